@@ -1,0 +1,24 @@
+"""Four published hole-filling algorithms as pymeshlab MeshSet filters.
+
+Importing the package registers the filters as methods of ``pymeshlab.MeshSet``::
+
+    import pymeshlab, meshlab_holefill
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh("scan.ply")
+    ms.meshing_close_holes_min_angle_bilateral(maxholesize=500)
+"""
+from .filter_specs import register_all as _register_all
+from .holes import HoleContext, MeshTopologyError, boundary_loops, hole_context
+from .patch import HoleFillError, Patch
+from .registry import (FILTERS, FilterParameterError, apply_filter, filter_history, filter_list,
+                       print_filter_parameter_list)
+
+__version__ = "0.1.0"
+
+_register_all()
+
+__all__ = [
+    "FILTERS", "FilterParameterError", "HoleContext", "HoleFillError", "MeshTopologyError", "Patch",
+    "apply_filter", "boundary_loops", "filter_history", "filter_list", "hole_context",
+    "print_filter_parameter_list",
+]

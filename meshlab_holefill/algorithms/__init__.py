@@ -1,0 +1,1 @@
+"""One module per paper; each provides ``fill(ctx, **params) -> Patch``, ``PARAMS`` and ``RINGS``."""

@@ -1,0 +1,161 @@
+"""The ``meshlab-holefill`` command: fill holes, list holes and filters, run .mlx scripts."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import numpy as np
+
+
+def _parse_value(text):
+    """Command-line value: bool, int, float, or string (enum names)."""
+    low = text.lower()
+    if low in ("true", "false"):
+        return low == "true"
+    for cast in (int, float):
+        try:
+            return cast(text)
+        except ValueError:
+            pass
+    if text.endswith("%"):
+        import pymeshlab
+
+        return pymeshlab.PercentageValue(float(text[:-1]))
+    return text
+
+
+def _params_from_unknown(unknown):
+    """Turn ``--name value`` pairs left over by argparse into filter keyword arguments."""
+    params = {}
+    i = 0
+    while i < len(unknown):
+        key = unknown[i]
+        if not key.startswith("--"):
+            raise SystemExit(f"unexpected argument {key!r}; filter parameters are given as --name value")
+        name = key[2:].replace("-", "_")
+        if "=" in name:
+            name, value = name.split("=", 1)
+            i += 1
+        elif i + 1 < len(unknown):
+            value = unknown[i + 1]
+            i += 2
+        else:
+            raise SystemExit(f"parameter {key} has no value")
+        params[name] = _parse_value(value)
+    return params
+
+
+def _load(path):
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(path)
+    return ms
+
+
+def cmd_fill(args, extra):
+    from . import apply_filter
+
+    ms = _load(args.input)
+    result = apply_filter(ms, args.filter, **_params_from_unknown(extra))
+    ms.save_current_mesh(args.output)
+    if args.json:
+        print(json.dumps(result, indent=2, default=float))
+    else:
+        print(_hole_status_table(result))
+    return 0 if result.get("failed_holes", 0) == 0 else 1
+
+
+def _hole_status_table(result):
+    lines = [f"{'hole':>4} {'edges':>6} {'status':>8} {'new V':>6} {'new F':>6} {'sec':>7}  reason"]
+    for h in result.get("holes", []):
+        lines.append(f"{h['hole']:>4} {h['boundary_edges']:>6} {h['status']:>8} {h.get('new_vertices', ''):>6} "
+                     f"{h.get('new_faces', ''):>6} {h.get('seconds', float('nan')):>7.3f}  {h.get('reason', '')}")
+    summary = {k: v for k, v in result.items() if k != "holes"}
+    lines.append(", ".join(f"{k}={v:.3f}" if isinstance(v, float) else f"{k}={v}" for k, v in summary.items()))
+    return "\n".join(lines)
+
+
+def cmd_holes(args, extra):
+    from .holes import boundary_loops, loop_measures
+
+    ms = _load(args.input)
+    m = ms.current_mesh()
+    V, F = m.vertex_matrix(), m.face_matrix()
+    loops = boundary_loops(F)
+    print(f"{m.label()}: {m.vertex_number()} vertices, {m.face_number()} faces, {len(loops)} boundary loops")
+    print(f"{'hole':>4} {'edges':>6} {'perimeter':>11} {'diameter':>10} {'planarity':>9}  notes")
+    for i, loop in enumerate(loops):
+        meas = loop_measures(V[loop.vertices])
+        notes = []
+        if loop.pinched:
+            notes.append("pinched (non-manifold vertex)")
+        if not loop.closed:
+            notes.append("open chain")
+        print(f"{i:>4} {meas['edges']:>6} {meas['perimeter']:>11.4g} {meas['diameter']:>10.4g} "
+              f"{meas['planarity']:>9.4f}  {', '.join(notes)}")
+    return 0
+
+
+def cmd_filters(args, extra):
+    from .registry import FILTERS, filter_help
+
+    names = [args.name] if args.name else sorted(FILTERS)
+    for name in names:
+        if name not in FILTERS:
+            from .registry import print_filter_parameter_list
+
+            print_filter_parameter_list(name)
+            continue
+        print(f"== {name}")
+        print(filter_help(name))
+        print()
+    return 0
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(prog="meshlab-holefill",
+                                     description="Hole-filling filters for pymeshlab (four papers + MeshLab's Close Holes).")
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("fill", help="fill the holes of a mesh with one filter; extra --name value pairs are parameters")
+    p.add_argument("input")
+    p.add_argument("output")
+    p.add_argument("--filter", default="meshing_close_holes_min_angle_bilateral",
+                   help="filter name (ours or any pymeshlab filter, e.g. meshing_close_holes)")
+    p.add_argument("--json", action="store_true", help="print the whole result dictionary as JSON")
+    p.set_defaults(func=cmd_fill)
+    p = sub.add_parser("holes", help="table of boundary loops: edges, perimeter, diameter, planarity")
+    p.add_argument("input")
+    p.set_defaults(func=cmd_holes)
+    p = sub.add_parser("filters", help="list the filters with their parameters, defaults and help")
+    p.add_argument("name", nargs="?")
+    p.set_defaults(func=cmd_filters)
+    # Further subcommands (run, compare) register themselves here.
+    for register in _SUBCOMMANDS:
+        register(sub)
+    return parser
+
+
+_SUBCOMMANDS = []
+
+
+def main(argv=None):
+    parser = build_parser()
+    args, extra = parser.parse_known_args(argv)
+    if extra and args.command != "fill":
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    try:
+        return args.func(args, extra)
+    except (ValueError, OSError) as exc:
+        print(f"meshlab-holefill: error: {exc}", file=sys.stderr)
+        return 2
+    except Exception as exc:  # pymeshlab raises its own exception types (not ValueError)
+        if type(exc).__module__.startswith("pymeshlab"):
+            print(f"meshlab-holefill: error: {exc}", file=sys.stderr)
+            return 2
+        raise
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,38 @@
+"""The table of this package's filters: one FilterSpec per paper, built from each algorithm module.
+
+An algorithm module provides ``fill(ctx, **params) -> Patch``, ``PARAMS`` (its own
+ParamSpecs, after the common ones) and ``RINGS`` (how many rings of surrounding mesh its
+HoleContext needs). Adding a filter is adding one row to ``ALGORITHMS``.
+"""
+from __future__ import annotations
+
+import importlib
+
+from .hole_filter import COMMON_PARAMS, close_holes
+from .registry import FilterSpec, register
+
+# (module in meshlab_holefill.algorithms, python name, .mlx display name, paper)
+ALGORITHMS = [
+    ("min_angle_bilateral", "meshing_close_holes_min_angle_bilateral", "Close Holes: Minimum Angle + Bilateral",
+     "P. Hu, C. Wang, B. Li, M. Liu, Filling Holes in Triangular Meshes in Engineering, JSW 2012"),
+]
+
+
+def _make_spec(module_name, name, display_name, paper):
+    module = importlib.import_module(f".algorithms.{module_name}", __package__)
+    own = list(module.PARAMS)
+    params = COMMON_PARAMS + own
+
+    def run(ms, **params_in):
+        return close_holes(ms, module.fill, params_in, algorithm_params=[p.name for p in own],
+                           rings=module.RINGS)
+
+    doc = (module.__doc__ or "").strip().split("\n\n")[0]
+    return FilterSpec(name=name, display_name=display_name, description=doc, params=params, run=run,
+                      paper=paper, extra={"module": module.__name__})
+
+
+def register_all():
+    """Register every filter of ALGORITHMS on pymeshlab.MeshSet (idempotent)."""
+    for row in ALGORITHMS:
+        register(_make_spec(*row))

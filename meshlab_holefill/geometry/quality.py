@@ -1,0 +1,115 @@
+"""Per-triangle measures: areas, normals, angles and the 2r/R quality of Field (2000)."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def face_normals(V, F, normalize=True):
+    """Face normals from the right-hand rule.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int
+    normalize : bool
+        If False, return cross products (length = twice the area).
+
+    Returns
+    -------
+    N : (m, 3) float64
+        Zero rows for degenerate faces when normalised.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F)
+    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    if not normalize:
+        return N
+    lengths = np.linalg.norm(N, axis=1)
+    out = np.zeros_like(N)
+    ok = lengths > 0
+    out[ok] = N[ok] / lengths[ok, None]
+    return out
+
+
+def face_areas(V, F):
+    """Triangle areas, (m,) float64."""
+    return 0.5 * np.linalg.norm(face_normals(V, F, normalize=False), axis=1)
+
+
+def vertex_normals(V, F, n_vertices=None):
+    """Area-weighted vertex normals (sum of face cross products), unit length.
+
+    Vertices without faces get a zero normal.
+
+    Returns
+    -------
+    N : (n, 3) float64
+    """
+    n = len(V) if n_vertices is None else n_vertices
+    C = face_normals(V, F, normalize=False)
+    N = np.zeros((n, 3))
+    for k in range(3):
+        np.add.at(N, F[:, k], C)
+    lengths = np.linalg.norm(N, axis=1)
+    ok = lengths > 0
+    N[ok] /= lengths[ok, None]
+    return N
+
+
+def edge_lengths(V, F):
+    """Lengths of the edges opposite each corner: column k is |V[F[:,k+1]] - V[F[:,k+2]]|, (m, 3)."""
+    V = np.asarray(V, dtype=np.float64)
+    a = np.linalg.norm(V[F[:, 1]] - V[F[:, 2]], axis=1)
+    b = np.linalg.norm(V[F[:, 2]] - V[F[:, 0]], axis=1)
+    c = np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1)
+    return np.stack([a, b, c], axis=1)
+
+
+def triangle_quality(V, F):
+    """Field's quality 2r/R (twice inradius over circumradius), as used by Hu et al. Sec. IV.
+
+    Equals 1 for an equilateral triangle and 0 for a degenerate one.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int
+
+    Returns
+    -------
+    q : (m,) float64 in [0, 1]
+    """
+    L = edge_lengths(V, F)
+    area = face_areas(V, F)
+    # r = 2A / (a+b+c), R = abc / (4A)  =>  2r/R = 16 A^2 / ((a+b+c) abc)
+    denom = L.sum(axis=1) * L.prod(axis=1)
+    q = np.zeros(len(F))
+    ok = denom > 0
+    q[ok] = 16.0 * area[ok] ** 2 / denom[ok]
+    return np.clip(q, 0.0, 1.0)
+
+
+def corner_angles(V, F):
+    """Interior angle at each corner, (m, 3) float64 radians (column k is the angle at F[:, k])."""
+    V = np.asarray(V, dtype=np.float64)
+    out = np.empty((len(F), 3))
+    for k in range(3):
+        p = V[F[:, k]]
+        u = V[F[:, (k + 1) % 3]] - p
+        w = V[F[:, (k + 2) % 3]] - p
+        out[:, k] = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+    return out
+
+
+def unique_edges(F):
+    """Undirected edges of a face list, sorted per row and unique, (e, 2) int64."""
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64), axis=1)
+    return np.unique(E, axis=0)
+
+
+def mean_edge_length(V, F):
+    """Mean length of the unique edges of F (0.0 for an empty face list)."""
+    if len(F) == 0:
+        return 0.0
+    E = unique_edges(F)
+    return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())

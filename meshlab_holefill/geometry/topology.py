@@ -1,0 +1,42 @@
+"""Edge topology of small face lists (patches): half-edge twins, interior edges, 1-rings."""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+
+def interior_edges(F, n):
+    """Interior (two-face) edges of a consistently oriented face list.
+
+    Returns
+    -------
+    edges : (e, 2) int64
+        (a, b) as traversed by face ``f1``.
+    f1, c1 : (e,) int64
+        Face holding half-edge a -> b and the corner index of ``a`` in it.
+    f2, c2 : (e,) int64
+        Face holding the twin half-edge b -> a and the corner index of ``b`` in it.
+    """
+    F = np.asarray(F, np.int64)
+    q = len(F)
+    a = F.ravel()
+    b = np.roll(F, -1, axis=1).ravel()
+    key = a * n + b
+    twin_key = b * n + a
+    order = np.argsort(key)
+    pos = np.searchsorted(key[order], twin_key)
+    pos = np.minimum(pos, len(key) - 1)
+    has = key[order][pos] == twin_key
+    he = np.flatnonzero(has & (a < b))
+    tw = order[pos[he]]
+    return (np.stack([a[he], b[he]], axis=1), he // 3, he % 3, tw // 3, tw % 3)
+
+
+def one_ring_matrix(F, n):
+    """Symmetric sparse (n, n) adjacency of vertices sharing an edge (CSR, ones)."""
+    F = np.asarray(F, np.int64)
+    i = np.concatenate([F[:, 0], F[:, 1], F[:, 2], F[:, 1], F[:, 2], F[:, 0]])
+    j = np.concatenate([F[:, 1], F[:, 2], F[:, 0], F[:, 0], F[:, 1], F[:, 2]])
+    A = sp.coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)).tocsr()
+    A.data[:] = 1.0
+    return A

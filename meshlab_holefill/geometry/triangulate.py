@@ -1,0 +1,79 @@
+"""Constrained Delaunay triangulation of a simple planar polygon (wrapping Shewchuk's Triangle)."""
+from __future__ import annotations
+
+import numpy as np
+import triangle
+
+from ..patch import HoleFillError
+
+
+def polygon_signed_area(Q):
+    """Signed area of a closed 2D polygon (positive when counter-clockwise), Q : (k, 2)."""
+    x, y = Q[:, 0], Q[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def triangulate_polygon(Q, max_area=None, min_angle=None, extra_points=None, steiner_on_boundary=False):
+    """Constrained Delaunay triangulation of the simple polygon Q, every polygon edge kept.
+
+    Without ``max_area``/``min_angle`` no Steiner point is inserted (Triangle switches
+    ``p`` and ``Y``); with them Triangle refines the interior (Chew/Ruppert), still without
+    points on the boundary unless ``steiner_on_boundary``.
+
+    Parameters
+    ----------
+    Q : (k, 2) float64
+        Polygon vertices in order (either orientation); must be simple.
+    max_area : float, optional
+        Upper bound on triangle area (switch ``a``).
+    min_angle : float, optional
+        Lower bound on angles in degrees (switch ``q``; Triangle guarantees up to ~33 deg).
+    extra_points : (p, 2) float64, optional
+        Interior points to insert as vertices (e.g. predicted points).
+    steiner_on_boundary : bool
+
+    Returns
+    -------
+    points : (k + s, 2) float64
+        The polygon vertices first, unchanged and in order, then interior points.
+    faces : (t, 3) int64
+        Oriented like Q: counter-clockwise faces for a counter-clockwise Q, clockwise for a
+        clockwise one, so that lifting to 3D keeps the loop's patch orientation.
+
+    Raises
+    ------
+    HoleFillError
+        When Triangle fails or changes the boundary (self-intersecting polygon).
+    """
+    Q = np.asarray(Q, np.float64)
+    k = len(Q)
+    pts = Q if extra_points is None or len(extra_points) == 0 else np.concatenate([Q, extra_points])
+    segments = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    opts = "pQ"
+    if not steiner_on_boundary:
+        opts += "Y"
+    if min_angle is not None:
+        opts += f"q{float(min_angle):.6f}"
+    if max_area is not None:
+        opts += f"a{float(max_area):.12g}"
+    try:
+        out = triangle.triangulate({"vertices": pts, "segments": segments}, opts)
+    except Exception as exc:  # Triangle reports problems as generic errors
+        raise HoleFillError(f"constrained triangulation failed: {exc}") from exc
+    P = out.get("vertices")
+    T = out.get("triangles")
+    if P is None or T is None or len(T) == 0:
+        raise HoleFillError("constrained triangulation produced no triangles")
+    if len(P) < len(pts) or not np.array_equal(P[:len(pts)], pts):
+        raise HoleFillError("constrained triangulation changed the boundary (polygon not simple?)")
+    T = np.asarray(T, np.int64)
+    # 'p' without 'c' already drops the outside; Triangle emits counter-clockwise faces.
+    A = P[T]
+    signed = (A[:, 1, 0] - A[:, 0, 0]) * (A[:, 2, 1] - A[:, 0, 1]) - (A[:, 2, 0] - A[:, 0, 0]) * (A[:, 1, 1] - A[:, 0, 1])
+    ccw_polygon = polygon_signed_area(Q) > 0
+    flip = (signed > 0) != ccw_polygon
+    T[flip] = T[flip][:, [0, 2, 1]]
+    if not steiner_on_boundary:
+        if len(T) and len(P) == len(pts) and len(T) != k - 2 + 2 * (len(pts) - k):
+            raise HoleFillError("constrained triangulation is not a triangulation of the polygon")
+    return np.asarray(P, np.float64), T

@@ -1,0 +1,188 @@
+"""The pipeline every hole-filling filter shares: find holes, fill each, validate, merge.
+
+An algorithm only provides ``fill(ctx, **params) -> Patch`` on one :class:`HoleContext`;
+this module does the rest of the filter contract (DESIGN.md): hole selection by size and
+selection, all-or-nothing per hole, patch validation, the optional self-intersection
+check, bit-exact originals, attributes, and the result dictionary.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .geometry.intersections import faces_intersecting
+from .holes import boundary_loops, hole_context, vertex_face_incidence
+from .meshset_io import (check_manifold_edges, current_mesh_arrays, extend_attributes,
+                         replace_current_mesh)
+from .patch import HoleFillError, merge_patches, validate_patch
+from .registry import ParamSpec
+
+COMMON_PARAMS = [
+    ParamSpec("maxholesize", "int", 1000,
+              "Largest hole to close, as its number of boundary edges; larger holes are skipped "
+              "(MeshLab's Close Holes uses 30; these algorithms target large holes, hence 1000).",
+              minimum=3, mlx_name="MaxHoleSize", display="Max size to be closed"),
+    ParamSpec("selected", "bool", False,
+              "Close only holes with at least one selected border face.",
+              mlx_name="Selected", display="Close holes with selected faces"),
+    ParamSpec("newfaceselected", "bool", True,
+              "Select the new faces after filling (the original selection is kept).",
+              mlx_name="NewFaceSelected", display="Select the newly created faces"),
+    ParamSpec("selfintersection", "bool", True,
+              "Reject a patch that intersects the existing mesh or itself; the hole is then reported failed.",
+              mlx_name="SelfIntersection", display="Prevent creation of selfIntersecting faces"),
+]
+
+
+def patch_intersections(ctx_vertices, patch_points, patch_faces, mesh_V, mesh_F, face_lo, face_hi, loop):
+    """Indices of patch faces that intersect the existing mesh near the hole, or the patch itself.
+
+    Candidate mesh faces are those whose bounding box overlaps the patch's (vectorised over
+    the mesh, cost O(m) per hole with precomputed face boxes).
+    """
+    lo, hi = patch_points.min(axis=0), patch_points.max(axis=0)
+    pad = 1e-9 * float(np.linalg.norm(hi - lo))
+    near = np.flatnonzero(np.all(face_hi >= lo - pad, axis=1) & np.all(face_lo <= hi + pad, axis=1))
+    used = np.unique(mesh_F[near].ravel()) if len(near) else np.zeros(0, np.int64)
+    # Local vertex array: loop vertices keep their loop-local numbers so shared vertices
+    # between patch and mesh faces are recognised as shared.
+    others = np.setdiff1d(used, loop)
+    k, p = len(loop), len(patch_points) - len(loop)
+    X = np.concatenate([patch_points, mesh_V[others]])
+    ids = np.concatenate([loop, others])
+    sorter = np.argsort(ids)
+    local_mesh = sorter[np.searchsorted(ids, mesh_F[near], sorter=sorter)].reshape(-1, 3)
+    local_mesh = np.where(local_mesh >= k, local_mesh + p, local_mesh)
+    allF = np.concatenate([patch_faces, local_mesh])
+    q = len(patch_faces)
+    hits = faces_intersecting(X, allF, np.arange(q), np.arange(len(allF)))
+    return hits
+
+
+def close_holes(ms, fill, params, *, algorithm_params=(), rings=3):
+    """Run one hole-filling algorithm on every eligible hole of the current mesh.
+
+    Parameters
+    ----------
+    ms : pymeshlab.MeshSet
+    fill : callable ``fill(ctx, **algorithm_params) -> Patch``
+    params : dict
+        Validated filter parameters (common ones and the algorithm's).
+    algorithm_params : iterable of str
+        Names in ``params`` passed on to ``fill``.
+    rings : int
+        Face rings of surrounding mesh each HoleContext carries.
+
+    Returns
+    -------
+    dict
+        ``closed_holes``, ``new_faces``, ``new_vertices``, ``skipped_holes``,
+        ``failed_holes``, ``holes`` (per-hole dicts) and ``seconds``.
+    """
+    t_start = time.perf_counter()
+    arrays = current_mesh_arrays(ms)
+    check_manifold_edges(arrays.F, arrays.label)
+    V, F = arrays.V, arrays.F
+    loops = boundary_loops(F)
+    selected_faces = arrays.face_attrs["selected"].ravel() > 0
+    report, todo = [], []
+    for i, loop in enumerate(loops):
+        entry = {"hole": i, "boundary_edges": len(loop), "pinched": bool(loop.pinched)}
+        if not loop.closed:
+            entry.update(status="skipped", reason="open boundary chain (inconsistent face orientation)")
+        elif len(loop) < 3:
+            entry.update(status="skipped", reason="degenerate loop with fewer than 3 edges")
+        elif len(loop) > params["maxholesize"]:
+            entry.update(status="skipped", reason=f"too large ({len(loop)} > maxholesize {params['maxholesize']})")
+        elif params["selected"] and not selected_faces[loop.border_faces].any():
+            entry.update(status="skipped", reason="not selected")
+        else:
+            todo.append(i)
+        report.append(entry)
+    incidence = vertex_face_incidence(F, len(V)) if todo else None
+    if params["selfintersection"] and todo:
+        corners = V[F]
+        face_lo, face_hi = corners.min(axis=1), corners.max(axis=1)
+    fill_kwargs = {name: params[name] for name in algorithm_params}
+    done_loops, patches, closed_ids = [], [], []
+    for i in todo:
+        entry = report[i]
+        t0 = time.perf_counter()
+        try:
+            ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
+            patch = fill(ctx, **fill_kwargs)
+            validate_patch(patch, ctx.points, ctx.forbidden_edges)
+            if params["selfintersection"]:
+                hits = patch_intersections(ctx.vertices, patch.all_points(ctx.points), patch.faces,
+                                           V, F, face_lo, face_hi, ctx.loop)
+                if len(hits):
+                    raise HoleFillError(f"patch would intersect the mesh ({len(hits)} faces)")
+        except HoleFillError as exc:
+            entry.update(status="failed", reason=str(exc), seconds=time.perf_counter() - t0)
+            continue
+        except (np.linalg.LinAlgError, ArithmeticError, ValueError, RuntimeError) as exc:
+            entry.update(status="failed", reason=f"{type(exc).__name__}: {exc}", seconds=time.perf_counter() - t0)
+            continue
+        entry.update(status="closed", new_vertices=len(patch.vertices), new_faces=len(patch.faces),
+                     seconds=time.perf_counter() - t0, **_json_safe(patch.info))
+        done_loops.append(ctx.loop)
+        patches.append(patch)
+        closed_ids.append(i)
+    V2, F2 = merge_patches(V, F, done_loops, patches)
+    done_loops, patches, closed_ids = _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids)
+    V2, F2 = merge_patches(V, F, done_loops, patches)
+    n_new_faces = len(F2) - len(F)
+    if n_new_faces:
+        vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops,
+                                                  [len(p.vertices) for p in patches])
+        select = np.arange(len(F), len(F2)) if params["newfaceselected"] else None
+        replace_current_mesh(ms, arrays, V2, F2, vattrs, fattrs, wedge, select_faces=select)
+    statuses = [h["status"] for h in report]
+    result = {
+        "closed_holes": statuses.count("closed"),
+        "new_faces": int(n_new_faces),
+        "new_vertices": int(len(V2) - len(V)),
+        "skipped_holes": statuses.count("skipped"),
+        "failed_holes": statuses.count("failed"),
+        "holes": report,
+        "seconds": time.perf_counter() - t_start,
+    }
+    return result
+
+
+def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):
+    """Patches validated alone can still clash where two holes share a pinched vertex.
+
+    Any patch owning a face on a non-manifold edge of the merged mesh is withdrawn and its
+    hole reported failed, so no hole is ever left half-filled.
+    """
+    from .holes import nonmanifold_edges
+
+    bad = nonmanifold_edges(F2)
+    if len(F2) == len(F) or len(bad) == 0:
+        return done_loops, patches, closed_ids
+    owner = np.repeat(np.arange(len(patches)), [len(p.faces) for p in patches])
+    new = np.sort(F2[len(F):], axis=1)
+    bad_set = {tuple(e) for e in bad.tolist()}
+    drop = set()
+    for f, (a, b, c) in enumerate(new.tolist()):
+        if (a, b) in bad_set or (b, c) in bad_set or (a, c) in bad_set:
+            drop.add(int(owner[f]))
+    keep = [j for j in range(len(patches)) if j not in drop]
+    for j in drop:
+        report[closed_ids[j]].update(status="failed", reason="patch clashes with another patch at a shared vertex")
+        for key in ("new_vertices", "new_faces"):
+            report[closed_ids[j]].pop(key, None)
+    return [done_loops[j] for j in keep], [patches[j] for j in keep], [closed_ids[j] for j in keep]
+
+
+def _json_safe(info):
+    out = {}
+    for key, value in info.items():
+        if isinstance(value, np.generic):
+            value = value.item()
+        elif isinstance(value, np.ndarray):
+            value = value.tolist()
+        out[key] = value
+    return out

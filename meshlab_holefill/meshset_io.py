@@ -1,0 +1,211 @@
+"""MeshSet <-> numpy arrays, and putting a filled mesh back as the current layer.
+
+Only this module and ``registry.py`` touch pymeshlab objects.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+
+import numpy as np
+import pymeshlab
+
+from .holes import MeshTopologyError, nonmanifold_edges
+
+
+@dataclass
+class MeshArrays:
+    """The current mesh of a MeshSet as arrays, with the per-element attributes it carries.
+
+    Attributes
+    ----------
+    V : (n, 3) float64, C-ordered copy
+    F : (m, 3) int64
+    vertex_attrs : dict name -> (n, c) array   (``color``, ``quality``, ``texcoord``)
+    face_attrs : dict name -> (m, c) array     (``color``, ``quality``, ``selected``)
+    wedge_texcoords : (3m, 2) float64 or None
+    label : str
+    mesh_id : int
+    """
+
+    V: np.ndarray
+    F: np.ndarray
+    vertex_attrs: dict = field(default_factory=dict)
+    face_attrs: dict = field(default_factory=dict)
+    wedge_texcoords: np.ndarray | None = None
+    label: str = ""
+    mesh_id: int = 0
+    textures: dict = field(default_factory=dict)
+
+
+def current_mesh_arrays(ms):
+    """Read the current mesh of ``ms`` into a MeshArrays, checking it can be hole-filled.
+
+    Raises
+    ------
+    ValueError
+        Empty MeshSet, point cloud, mesh without faces, NaN/inf coordinates.
+    """
+    if not isinstance(ms, pymeshlab.MeshSet):
+        raise TypeError(f"expected a pymeshlab.MeshSet, got {type(ms).__name__}")
+    if ms.mesh_number() == 0:
+        raise ValueError("the MeshSet is empty: load a mesh first")
+    if not ms.mesh_id_exists(ms.current_mesh_id()):
+        raise ValueError("the MeshSet has no valid current mesh")
+    m = ms.current_mesh()
+    if m.face_number() == 0 or m.is_point_cloud():
+        raise ValueError(f"mesh '{m.label()}' is a point cloud (no faces): there are no holes to fill")
+    V = np.ascontiguousarray(m.vertex_matrix(), dtype=np.float64)
+    F = np.ascontiguousarray(m.face_matrix(), dtype=np.int64)
+    if not np.all(np.isfinite(V)):
+        bad = int(np.count_nonzero(~np.isfinite(V).all(axis=1)))
+        raise ValueError(f"mesh '{m.label()}' has {bad} vertices with NaN or infinite coordinates")
+    arrays = MeshArrays(V=V, F=F, label=m.label(), mesh_id=m.id())
+    if m.has_vertex_color():
+        arrays.vertex_attrs["color"] = m.vertex_color_matrix()
+    if m.has_vertex_scalar():
+        arrays.vertex_attrs["quality"] = m.vertex_scalar_array()[:, None]
+    if m.has_vertex_tex_coord():
+        arrays.vertex_attrs["texcoord"] = m.vertex_tex_coord_matrix()
+    if m.has_face_color():
+        arrays.face_attrs["color"] = m.face_color_matrix()
+    if m.has_face_scalar():
+        arrays.face_attrs["quality"] = m.face_scalar_array()[:, None]
+    arrays.face_attrs["selected"] = m.face_selection_array().astype(np.float64)[:, None]
+    if m.has_wedge_tex_coord():
+        arrays.wedge_texcoords = m.wedge_tex_coord_matrix()
+    arrays.textures = dict(m.textures())
+    return arrays
+
+
+def check_manifold_edges(F, label=""):
+    """Raise MeshTopologyError when an edge is shared by more than two faces."""
+    bad = nonmanifold_edges(F)
+    if len(bad):
+        raise MeshTopologyError(
+            f"mesh '{label}' has {len(bad)} non-manifold edges (e.g. vertices {bad[0].tolist()}); "
+            "run meshing_repair_non_manifold_edges first")
+
+
+def _idw_weights(sources, targets):
+    """Inverse-squared-distance weights (t, s) of source points for target points, rows sum to 1."""
+    d2 = ((targets[:, None, :] - sources[None, :, :]) ** 2).sum(axis=2)
+    w = 1.0 / np.maximum(d2, 1e-300)
+    return w / w.sum(axis=1, keepdims=True)
+
+
+def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
+    """Per-element attributes for the filled mesh: originals unchanged, new ones interpolated.
+
+    A new vertex gets the inverse-distance interpolation of its hole's loop-vertex values;
+    a new face gets the mean value of its hole's border faces (colours, quality) and is
+    unselected; wedge texture coordinates of new corners come from the loop vertex's
+    coordinate in a border face, or the interpolation above for new vertices.
+
+    Returns
+    -------
+    vertex_attrs, face_attrs : dict name -> array
+    wedge : (3 m2, 2) float64 or None
+    """
+    n, m = len(arrays.V), len(arrays.F)
+    new_v_owner = np.repeat(np.arange(len(loops)), new_vertex_counts)
+    weights = []
+    for h, loop in enumerate(loops):
+        targets = V2[n:][new_v_owner == h]
+        weights.append(_idw_weights(arrays.V[loop], targets) if len(targets) else np.zeros((0, len(loop))))
+    vertex_attrs = {}
+    for name, A in arrays.vertex_attrs.items():
+        parts = [A] + [W @ A[loop] for W, loop in zip(weights, loops)]
+        vertex_attrs[name] = np.concatenate(parts) if parts else A
+    new_faces = F2[m:]
+    # Hole of each new face: the loop or new vertex it touches.
+    face_owner = np.full(len(new_faces), -1)
+    vert_owner = np.full(len(V2), -1)
+    for h, loop in enumerate(loops):
+        vert_owner[loop] = h
+    vert_owner[n:] = new_v_owner
+    face_owner = vert_owner[new_faces].max(axis=1)
+    face_attrs = {}
+    border = _border_faces_per_loop(arrays.F, loops)
+    for name, A in arrays.face_attrs.items():
+        if name == "selected":
+            face_attrs[name] = np.concatenate([A, np.zeros((len(new_faces), 1))])
+            continue
+        means = np.array([A[b].mean(axis=0) if len(b) else A.mean(axis=0) for b in border]).reshape(len(loops), -1)
+        face_attrs[name] = np.concatenate([A, means[face_owner]]) if len(new_faces) else A
+    wedge = None
+    if arrays.wedge_texcoords is not None:
+        W0 = arrays.wedge_texcoords.reshape(m, 3, 2)
+        per_vertex = np.zeros((len(V2), 2))
+        # Any original corner's coordinate is a valid one for its vertex (seams aside).
+        per_vertex[arrays.F.ravel()] = W0.reshape(-1, 2)
+        for h, (W, loop) in enumerate(zip(weights, loops)):
+            per_vertex[n:][new_v_owner == h] = W @ per_vertex[loop]
+        wedge = np.concatenate([arrays.wedge_texcoords, per_vertex[new_faces].reshape(-1, 2)])
+    return vertex_attrs, face_attrs, wedge
+
+
+def _border_faces_per_loop(F, loops):
+    """For each loop, the original faces holding one of its edges."""
+    from .holes import boundary_halfedges
+
+    he, faces = boundary_halfedges(F)
+    out = []
+    for loop in loops:
+        on_loop = np.isin(he[:, 0], loop) & np.isin(he[:, 1], loop)
+        out.append(faces[on_loop])
+    return out
+
+
+def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, select_faces=None):
+    """Put the filled mesh into ``ms`` in place of the current layer, keeping its name.
+
+    The old layer is removed and the new one becomes current; other layers are untouched.
+    Face selection: the original selection is kept on original faces, and faces in
+    ``select_faces`` (indices into F2) are added to it.
+    """
+    kwargs = {"vertex_matrix": np.asarray(V2, np.float64), "face_matrix": np.asarray(F2, np.int32)}
+    if "color" in vertex_attrs:
+        kwargs["v_color_matrix"] = np.clip(vertex_attrs["color"], 0.0, 1.0)
+    if "quality" in vertex_attrs:
+        kwargs["v_scalar_array"] = vertex_attrs["quality"].ravel()
+    if "texcoord" in vertex_attrs:
+        kwargs["v_tex_coords_matrix"] = vertex_attrs["texcoord"]
+    if "color" in face_attrs:
+        kwargs["f_color_matrix"] = np.clip(face_attrs["color"], 0.0, 1.0)
+    if "quality" in face_attrs:
+        kwargs["f_scalar_array"] = face_attrs["quality"].ravel()
+    if wedge is not None:
+        kwargs["w_tex_coords_matrix"] = wedge
+    mesh = pymeshlab.Mesh(**kwargs)
+    old_id = arrays.mesh_id
+    ms.set_current_mesh(old_id)
+    ms.delete_current_mesh()
+    ms.add_mesh(mesh, arrays.label, set_as_current=True)
+    _restore_textures(ms, arrays.textures)
+    selected = face_attrs.get("selected", np.zeros((len(F2), 1))).ravel() > 0
+    if select_faces is not None and len(select_faces):
+        selected = selected.copy()
+        selected[np.asarray(select_faces)] = True
+    if selected.any():
+        set_face_selection(ms, selected)
+    return ms.current_mesh_id()
+
+
+def set_face_selection(ms, selected):
+    """Select exactly the faces where ``selected`` is True on the current mesh."""
+    m = ms.current_mesh()
+    m.add_face_custom_scalar_attribute(np.asarray(selected, np.float64), "holefill_select")
+    ms.compute_selection_by_condition_per_face(condselect="holefill_select > 0")
+
+
+def _restore_textures(ms, textures):
+    """Re-attach texture images (pymeshlab.Mesh cannot take them in its constructor)."""
+    if not textures:
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, image in textures.items():
+            path = os.path.join(tmp, os.path.basename(name) or "texture.png")
+            image.save(path)
+            ms.set_texture_per_mesh(textname=path)

@@ -1,0 +1,304 @@
+import time
+
+import numpy as np
+import pymeshlab
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from meshlab_holefill.geometry import intersections
+from meshlab_holefill.geometry.intersections import faces_intersecting, intersecting_pairs
+
+
+def meets(V, F, i=0, j=1, **kw):
+    """Whether faces i and j intersect; also checks the answer is symmetric."""
+    ab = len(intersecting_pairs(V, F, [i], [j], **kw)) > 0
+    ba = len(intersecting_pairs(V, F, [j], [i], **kw)) > 0
+    assert ab == ba
+    return ab
+
+
+def soup(*tris):
+    """Mesh of triangles given by corner coordinates, sharing no vertex index."""
+    V = np.array(tris, dtype=float).reshape(-1, 3)
+    return V, np.arange(len(V)).reshape(-1, 3)
+
+
+def uv_sphere(nu, nv, r=1.0, centre=(0.0, 0.0, 0.0)):
+    """Closed UV sphere: nu segments, nv rings, triangle fans at the poles."""
+    th = np.linspace(0, np.pi, nv + 1)[1:-1]
+    ph = np.linspace(0, 2 * np.pi, nu, endpoint=False)
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    V = np.c_[np.sin(T).ravel() * np.cos(P).ravel(), np.sin(T).ravel() * np.sin(P).ravel(), np.cos(T).ravel()]
+    V = np.vstack([V, [0, 0, 1], [0, 0, -1]]) * r + centre
+    n, k = len(V) - 2, np.arange(nu)
+    a = (np.arange(nv - 2)[:, None] * nu + k).ravel()
+    b = (np.arange(nv - 2)[:, None] * nu + (k + 1) % nu).ravel()
+    F = np.vstack([np.c_[a, a + nu, b], np.c_[b, a + nu, b + nu],
+                   np.c_[np.full(nu, n), k, (k + 1) % nu],
+                   np.c_[np.full(nu, n + 1), n - nu + (k + 1) % nu, n - nu + k]])
+    return V, F
+
+
+def icosphere():
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    return ms.current_mesh().vertex_matrix().copy(), ms.current_mesh().face_matrix().copy()
+
+
+# Shared-topology configurations: (V, F with faces 0 and 1, expected intersection)
+FLAT = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+CONFIGS = {
+    "pierce_x": (*soup(FLAT, [[0.2, 0.2, -1], [0.3, 0.2, 1], [0.25, 2, 0.1]]), True),
+    "parallel": (*soup(FLAT, np.add(FLAT, [0, 0, 0.5])), False),
+    "coplanar_overlap": (*soup(FLAT, [[0.2, 0.2, 0], [2, 0.3, 0], [0.3, 2, 0]]), True),
+    "coplanar_contained": (*soup([[0, 0, 0], [4, 0, 0], [0, 4, 0]], [[1, 1, 0], [1.5, 1, 0], [1, 1.5, 0]]), True),
+    "coplanar_disjoint": (*soup(FLAT, np.add(FLAT, [1.2, 0.5, 0])), False),
+    # shared edge 0-1; third vertices 2 and 3
+    "strip": (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, -1, 0.]]), np.array([[0, 1, 2], [1, 0, 3]]), False),
+    "folded": (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.8, 0.5, 0.]]), np.array([[0, 1, 2], [1, 0, 3]]), True),
+    "right_angle": (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.5, 0, 1.]]), np.array([[0, 1, 2], [1, 0, 3]]), False),
+    # shared vertex 0
+    "fan_flat": (np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [-1, 1, 0], [-1, -0.2, 0]]),
+                 np.array([[0, 1, 2], [0, 3, 4]]), False),
+    "vertex_pierce": (np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [0.5, 0.5, 1], [0.5, 0.5, -1.]]),
+                      np.array([[0, 1, 2], [0, 3, 4]]), True),
+    "vertex_pierce_big": (np.array([[0, 0, 0], [0.2, 0, 0], [0, 0.2, 0], [5, 5, 4], [5, 5, -4.]]),
+                          np.array([[0, 1, 2], [0, 3, 4]]), True),
+    # edge 0-3 of face 1 lies in face 0's plane, runs through its interior and leaves it
+    "vertex_edge_inside": (np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [2, 2, 0], [1, -1, 1.]]),
+                           np.array([[0, 1, 2], [0, 3, 4]]), True),
+    # the same with face 1 upright: the crossing point lies exactly on its boundary edge 0-3
+    "vertex_edge_inside_upright": (np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [2, 2, 0], [0.5, 0.5, 1.]]),
+                                   np.array([[0, 1, 2], [0, 3, 4]]), True),
+    "vertex_coplanar_overlap": (np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [2, 1, 0], [1, 2, 0.]]),
+                                np.array([[0, 1, 2], [0, 3, 4]]), True),
+    "vertex_cone": (np.array([[0, 0, 1], [1, 0, 0], [0.5, 0.8, 0], [-1, 0, 0], [-0.5, -0.8, 0.]]),
+                    np.array([[0, 1, 2], [0, 3, 4]]), False),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CONFIGS))
+def test_configurations(name):
+    V, F, expected = CONFIGS[name]
+    assert meets(V, F) == expected
+
+
+def test_edge_through_shared_vertex_inside_other_face_is_robust():
+    # the only witness is a crossing exactly on a face boundary, so without growing faces
+    # by tol in their plane the answer would follow the rounding of each rotation
+    V, F, _ = CONFIGS["vertex_edge_inside_upright"]
+    for seed in range(20):
+        assert meets(Rotation.random(random_state=seed).apply(V) * 3 + 1, F)
+
+
+@pytest.mark.parametrize("opening, expected", [(0.0, True), (1e-5, True), (2e-3, False), (0.3, False)])
+def test_shared_edge_fold_threshold(opening, expected):
+    third = [0.5, 0.5 * np.cos(opening), 0.5 * np.sin(opening)]  # rotated about the shared x axis
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.3, 1, 0], third])
+    assert meets(V, [[0, 1, 2], [1, 0, 3]]) == expected
+    assert meets(V, [[0, 1, 2], [1, 0, 3]], fold_angle=1.0)  # caller can widen the fold test
+
+
+@pytest.mark.parametrize("apex_z", [0.0, 0.5, -2.0])
+@pytest.mark.parametrize("valence", [3, 6, 40])
+def test_fan_around_vertex_all_pairs_clear(apex_z, valence):
+    ang = np.linspace(0, 2 * np.pi, valence, endpoint=False)
+    ring = np.c_[np.cos(ang), np.sin(ang), 0.3 * np.sin(3 * ang)]  # wavy rim: a saddle for apex_z = 0
+    V = np.vstack([[0, 0, apex_z], ring])
+    k = np.arange(valence)
+    F = np.c_[np.zeros(valence, int), k + 1, (k + 1) % valence + 1]
+    allf = np.arange(len(F))
+    assert intersecting_pairs(V, F, allf, allf).shape == (0, 2)
+
+
+@pytest.mark.parametrize("mesh", ["ico", "uv"])
+def test_closed_sphere_clean_then_pushed_vertex_intersects(mesh):
+    V, F = icosphere() if mesh == "ico" else uv_sphere(32, 17)
+    allf = np.arange(len(F))
+    assert len(intersecting_pairs(V, F, allf, allf)) == 0
+    V = V.copy()
+    V[5] *= -1.5  # through the centre and out the far side
+    pairs = intersecting_pairs(V, F, allf, allf)
+    assert len(pairs) > 0
+    moved = np.isin(F, 5).any(1)
+    assert (moved[pairs[:, 0]] | moved[pairs[:, 1]]).all()
+
+
+def _reference(t1, t2):
+    """Interval test on the planes' common line; exact for triangles in general position."""
+    n1 = np.cross(t1[1] - t1[0], t1[2] - t1[0])
+    n2 = np.cross(t2[1] - t2[0], t2[2] - t2[0])
+    d1, d2 = (t1 - t2[0]) @ n2, (t2 - t1[0]) @ n1
+    if np.all(d1 > 0) or np.all(d1 < 0) or np.all(d2 > 0) or np.all(d2 < 0):
+        return False
+    D = np.cross(n1, n2)
+
+    def span(t, d):
+        s = [(t[i] + (t[j] - t[i]) * d[i] / (d[i] - d[j])) @ D
+             for i, j in ((0, 1), (1, 2), (2, 0)) if d[i] * d[j] < 0]
+        return min(s), max(s)
+
+    (a0, a1), (b0, b1) = span(t1, d1), span(t2, d2)
+    return a0 <= b1 and b0 <= a1
+
+
+@pytest.mark.parametrize("chunk", [200_000, 7])
+@pytest.mark.parametrize("seed", range(4))
+def test_random_soup_matches_brute_force(seed, chunk, monkeypatch):
+    monkeypatch.setattr(intersections, "CHUNK", chunk)
+    rng = np.random.default_rng(seed)
+    n = 40
+    T = rng.uniform(0, 3, (n, 1, 3)) + rng.normal(0, 0.4 * rng.uniform(0.2, 2, (n, 1, 1)), (n, 3, 3))
+    V, F = T.reshape(-1, 3), np.arange(3 * n).reshape(-1, 3)
+    expected = {(i, j) for i in range(n) for j in range(i + 1, n) if _reference(T[i], T[j])}
+    allf = np.arange(n)
+    assert {tuple(p) for p in intersecting_pairs(V, F, allf, allf)} == expected
+    q, a = allf[:15], allf[15:]
+    assert {tuple(p) for p in intersecting_pairs(V, F, q, a)} == {p for p in expected if p[0] < 15 <= p[1]}
+    assert len(expected) > 5  # the soup is dense enough to mean something
+
+
+def test_random_shared_vertex_pairs_match_reference():
+    rng = np.random.default_rng(1)
+    k = 400
+    pts = rng.normal(size=(k, 5, 3)) + 100.0 * np.arange(k)[:, None, None]  # groups far apart
+    V = pts.reshape(-1, 3)
+    base = 5 * np.arange(k)[:, None]
+    F = np.vstack([np.c_[base, base + 1, base + 2], np.c_[base, base + 3, base + 4]])
+
+    def reach(S, a, b, n, D):  # signed extent along D of triangle S,a,b on the plane with normal n
+        da, db = (a - S) @ n, (b - S) @ n
+        return 0.0 if da * db > 0 else (a + (b - a) * da / (da - db) - S) @ D
+
+    expected = set()
+    for g, (S, a1, b1, a2, b2) in enumerate(pts):
+        n1, n2 = np.cross(a1 - S, b1 - S), np.cross(a2 - S, b2 - S)
+        D = np.cross(n1, n2)
+        if reach(S, a1, b1, n2, D) * reach(S, a2, b2, n1, D) > 0:
+            expected.add((g, g + k))
+    got = {tuple(p) for p in intersecting_pairs(V, F, np.arange(k), np.arange(k, 2 * k))}
+    assert got == expected
+    assert 0.1 * k < len(expected) < 0.9 * k
+
+
+angles = st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda q: np.linalg.norm(q) > 0.1)
+motions = st.tuples(angles, st.floats(1e-2, 1e2), st.lists(st.floats(-10, 10), min_size=3, max_size=3))
+
+
+@settings(max_examples=60, deadline=None)
+@given(motion=motions, name=st.sampled_from(sorted(CONFIGS)))
+def test_similarity_transform_preserves_answer(motion, name):
+    quat, scale, shift = motion
+    V, F, expected = CONFIGS[name]
+    V2 = Rotation.from_quat(quat).apply(V) * scale + shift
+    assert meets(V2, F) == expected
+
+
+@settings(max_examples=60, deadline=None)
+@given(tri=st.lists(st.floats(-5, 5), min_size=9, max_size=9),
+       direction=st.lists(st.floats(-1, 1), min_size=3, max_size=3).filter(lambda d: np.linalg.norm(d) > 0.1),
+       dist=st.floats(1.01, 1e3))
+def test_far_translated_copy_never_intersects(tri, direction, dist):
+    t = np.reshape(tri, (3, 3))
+    size = np.linalg.norm(t.max(0) - t.min(0))
+    shift = np.asarray(direction) / np.linalg.norm(direction) * (dist * size + 1e-3)
+    V, F = soup(t, t + shift)
+    assert not meets(V, F)
+
+
+def test_result_format_indices_into_F_query_first():
+    V, F = uv_sphere(12, 7)
+    n = len(F)
+    spikes = [[[0.5, 0, 0], [1.5, 0.1 * k, 0.2], [1.5, -0.1, -0.2 - 0.1 * k]] for k in range(3)]
+    V = np.vstack([V, np.reshape(spikes, (-1, 3))])  # 3 faces poking out through the sphere
+    F = np.vstack([F, len(V) - 9 + np.arange(9).reshape(3, 3)])
+    query, against = np.array([n + 2, n, n + 1, n]), np.arange(n)
+    pairs = intersecting_pairs(V, F, query, against)
+    assert pairs.dtype == np.int64 and pairs.ndim == 2 and pairs.shape[1] == 2
+    assert len(pairs) > 0
+    assert np.isin(pairs[:, 0], query).all() and np.isin(pairs[:, 1], against).all()
+    assert len(np.unique(pairs, axis=0)) == len(pairs)
+    hits = faces_intersecting(V, F, query, against)
+    assert np.array_equal(hits, np.unique(pairs[:, 0]))
+
+    allf = np.arange(len(F))
+    selfp = intersecting_pairs(V, F, allf, allf)
+    assert (selfp[:, 0] != selfp[:, 1]).all()
+    assert len({frozenset(p) for p in selfp}) == len(selfp)
+    assert {frozenset(p) for p in pairs} <= {frozenset(p) for p in selfp}
+    hit_all = faces_intersecting(V, F, allf, allf)
+    assert np.array_equal(hit_all, np.unique(selfp))  # both partners count
+
+
+def test_empty_inputs():
+    V, F = soup(FLAT, FLAT)
+    assert intersecting_pairs(V, F, [], [0, 1]).shape == (0, 2)
+    assert faces_intersecting(V, F, [0], []).shape == (0,)
+    assert intersecting_pairs(V, F, [0], [0]).shape == (0, 2)  # never with itself
+
+
+def test_duplicate_face_intersects():
+    V = np.array(FLAT, float)
+    assert meets(V, [[0, 1, 2], [2, 1, 0]])
+
+
+def test_unwelded_vertices_count_as_shared():
+    V, F, _ = CONFIGS["fan_flat"]
+    V2 = np.vstack([V, V[0]])  # face 1 uses a coincident copy of vertex 0
+    assert not meets(V2, [[0, 1, 2], [5, 3, 4]])
+    Vs, Fs, _ = CONFIGS["strip"]
+    assert not meets(np.vstack([Vs, Vs[:2]]), [[0, 1, 2], [5, 4, 3]])
+
+
+def test_degenerate_faces():
+    needle = [[0.2, 0.2, -1], [0.2, 0.2, 1], [0.2, 0.2, 0.5]]  # collinear: zero area
+    V, F = soup(FLAT, needle)
+    assert meets(V, F)  # a needle through a face is reported
+    V, F = soup(needle, np.add(needle, [0, 0, 0.3]))
+    assert not meets(V, F)  # two degenerate faces never intersect
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.5, 0, 0]])
+    assert not meets(V, [[0, 1, 2], [0, 1, 3]])  # degenerate face on a shared edge
+    V[3] = [0.3, 0.3, 0]
+    assert meets(V, [[0, 1, 2], [0, 0, 3]])  # repeated vertex index: a needle into the face
+    V[3] = [-0.3, 0.3, 0]
+    assert not meets(V, [[0, 1, 2], [0, 0, 3]])  # ... and one pointing away from it
+    V = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [1, 1, 0], [2, 2, 0]])
+    assert meets(V, [[0, 1, 2], [0, 3, 4]])  # needle from the shared vertex through the face
+    V2 = V.copy()
+    V2[3:] *= [1, -1, 1]  # same needle pointing away from the face
+    assert not meets(V2, [[0, 1, 2], [0, 3, 4]])
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.3, 1, 0], [0.5, 1e-14, 0]])
+    assert not meets(V, [[0, 1, 2], [1, 0, 3]])  # sliver flatter than tol along a shared edge
+
+
+def test_sharp_corner_does_not_reach_out():
+    # corner of 1e-4 rad at the origin; an edge of the other face passes 100 tol beyond it,
+    # where the sliver's edge lines grown by tol would still overlap (up to 2e4 tol)
+    turn = Rotation.from_euler("xyz", [0.3, 0.5, 0.7])  # so that bounding boxes do not decide
+    sliver = [[0, 0, 0], [1, 5e-5, 0], [1, -5e-5, 0]]
+    V, F = soup(sliver, [[-1e-4, 0, -1], [-1e-4, 0, 1], [-1, 0.5, 0]])
+    assert not meets(turn.apply(V), F, tol=1e-6)
+    V, F = soup(sliver, [[1e-4, 0, -1], [1e-4, 0, 1], [-1, 0.5, 0]])
+    assert meets(turn.apply(V), F, tol=1e-6)
+
+
+@pytest.mark.parametrize("gap, tol, expected", [(5e-7, 1e-6, True), (1e-5, 1e-6, False),
+                                                (1e-12, None, True), (1e-6, None, False)])
+def test_tolerance_near_touch(gap, tol, expected):
+    V, F = soup(FLAT, [[0.3, 0.3, gap], [0.4, 0.3, 1], [0.3, 0.4, 1]])  # vertex hovering over face 0
+    assert meets(V, F, tol=tol) == expected
+
+
+def test_speed_3000_against_50000():
+    V1, F1 = uv_sphere(160, 158)
+    V2, F2 = uv_sphere(40, 39, 1.0, (0.3, 0.1, 0.05))
+    V, F = np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
+    against, query = np.arange(len(F1)), np.arange(len(F1), len(F))
+    assert len(against) > 50_000 and len(query) > 3000
+    start = time.perf_counter()
+    hits = faces_intersecting(V, F, query, against)
+    elapsed = time.perf_counter() - start
+    assert 0 < len(hits) < len(query)  # the spheres cross along one curve
+    assert elapsed < 3.0
