@@ -10,8 +10,10 @@ Importing the package registers the filters as methods of ``pymeshlab.MeshSet``:
 from .filter_specs import register_all as _register_all
 from .holes import HoleContext, MeshTopologyError, boundary_loops, hole_context
 from .patch import HoleFillError, Patch
-from .registry import (FILTERS, FilterParameterError, apply_filter, filter_history, filter_list,
-                       print_filter_parameter_list)
+from .registry import (FILTERS, FilterParameterError, apply_filter, clear_filter_history, filter_calls,
+                       filter_history, filter_list, print_filter_parameter_list)
+from .mlx import (MlxRunError, MlxScriptError, filter_script_xml, read_filter_script, run_filter_script,
+                  save_filter_script)
 
 __version__ = "0.1.0"
 
@@ -21,4 +23,6 @@ __all__ = [
     "FILTERS", "FilterParameterError", "HoleContext", "HoleFillError", "MeshTopologyError", "Patch",
     "apply_filter", "boundary_loops", "filter_history", "filter_list", "hole_context",
     "print_filter_parameter_list",
+    "MlxRunError", "MlxScriptError", "clear_filter_history", "filter_calls", "filter_script_xml",
+    "read_filter_script", "run_filter_script", "save_filter_script",
 ]

@@ -159,8 +159,11 @@ def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):
     """
     from .holes import nonmanifold_edges
 
+    shared = np.concatenate(done_loops) if done_loops else np.zeros(0, np.int64)
+    if len(F2) == len(F) or len(np.unique(shared)) == len(shared):
+        return done_loops, patches, closed_ids  # no two patches meet: nothing can clash
     bad = nonmanifold_edges(F2)
-    if len(F2) == len(F) or len(bad) == 0:
+    if len(bad) == 0:
         return done_loops, patches, closed_ids
     owner = np.repeat(np.arange(len(patches)), [len(p.faces) for p in patches])
     new = np.sort(F2[len(F):], axis=1)

@@ -401,38 +401,91 @@ def inside_hole_sector(apex, normal, prev_point, next_point, targets, margin=1e-
     return (phi > margin) & (phi < limit - margin)
 
 
-def patch_guard(ctx):
-    """Veto for edge swaps that would push a patch through the surrounding mesh.
+class LoopSectors:
+    """The hole sector of every loop vertex, for vectorised :func:`inside_hole_sector` tests.
+
+    Parameters
+    ----------
+    points : (k, 3) float64  loop points, patch orientation
+    normals : (k, 3) float64
+    """
+
+    def __init__(self, points, normals):
+        P = np.asarray(points, np.float64)
+        N = np.asarray(normals, np.float64)
+        N = N / np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
+        u = np.roll(P, -1, axis=0) - P
+        u -= np.einsum("ij,ij->i", u, N)[:, None] * N
+        u /= np.maximum(np.linalg.norm(u, axis=1), 1e-300)[:, None]
+        self.points, self.u, self.w = P, u, np.cross(N, u)
+        self.limit = self._angle(np.arange(len(P)), np.roll(P, 1, axis=0))
+
+    def _angle(self, i, targets):
+        D = targets - self.points[i]
+        return np.mod(np.arctan2(np.einsum("ij,ij->i", D, self.w[i]), np.einsum("ij,ij->i", D, self.u[i])),
+                      2 * np.pi)
+
+    def contains(self, i, targets, margin=1e-9):
+        """(s,) bool: does the segment from loop vertex i[j] to targets[j] start into the hole?"""
+        i = np.asarray(i, np.int64)
+        phi = self._angle(i, np.atleast_2d(targets))
+        return (phi > margin) & (phi < self.limit[i] - margin)
+
+
+def patch_crossings(ctx, patch_points, patch_faces, faces=None):
+    """Patch faces (or the given subset of candidate faces) that intersect the HoleContext's surrounding faces.
+
+    Parameters
+    ----------
+    ctx : HoleContext
+    patch_points : (k + p, 3) float64  loop points then new vertices
+    patch_faces : (q, 3) int           faces in patch numbering
+    faces : (s, 3) int, optional       faces to test instead of ``patch_faces``
+
+    Returns
+    -------
+    (t,) int64 sorted indices into the tested faces
+    """
+    from .geometry.intersections import faces_intersecting
+
+    k, n_local = ctx.size, len(ctx.vertices)
+    test = np.asarray(patch_faces if faces is None else faces, np.int64).reshape(-1, 3)
+    if len(test) == 0 or len(ctx.faces) == 0:
+        return np.zeros(0, np.int64)
+    X = np.concatenate([ctx.vertices, np.asarray(patch_points)[k:]])
+    local = np.where(test >= k, test - k + n_local, test)
+    allF = np.concatenate([local, ctx.faces])
+    return faces_intersecting(X, allF, np.arange(len(local)), np.arange(len(local), len(allF)))
+
+
+def patch_guard(ctx, check_surroundings=False):
+    """Veto for edge swaps that would push a patch out of its hole.
 
     Returns ``allowed(V, A, B) -> (s,) bool`` (the ``allowed`` hook of
     :func:`geometry.flips.relax_edges`), where V holds the patch vertices (loop first, as in
     a Patch) and A[i], B[i] are the two triangles a swap would create. A swap is refused when
-    its new edge leaves a boundary vertex outside the hole sector
-    (:func:`inside_hole_sector`) or when a new triangle intersects the surrounding faces of
-    the HoleContext.
+    its new edge leaves a boundary vertex outside its hole sector (:class:`LoopSectors`)
+    and, with ``check_surroundings``, when a new triangle touching the loop intersects the
+    surrounding faces (slower: one intersection query per round of swaps).
     """
-    from .geometry.intersections import faces_intersecting
-
-    points, normals, k = ctx.points, ctx.loop_normals, ctx.size
-    n_local = len(ctx.vertices)
+    k = ctx.size
+    sectors = LoopSectors(ctx.points, ctx.loop_normals)
 
     def allowed(V, A, B):
         c, d = B[:, 1], B[:, 2]
         ok = np.ones(len(A), bool)
         for end, other in ((c, d), (d, c)):
-            for j in np.flatnonzero(end < k).tolist():
-                v = int(end[j])
-                ok[j] &= bool(inside_hole_sector(points[v], normals[v], points[(v - 1) % k],
-                                                 points[(v + 1) % k], V[other[j]][None])[0])
-        if ok.any() and len(ctx.faces):
-            X = np.concatenate([ctx.vertices, V[k:]])
-            new = np.concatenate([A, B])
-            new = np.where(new >= k, new - k + n_local, new)
-            allF = np.concatenate([new, ctx.faces])
-            hit = faces_intersecting(X, allF, np.arange(len(new)), np.arange(len(new), len(allF)))
-            bad = np.zeros(len(new), bool)
+            on_loop = end < k
+            ok[on_loop] &= sectors.contains(end[on_loop], V[other[on_loop]])
+        if not check_surroundings:
+            return ok
+        # Only swaps touching the boundary can reach the surrounding faces.
+        near = np.flatnonzero(ok & ((A < k).any(axis=1) | (B < k).any(axis=1)))
+        if len(near):
+            hit = patch_crossings(ctx, V, None, faces=np.concatenate([A[near], B[near]]))
+            bad = np.zeros(2 * len(near), bool)
             bad[hit] = True
-            ok &= ~(bad[: len(A)] | bad[len(A):])
+            ok[near] &= ~(bad[: len(near)] | bad[len(near):])
         return ok
 
     return allowed

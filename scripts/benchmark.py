@@ -34,7 +34,7 @@ def load_case(name):
     if name == "sphere":
         ms.create_sphere(subdiv=6)
     elif name == "torus":
-        ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=128, vsubdiv=64)
+        ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=192, vsubdiv=96)
     else:
         ms.load_new_mesh(os.path.join(SAMPLES, name))
     m = ms.current_mesh()

@@ -12,9 +12,9 @@ import time
 import numpy as np
 
 from ..geometry.bilateral import bilateral_filter
-from ..geometry.fairing import fair_positions
+from ..geometry.fairing import fair_patch_in_context
 from ..geometry.refine import refine_patch
-from ..holes import inside_hole_sector, patch_guard
+from ..holes import inside_hole_sector, patch_crossings, patch_guard
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
 
@@ -33,7 +33,8 @@ PARAMS = [
     ParamSpec("iterations", "int", 3, "Bilateral filter iterations (Sec. IV).", minimum=0, maximum=100),
     ParamSpec("fairing", "enum", "none",
               "Extra step beyond the paper, off by default: solve a membrane ('membrane') or thin-plate "
-              "('thinplate') energy for the interior vertices after refinement, before the bilateral filter.",
+              "('thinplate') energy for the new vertices, with the surrounding rings fixed, after refinement "
+              "and before the bilateral filter.",
               choices=("none", "membrane", "thinplate")),
 ]
 
@@ -83,6 +84,31 @@ def _vertex_angle(p_prev, p, p_next, normal):
     return theta if -(cross @ normal) >= 0 else 2 * np.pi - theta, np.sqrt(cross @ cross)
 
 
+def _ear_holds_a_vertex(P, p, v, n, others):
+    """True when a boundary vertex of ``others`` lies in the ear triangle (p, v, n) or on its new edge.
+
+    The test is made in the ear's plane, for vertices within half the ear's longest edge of
+    that plane: the classic ear condition, which the paper's angle rule takes for granted.
+    """
+    A, B, C = P[p], P[v], P[n]
+    nt = np.cross(B - A, C - A)
+    area2 = np.linalg.norm(nt)
+    if area2 == 0 or len(others) == 0:
+        return False
+    nt = nt / area2
+    Q = P[others]
+    height = (Q - A) @ nt
+    reach = 0.5 * max(np.linalg.norm(B - A), np.linalg.norm(C - B), np.linalg.norm(A - C))
+    Q = Q - np.outer(height, nt)
+    # Barycentric signs: inside or on the boundary of the triangle (tolerance relative to its size).
+    tol = -1e-9
+    w_a = np.cross(C - B, Q - B) @ nt / area2
+    w_b = np.cross(A - C, Q - C) @ nt / area2
+    w_c = np.cross(B - A, Q - A) @ nt / area2
+    inside = (w_a >= tol) & (w_b >= tol) & (w_c >= tol) & (np.abs(height) <= reach)
+    return bool(inside.any())
+
+
 def min_angle_triangulation(P, normals, forbidden_edges=()):
     """Modified principle of minimum angle (Sec. III.B, Steps 1-3).
 
@@ -93,7 +119,8 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
     used (the paper leaves this case open). An ear is never cut when its new edge (v1, v2)
     already exists in the mesh (``forbidden_edges``) or its area is zero; ears whose new
     edge leaves v1 or v2 outside the hole (:func:`inside_hole_sector`, about the vertex
-    normal) are cut only when no other ear is left.
+    normal) or whose triangle holds another boundary vertex (:func:`_ear_holds_a_vertex`)
+    are cut only when no other ear is left.
 
     After a cut only the ears within two positions of the removed vertex change, so each
     step costs O(1) updates plus one arg-min over the remaining vertices.
@@ -120,37 +147,55 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
     nxt = [(i + 1) % k for i in range(k)]
     active = np.ones(k, bool)
     angle = np.full(k, np.inf)
-    # rank: 3 = every test passes, 2 = all but the normal test, 1 = only the sector test fails, 0 = never.
-    rank = np.zeros(k, np.int64)
+    cuttable = np.zeros(k, bool)      # non-degenerate, new edge not already in the mesh
+    normals_agree = np.zeros(k, bool)  # the normal test alpha <= sigma
+    verdict = {}                       # cached ear/sector test, dropped when the ear changes
     area_tol = 1e-14 * float(np.ptp(P, axis=0).max()) ** 2
 
     def evaluate(v):
         p, n = prv[v], nxt[v]
         angle[v], area2 = _vertex_angle(P[p], P[v], P[n], N[v])
-        if area2 <= area_tol or tuple(sorted((p, n))) in forbidden:
-            rank[v] = 0
-            return
-        inside = (inside_hole_sector(P[p], N[p], P[prv[p]], P[v], P[n][None])[0]
+        cuttable[v] = area2 > area_tol and tuple(sorted((p, n))) not in forbidden
+        normals_agree[v] = N[p] @ N[n] >= cos_sigma
+        verdict.pop(v, None)
+
+    def proper_ear(v):
+        # Removing other vertices can only unblock an ear, so a cached False stays safe.
+        if v not in verdict:
+            p, n = prv[v], nxt[v]
+            ok = (inside_hole_sector(P[p], N[p], P[prv[p]], P[v], P[n][None])[0]
                   and inside_hole_sector(P[n], N[n], P[v], P[nxt[n]], P[p][None])[0])
-        if not inside:
-            rank[v] = 1
-        else:
-            rank[v] = 3 if N[p] @ N[n] >= cos_sigma else 2
+            if ok:
+                others = np.flatnonzero(active)
+                others = others[(others != p) & (others != v) & (others != n)]
+                ok = not _ear_holds_a_vertex(P, p, v, n, others)
+            verdict[v] = ok
+        return verdict[v]
 
     for v in range(k):
         evaluate(v)
     faces = []
     remaining = k
     while remaining > 3:
-        best = int(rank.max(initial=0, where=active))
-        if best == 0:
-            raise HoleFillError("no valid ear left in the minimum-angle triangulation")
-        v = int(np.argmin(np.where(active & (rank == best), angle, np.inf)))
+        pick = None
+        for tier in (active & cuttable & normals_agree, active & cuttable):
+            candidates = np.flatnonzero(tier)
+            for v in candidates[np.argsort(angle[candidates], kind="stable")].tolist():
+                if proper_ear(v):
+                    pick = v
+                    break
+            if pick is not None:
+                break
+        if pick is None:
+            candidates = np.flatnonzero(active & cuttable)
+            if len(candidates) == 0:
+                raise HoleFillError("no valid ear left in the minimum-angle triangulation")
+            pick = int(candidates[np.argmin(angle[candidates])])
+        v = pick
         p, n = prv[v], nxt[v]
         faces.append((p, v, n))
         nxt[p], prv[n] = n, p
         active[v] = False
-        rank[v] = 0
         remaining -= 1
         for u in {prv[p], p, n, nxt[n]}:
             evaluate(u)
@@ -183,10 +228,18 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     fixed = np.concatenate([loop_edges, ctx.forbidden_edges.reshape(-1, 2)])
     V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
                                      allowed=patch_guard(ctx))
+    # Swaps can fold a patch through a strongly curved border; redo those rare holes with
+    # every swap near the border checked against the surrounding faces.
+    info["guarded_refinement"] = False
+    if len(patch_crossings(ctx, V, F)) and not len(patch_crossings(ctx, ctx.points, F0)):
+        V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
+                                         allowed=patch_guard(ctx, check_surroundings=True))
+        info["guarded_refinement"] = True
     t2 = time.perf_counter()
     interior = np.arange(len(V)) >= k
     if fairing != "none" and interior.any():
-        V = fair_positions(V, F, ~interior, order=1 if fairing == "membrane" else 2)
+        V[k:] = fair_patch_in_context(ctx.vertices, ctx.faces, k, V[k:], F,
+                                      order=1 if fairing == "membrane" else 2)
     if iterations > 0 and interior.any():
         V = bilateral_filter(V, F, interior, sigma_c * scale, sigma_s * scale, iterations)
     t3 = time.perf_counter()

@@ -46,3 +46,32 @@ def fair_positions(V, F, fixed, order=1, weights="uniform", rhs=None):
     B = b[free] - A_fc @ V[~free]
     V[free] = spla.splu(A_ff).solve(B)
     return V
+
+
+def fair_patch_in_context(context_vertices, context_faces, k, patch_vertices, patch_faces, order=2,
+                          weights="uniform"):
+    """Fair a hole patch with the surrounding rings as constraints (Liepa-style).
+
+    The patch is glued to the surrounding faces along the loop and only its new vertices
+    move; with ``order=2`` the fixed ring outside the loop makes the fill tangent-continuous.
+
+    Parameters
+    ----------
+    context_vertices : (n, 3) float64  surrounding vertices, loop first (HoleContext.vertices)
+    context_faces : (m, 3) int         surrounding faces in the same numbering
+    k : int                            loop size
+    patch_vertices : (p, 3) float64    new vertices
+    patch_faces : (q, 3) int           patch faces (i < k loop vertex, k + j new vertex j)
+
+    Returns
+    -------
+    (p, 3) float64  faired new vertex positions
+    """
+    n = len(context_vertices)
+    faces = np.asarray(patch_faces, np.int64)
+    faces = np.where(faces >= k, faces - k + n, faces)
+    X = np.concatenate([context_vertices, patch_vertices])
+    fixed = np.arange(len(X)) < n
+    out = fair_positions(X, np.concatenate([np.asarray(context_faces, np.int64), faces]), fixed,
+                         order=order, weights=weights)
+    return out[n:]

@@ -38,7 +38,8 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
 
     For an interior edge (a, b) with triangles (a, b, c) and (b, a, d) the test passes when
     d lies outside the circumsphere of (a, b, c) and c outside that of (b, a, d); otherwise
-    the edge is swapped to (c, d). A swap is refused when it would fold the surface (a new
+    the edge is swapped to (c, d), provided (c, d) passes the same test (on a non-planar quad
+    both diagonals may fail it). A swap is refused when it would fold the surface (a new
     triangle facing against the old pair), create a duplicate edge, or touch a fixed edge.
     Swaps are applied in rounds of non-adjacent edges (vectorised).
 
@@ -79,6 +80,12 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
         inside = (np.linalg.norm(V[d] - cc1, axis=1) < r1 * (1 - 1e-9)) | \
                  (np.linalg.norm(V[c] - cc2, axis=1) < r2 * (1 - 1e-9))
         a, b = E[:, 0], E[:, 1]
+        # On a non-planar quad both diagonals can fail the test; swapping only when the new
+        # edge passes it rules out swapping back and forth.
+        cc3, r3 = circumcenters(V, np.stack([a, d, c], axis=1))
+        cc4, r4 = circumcenters(V, np.stack([b, c, d], axis=1))
+        inside &= (np.linalg.norm(V[b] - cc3, axis=1) >= r3 * (1 - 1e-9)) & \
+                  (np.linalg.norm(V[a] - cc4, axis=1) >= r4 * (1 - 1e-9))
         old = _triangle_normals(V[a], V[b], V[c]) + _triangle_normals(V[b], V[a], V[d])
         n1 = _triangle_normals(V[a], V[d], V[c])
         n2 = _triangle_normals(V[b], V[c], V[d])
@@ -97,11 +104,21 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
                                    np.stack([b[cand], c[cand], d[cand]], axis=1))]
         if len(cand) == 0:
             break
-        # Independent set: a face takes part in at most one swap per round.
-        claim = np.full(len(F), -1)
-        np.maximum.at(claim, f1[cand], cand)
-        np.maximum.at(claim, f2[cand], cand)
-        chosen = cand[(claim[f1[cand]] == cand) & (claim[f2[cand]] == cand)]
+        # Independent set: a face takes part in at most one swap per round; a few claiming
+        # passes make the set nearly maximal, so rounds stay few.
+        taken = np.zeros(len(F), bool)
+        picked = []
+        for _ in range(4):
+            cand = cand[~taken[f1[cand]] & ~taken[f2[cand]]]
+            if len(cand) == 0:
+                break
+            claim = np.full(len(F), -1)
+            np.maximum.at(claim, f1[cand], cand)
+            np.maximum.at(claim, f2[cand], cand)
+            won = cand[(claim[f1[cand]] == cand) & (claim[f2[cand]] == cand)]
+            taken[f1[won]] = taken[f2[won]] = True
+            picked.append(won)
+        chosen = np.concatenate(picked)
         _, first = np.unique(new_key[chosen], return_index=True)
         chosen = chosen[first]
         F[f1[chosen]] = np.stack([a[chosen], d[chosen], c[chosen]], axis=1)

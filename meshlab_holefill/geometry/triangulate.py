@@ -73,7 +73,12 @@ def triangulate_polygon(Q, max_area=None, min_angle=None, extra_points=None, ste
     ccw_polygon = polygon_signed_area(Q) > 0
     flip = (signed > 0) != ccw_polygon
     T[flip] = T[flip][:, [0, 2, 1]]
+    if max_area is None and min_angle is None and len(P) != len(pts):
+        raise HoleFillError("polygon is not simple: the triangulation had to add crossing points")
     if not steiner_on_boundary:
-        if len(T) and len(P) == len(pts) and len(T) != k - 2 + 2 * (len(pts) - k):
-            raise HoleFillError("constrained triangulation is not a triangulation of the polygon")
+        E = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
+        have = set((np.minimum(E[:, 0], E[:, 1]) * len(P) + np.maximum(E[:, 0], E[:, 1])).tolist())
+        need = np.minimum(segments[:, 0], segments[:, 1]) * len(P) + np.maximum(segments[:, 0], segments[:, 1])
+        if not all(key in have for key in need.tolist()):
+            raise HoleFillError("constrained triangulation lost a polygon edge (polygon not simple?)")
     return np.asarray(P, np.float64), T

@@ -1,0 +1,60 @@
+"""Shared fixtures: pymeshlab sample meshes and analytic shapes with holes of known shape."""
+import os
+
+import numpy as np
+import pymeshlab
+import pytest
+
+import meshlab_holefill  # noqa: F401  (registers the filters)
+
+SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
+
+
+def sample(name):
+    return os.path.join(SAMPLES, name)
+
+
+def mesh_arrays(ms):
+    m = ms.current_mesh()
+    return np.asarray(m.vertex_matrix(), np.float64), np.asarray(m.face_matrix(), np.int64)
+
+
+def meshset_from_arrays(V, F, name="mesh"):
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(V, np.float64), face_matrix=np.asarray(F, np.int32)), name)
+    return ms
+
+
+def cut_disks(V, F, centers, radius):
+    """Remove faces whose centroid is within ``radius`` of any centre; returns (V, F_kept, F_removed)."""
+    C = V[F].mean(axis=1)
+    remove = np.zeros(len(F), bool)
+    for c in np.atleast_2d(centers):
+        remove |= np.linalg.norm(C - c, axis=1) < radius
+    return V, F[~remove], F[remove]
+
+
+def sphere_with_holes(subdiv=4, centers=((1, 0, 0), (0, 0, 1)), radius=0.35):
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=subdiv)
+    V, F = mesh_arrays(ms)
+    return cut_disks(V, F, np.asarray(centers, float), radius)
+
+
+def grid(nx=12, ny=12, z=None):
+    """Flat (or height-field) triangulated square grid in [0, 1]^2, counter-clockwise faces."""
+    xs, ys = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 1, ny))
+    V = np.stack([xs.ravel(), ys.ravel(), np.zeros(nx * ny)], axis=1)
+    if z is not None:
+        V[:, 2] = z(V[:, 0], V[:, 1])
+    idx = np.arange(nx * ny).reshape(ny, nx)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
+    F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    return V, F
+
+
+@pytest.fixture
+def bunny_scan():
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("bunny10k_textured.obj"))
+    return ms

@@ -1,0 +1,166 @@
+"""The filter contract shared by every filter (DESIGN.md), checked on the Hu et al. filter."""
+import numpy as np
+import pymeshlab
+import pytest
+
+import meshlab_holefill
+from meshlab_holefill import FilterParameterError, MeshTopologyError, apply_filter, filter_list
+from meshlab_holefill.holes import boundary_loops
+
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+
+NAME = "meshing_close_holes_min_angle_bilateral"
+
+
+def test_filters_are_registered_as_meshset_methods():
+    assert NAME in filter_list()
+    for name in filter_list():
+        assert callable(getattr(pymeshlab.MeshSet, name))
+        assert name in meshlab_holefill.FILTERS
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"maxholesiz": 10}, "no parameter 'maxholesiz'"),
+    ({"maxholesize": "big"}, "expected an int"),
+    ({"maxholesize": 2}, "below the minimum"),
+    ({"selected": 1}, "expected a bool"),
+    ({"alpha": float("nan")}, "finite"),
+    ({"alpha": 100.0}, "above the maximum"),
+    ({"fairing": "spline"}, "expected one of"),
+])
+def test_bad_parameters_raise_before_anything_runs(bunny_scan, kwargs, message):
+    before = bunny_scan.current_mesh().face_number()
+    with pytest.raises(FilterParameterError, match=message):
+        getattr(bunny_scan, NAME)(**kwargs)
+    assert bunny_scan.current_mesh().face_number() == before
+
+
+def test_enum_parameters_accept_their_index_like_mlx_files(bunny_scan):
+    res = getattr(bunny_scan, NAME)(fairing=1, iterations=0)  # 1 == 'membrane'
+    assert res["closed_holes"] == 5
+
+
+def test_empty_meshset_point_cloud_and_nan_are_rejected():
+    with pytest.raises(ValueError, match="empty"):
+        getattr(pymeshlab.MeshSet(), NAME)()
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.random.default_rng(0).normal(size=(10, 3))))
+    with pytest.raises(ValueError, match="point cloud"):
+        getattr(ms, NAME)()
+    V, F = grid(4, 4)
+    V[3, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        getattr(meshset_from_arrays(V, F), NAME)()
+
+
+def test_non_manifold_edges_are_rejected_with_the_repair_filter_named():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    with pytest.raises(MeshTopologyError, match="meshing_repair_non_manifold_edges"):
+        getattr(meshset_from_arrays(V, F), NAME)()
+
+
+def test_layer_name_kept_other_layers_untouched_and_new_faces_selected(bunny_scan):
+    bunny_scan.create_sphere()
+    bunny_scan.set_current_mesh(0)
+    res = getattr(bunny_scan, NAME)()
+    assert bunny_scan.mesh_number() == 2
+    m = bunny_scan.current_mesh()
+    assert m.label() == "bunny10k_textured.obj"
+    assert m.selected_face_number() == res["new_faces"]
+    sel = m.face_selection_array()
+    assert not sel[:9999].any() and sel[9999:].all()
+    others = [bunny_scan.mesh(i) for i in range(10) if bunny_scan.mesh_id_exists(i) and i != bunny_scan.current_mesh_id()]
+    assert len(others) == 1 and others[0].face_number() == 1280  # the sphere layer
+
+
+def test_attributes_kept_on_originals_and_set_on_new_elements(bunny_scan):
+    m0 = bunny_scan.current_mesh()
+    fc0, wt0 = m0.face_color_matrix(), m0.wedge_tex_coord_matrix()
+    getattr(bunny_scan, NAME)(newfaceselected=False)
+    m1 = bunny_scan.current_mesh()
+    assert m1.selected_face_number() == 0
+    assert np.array_equal(m1.face_color_matrix()[:9999], fc0)
+    assert np.array_equal(m1.wedge_tex_coord_matrix()[: 3 * 9999], wt0)
+    new_colors = m1.face_color_matrix()[9999:]
+    assert np.allclose(new_colors, fc0.mean(axis=0), atol=0.05)  # the scan is uniformly coloured
+    assert m1.texture_number() == 1
+
+
+def test_vertex_colours_and_quality_are_interpolated_on_new_vertices():
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.4)
+    colors = np.ones((len(V), 4))
+    colors[:, 0] = (V[:, 0] + 1) / 2
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=F.astype(np.int32), v_color_matrix=colors,
+                               v_scalar_array=V[:, 1].copy()))
+    getattr(ms, NAME)()
+    m = ms.current_mesh()
+    vc, q = m.vertex_color_matrix(), m.vertex_scalar_array()
+    assert np.array_equal(vc[: len(V)], colors.astype(vc.dtype)) or np.allclose(vc[: len(V)], colors, atol=1 / 255)
+    new = m.vertex_matrix()[len(V):]
+    assert len(new) > 0
+    assert np.allclose(q[len(V):], new[:, 1], atol=0.15)  # quality ~ y, interpolated from the border
+
+
+def test_maxholesize_skips_large_holes_and_selected_limits_to_selection():
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(1, 0, 0)], radius=0.3)
+    _, F, _ = cut_disks(V, F, [(0, 0, 1)], 0.5)
+    sizes = sorted(len(lp) for lp in boundary_loops(F))
+    assert sizes[0] < sizes[1]
+    ms = meshset_from_arrays(V, F)
+    res = getattr(ms, NAME)(maxholesize=sizes[0])
+    assert res["closed_holes"] == 1 and res["skipped_holes"] == 1
+    assert "too large" in [h for h in res["holes"] if h["status"] == "skipped"][0]["reason"]
+    # selection: select the faces near (0, 0, 1) only
+    ms = meshset_from_arrays(V, F)
+    ms.compute_selection_by_condition_per_face(condselect="(z0 > 0.7) || (z1 > 0.7) || (z2 > 0.7)")
+    res = getattr(ms, NAME)(selected=True)
+    assert res["closed_holes"] == 1
+    assert [h["status"] for h in res["holes"]].count("skipped") == 1
+
+
+def test_no_hole_leaves_the_mesh_alone():
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere()
+    mid = ms.current_mesh_id()
+    res = getattr(ms, NAME)()
+    assert res["closed_holes"] == 0 and res["new_faces"] == 0 and ms.current_mesh_id() == mid
+
+
+def test_face_range_scan_with_pinched_vertices_and_many_components():
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("rangemaps/face000.ply"))
+    V0, F0 = mesh_arrays(ms)
+    res = getattr(ms, NAME)()
+    outer = res["holes"][0]
+    assert outer["boundary_edges"] == 2468 and outer["status"] == "skipped"
+    statuses = {h["status"] for h in res["holes"]}
+    assert statuses <= {"closed", "skipped", "failed"}
+    assert res["closed_holes"] >= 30
+    V1, F1 = mesh_arrays(ms)
+    assert np.array_equal(V1[: len(V0)], V0) and np.array_equal(F1[: len(F0)], F0)
+    # every closed hole really is closed; nothing half-filled
+    left = {tuple(sorted(lp.vertices.tolist())) for lp in boundary_loops(F1)}
+    for h, lp in zip(res["holes"], boundary_loops(F0)):
+        assert (tuple(sorted(lp.vertices.tolist())) in left) == (h["status"] != "closed")
+    assert ms.get_topological_measures()["non_two_manifold_edges"] == 0
+
+
+def test_apply_filter_runs_builtins_and_ours_and_rejects_unknown(bunny_scan):
+    res = apply_filter(bunny_scan, "meshing_close_holes", maxholesize=50)
+    assert res["closed_holes"] == 5
+    with pytest.raises(FilterParameterError, match="unknown filter"):
+        apply_filter(bunny_scan, "meshing_close_everything")
+
+
+def test_percentage_lengths_are_converted_like_builtin_filters():
+    from meshlab_holefill.registry import FilterSpec, ParamSpec, resolve_params
+
+    spec = FilterSpec("x", "X", "", [ParamSpec("radius", "length", pymeshlab.PercentageValue(1), "r")], run=None)
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("bunny10k_textured.obj"))
+    diag = ms.current_mesh().bounding_box().diagonal()
+    assert resolve_params(spec, {}, ms)["radius"] == pytest.approx(diag / 100)
+    assert resolve_params(spec, {"radius": pymeshlab.PureValue(0.5)}, ms)["radius"] == 0.5
+    assert resolve_params(spec, {"radius": pymeshlab.PercentageValue(10)}, ms)["radius"] == pytest.approx(diag / 10)

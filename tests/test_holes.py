@@ -1,0 +1,123 @@
+import numpy as np
+import pymeshlab
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from meshlab_holefill.holes import (boundary_halfedges, boundary_loops, hole_context, inside_hole_sector,
+                                    loop_measures, nonmanifold_edges, vertex_face_incidence)
+
+from conftest import cut_disks, grid, mesh_arrays, sample, sphere_with_holes
+
+
+def test_single_triangle_loop_runs_against_the_face():
+    loops = boundary_loops(np.array([[0, 1, 2]]))
+    assert len(loops) == 1
+    # Patch orientation is the reverse of the face's own order.
+    v = loops[0].vertices.tolist()
+    assert v in ([0, 2, 1], [2, 1, 0], [1, 0, 2])
+
+
+def test_grid_with_hole_has_outer_and_inner_loop_with_border_faces():
+    V, F = grid(10, 10)
+    _, F, removed = cut_disks(V, F, [(0.5, 0.5, 0)], 0.2)
+    loops = boundary_loops(F)
+    assert len(loops) == 2
+    outer, inner = loops
+    assert len(outer) == 36
+    for lp in loops:
+        assert len(np.unique(lp.vertices)) == len(lp.vertices)
+        for i, f in enumerate(lp.border_faces):
+            a, b = lp.vertices[i], lp.vertices[(i + 1) % len(lp)]
+            face = F[f].tolist()
+            j = face.index(b)
+            assert face[(j + 1) % 3] == a  # the border face holds (b, a)
+
+
+def test_inner_loop_is_counter_clockwise_seen_from_the_normal():
+    V, F = grid(10, 10)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.2)
+    inner = boundary_loops(F)[1]
+    P = V[inner.vertices][:, :2]
+    signed = 0.5 * np.sum(P[:, 0] * np.roll(P[:, 1], -1) - np.roll(P[:, 0], -1) * P[:, 1])
+    assert signed > 0  # faces are counter-clockwise (normal +z), so the patch loop is too
+
+
+def test_pinched_vertex_is_split_into_simple_loops():
+    # Two triangles touching at vertex 0 (a bow tie).
+    F = np.array([[0, 1, 2], [0, 3, 4]])
+    loops = boundary_loops(F)
+    assert [len(lp) for lp in loops] == [3, 3]
+    assert all(lp.pinched for lp in loops)
+    assert all(len(set(lp.vertices.tolist())) == 3 for lp in loops)
+
+
+def test_bunny_scan_has_its_five_natural_holes():
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("bunny10k_textured.obj"))
+    _, F = mesh_arrays(ms)
+    assert [len(lp) for lp in boundary_loops(F)] == [38, 22, 22, 19, 8]
+
+
+def test_face_range_scan_loops_are_simple_and_cover_every_boundary_edge():
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("rangemaps/face000.ply"))
+    _, F = mesh_arrays(ms)
+    loops = boundary_loops(F)
+    assert len(loops[0]) == 2468
+    assert sum(len(lp) for lp in loops) == len(boundary_halfedges(F)[0])
+    assert all(len(set(lp.vertices.tolist())) == len(lp) for lp in loops)
+    assert all(lp.closed for lp in loops)
+    assert any(lp.pinched for lp in loops)
+
+
+def test_nonmanifold_edge_detected():
+    F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    assert nonmanifold_edges(F).tolist() == [[0, 1]]
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.lists(st.tuples(st.floats(0.25, 0.75), st.floats(0.25, 0.75)), min_size=1, max_size=1),
+       st.floats(0.08, 0.2))
+def test_one_hole_in_a_grid_gives_two_loops(centers, radius):
+    V, F = grid(16, 16)
+    _, F2, removed = cut_disks(V, F, [(x, y, 0) for x, y in centers], radius)
+    if len(removed) == 0:
+        return
+    loops = boundary_loops(F2)
+    assert len(loops) == 2
+    assert sum(len(lp) for lp in loops) == len(boundary_halfedges(F2)[0])
+
+
+def test_hole_context_rings_scale_and_normals():
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.3)
+    loop = boundary_loops(F)[0]
+    ctx = hole_context(V, F, loop, vertex_face_incidence(F, len(V)), rings=2)
+    k = ctx.size
+    assert np.array_equal(ctx.global_index[:k], loop.vertices)
+    assert np.array_equal(ctx.vertices[:k], V[loop.vertices])
+    assert set(np.unique(ctx.depth)) == {0, 1, 2}
+    # On a unit sphere, vertex normals point along the position.
+    cos = np.einsum("ij,ij->i", ctx.normals[ctx.depth < 2], ctx.vertices[ctx.depth < 2])
+    assert cos.min() > 0.99
+    assert np.allclose(ctx.edge_scale, ctx.mean_edge_length, rtol=0.3)
+    # border faces hold the loop edges
+    for i in range(k):
+        face = ctx.faces[ctx.border_faces[i]].tolist()
+        assert i in face and (i + 1) % k in face
+
+
+def test_loop_measures_of_a_planar_circle():
+    t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    P = np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], 1)
+    m = loop_measures(P)
+    assert m["planarity"] == pytest.approx(0, abs=1e-12)
+    assert m["diameter"] == pytest.approx(2, rel=1e-3)
+    assert m["perimeter"] == pytest.approx(2 * np.pi, rel=1e-2)
+
+
+def test_hole_sector_on_a_square_corner():
+    # Counter-clockwise square seen from +z: at (1, 0) the hole sector points up-left.
+    z = np.array([0, 0, 1.0])
+    apex, prev, nxt = np.array([1.0, 0, 0]), np.array([0.0, 0, 0]), np.array([1.0, 1, 0])
+    inside = inside_hole_sector(apex, z, prev, nxt, np.array([[0.5, 0.5, 0], [1.5, -0.5, 0], [2, 0.1, 0]]))
+    assert inside.tolist() == [True, False, False]

@@ -1,0 +1,123 @@
+"""Hu et al.: modified minimum-angle triangulation, refinement, bilateral filter, and the filter end to end."""
+import numpy as np
+import pymeshlab
+import pytest
+
+from meshlab_holefill.algorithms.min_angle_bilateral import (boundary_angles, fill, min_angle_triangulation,
+                                                             normal_angle_threshold)
+from meshlab_holefill.geometry.quality import triangle_quality
+from meshlab_holefill.holes import boundary_loops, hole_context, vertex_face_incidence
+from meshlab_holefill.patch import validate_patch
+
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+
+UP = np.array([0.0, 0.0, 1.0])
+# Counter-clockwise L shape seen from +z: the vertex (1, 1) is the concave one.
+L_SHAPE = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0]], float)
+
+
+def test_convex_and_concave_vertices_of_an_l_shape():
+    angle, convex = boundary_angles(L_SHAPE, np.tile(UP, (6, 1)))
+    assert convex.tolist() == [True, True, True, False, True, True]
+    assert np.degrees(angle).round(6).tolist() == [90, 90, 90, 270, 90, 90]
+
+
+def test_the_concave_reading_flips_with_the_normal():
+    # Seen from below the same loop is clockwise: every vertex swaps convexity (Eq. 2's two cases).
+    _, convex = boundary_angles(L_SHAPE, np.tile(-UP, (6, 1)))
+    assert convex.tolist() == [False, False, False, True, False, False]
+
+
+def test_normal_angle_threshold_rule():
+    tilt = lambda deg: np.array([np.sin(np.radians(deg)), 0, np.cos(np.radians(deg))])
+    assert np.degrees(normal_angle_threshold(np.array([tilt(0), tilt(50)]))) == pytest.approx(45)
+    assert np.degrees(normal_angle_threshold(np.array([tilt(0), tilt(80)]))) == pytest.approx(0.85 * 80)
+
+
+def test_min_angle_triangulation_of_the_l_shape_cuts_convex_ears_only():
+    F = min_angle_triangulation(L_SHAPE, np.tile(UP, (6, 1)))
+    assert len(F) == 4
+    # Every face is counter-clockwise (oriented like the loop) and the concave vertex is never an ear tip.
+    P = L_SHAPE
+    normals = np.cross(P[F[:, 1]] - P[F[:, 0]], P[F[:, 2]] - P[F[:, 0]])
+    assert np.all(normals[:, 2] > 0)
+    edges = {tuple(sorted(e)) for f in F.tolist() for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
+    assert (2, 4) not in edges  # the diagonal outside the L
+
+
+def test_min_angle_triangulation_prefers_the_smallest_angle():
+    # A thin triangle tip at vertex 1 (the sharpest angle) must be the first ear.
+    P = np.array([[0, 0, 0], [10, 0.5, 0], [0, 1, 0], [-1, 0.5, 0]], float)
+    F = min_angle_triangulation(P, np.tile(UP, (4, 1)))
+    assert F[0].tolist() == [0, 1, 2]
+
+
+def test_min_angle_triangulation_avoids_forbidden_edges():
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    F = min_angle_triangulation(square, np.tile(UP, (4, 1)), forbidden_edges=[[0, 2]])
+    edges = {tuple(sorted(e)) for f in F.tolist() for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
+    assert (1, 3) in edges and (0, 2) not in edges
+
+
+def _first_hole_context(V, F, rings=2):
+    loops = boundary_loops(F)
+    inner = [lp for lp in loops if len(lp) < max(len(x) for x in loops)] or loops
+    return hole_context(V, F, inner[0], vertex_face_incidence(F, len(V)), rings=rings)
+
+
+def test_fill_of_a_planar_hole_stays_planar_and_matches_density():
+    V, F = grid(20, 20)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.25)
+    ctx = _first_hole_context(V, F)
+    patch = fill(ctx)
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    assert np.abs(patch.vertices[:, 2]).max() < 1e-12
+    X = patch.all_points(ctx.points)
+    q = triangle_quality(X, patch.faces)
+    assert q.mean() > 0.8 and q.min() > 0.3
+    E = np.concatenate([patch.faces[:, [0, 1]], patch.faces[:, [1, 2]]])
+    ratio = np.linalg.norm(X[E[:, 0]] - X[E[:, 1]], axis=1).mean() / ctx.mean_edge_length
+    assert 0.8 < ratio < 1.25
+
+
+def test_fill_is_deterministic():
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.4)
+    ctx = _first_hole_context(V, F)
+    a, b = fill(ctx), fill(ctx)
+    assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+
+
+def test_fairing_option_brings_a_sphere_hole_closer_to_the_sphere():
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.6)
+    ctx = _first_hole_context(V, F)
+    flat = fill(ctx)
+    faired = fill(ctx, fairing="thinplate")
+    err = lambda p: np.abs(np.linalg.norm(p.vertices, axis=1) - 1).mean()
+    assert err(faired) < 0.5 * err(flat)
+
+
+def test_filter_closes_the_five_natural_holes_of_the_bunny_scan(bunny_scan):
+    V0, F0 = mesh_arrays(bunny_scan)
+    res = bunny_scan.meshing_close_holes_min_angle_bilateral()
+    assert res["closed_holes"] == 5 and res["failed_holes"] == 0
+    assert [h["boundary_edges"] for h in res["holes"]] == [38, 22, 22, 19, 8]
+    V1, F1 = mesh_arrays(bunny_scan)
+    assert np.array_equal(V1[: len(V0)], V0) and np.array_equal(F1[: len(F0)], F0)
+    assert len(boundary_loops(F1)) == 0
+    topo = bunny_scan.get_topological_measures()
+    assert topo["non_two_manifold_edges"] == 0 and topo["boundary_edges"] == 0
+    assert res["new_faces"] == len(F1) - len(F0)
+
+
+def test_filter_on_sphere_holes_gives_good_triangles_close_to_the_sphere():
+    V, F, _ = sphere_with_holes(subdiv=5, centers=[(1, 0, 0), (0, 0, 1)], radius=0.3)
+    ms = meshset_from_arrays(V, F)
+    res = ms.meshing_close_holes_min_angle_bilateral()
+    assert res["closed_holes"] == 2
+    V1, F1 = mesh_arrays(ms)
+    new = F1[len(F):]
+    q = triangle_quality(V1, new)
+    assert q.mean() > 0.8 and q.min() > 0.25
+    # A flat-ish cap over a hole of radius 0.3 on the unit sphere stays within its sagitta.
+    r = np.linalg.norm(V1[len(V):], axis=1)
+    assert np.all(r <= 1 + 1e-9) and np.all(r > 1 - 0.06)
