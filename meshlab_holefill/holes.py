@@ -458,34 +458,44 @@ def patch_crossings(ctx, patch_points, patch_faces, faces=None):
     return faces_intersecting(X, allF, np.arange(len(local)), np.arange(len(local), len(allF)))
 
 
-def patch_guard(ctx, check_surroundings=False):
-    """Veto for edge swaps that would push a patch out of its hole.
+def patch_guard(ctx, check_intersections=False):
+    """Veto for edge swaps that would push a patch out of its hole or through itself.
 
-    Returns ``allowed(V, A, B) -> (s,) bool`` (the ``allowed`` hook of
-    :func:`geometry.flips.relax_edges`), where V holds the patch vertices (loop first, as in
-    a Patch) and A[i], B[i] are the two triangles a swap would create. A swap is refused when
-    its new edge leaves a boundary vertex outside its hole sector (:class:`LoopSectors`)
-    and, with ``check_surroundings``, when a new triangle touching the loop intersects the
-    surrounding faces (slower: one intersection query per round of swaps).
+    Returns ``allowed(V, F, A, B, replaced) -> (s,) bool`` (the ``allowed`` hook of
+    :func:`geometry.flips.relax_edges`), where V, F are the current patch (loop vertices
+    first, as in a Patch) and A[i], B[i] the two triangles a swap would create in place of
+    faces replaced[i]. A swap is refused when its new edge leaves a boundary vertex outside
+    its hole sector (:class:`LoopSectors`) and, with ``check_intersections``, when a new
+    triangle intersects the surrounding faces or the rest of the patch (slower: one
+    intersection query per round of swaps).
     """
     k = ctx.size
     sectors = LoopSectors(ctx.points, ctx.loop_normals)
 
-    def allowed(V, A, B):
+    def allowed(V, F, A, B, replaced):
         c, d = B[:, 1], B[:, 2]
         ok = np.ones(len(A), bool)
         for end, other in ((c, d), (d, c)):
             on_loop = end < k
             ok[on_loop] &= sectors.contains(end[on_loop], V[other[on_loop]])
-        if not check_surroundings:
+        if not check_intersections or not ok.any():
             return ok
-        # Only swaps touching the boundary can reach the surrounding faces.
-        near = np.flatnonzero(ok & ((A < k).any(axis=1) | (B < k).any(axis=1)))
-        if len(near):
-            hit = patch_crossings(ctx, V, None, faces=np.concatenate([A[near], B[near]]))
-            bad = np.zeros(2 * len(near), bool)
-            bad[hit] = True
-            ok[near] &= ~(bad[: len(near)] | bad[len(near):])
+        idx = np.flatnonzero(ok)
+        s = len(idx)
+        new = np.concatenate([A[idx], B[idx]])
+        bad = np.zeros(2 * s, bool)
+        bad[patch_crossings(ctx, V, None, faces=new)] = True
+        # Against the rest of the patch: the faces a swap replaces do not count.
+        from .geometry.intersections import intersecting_pairs
+
+        allF = np.concatenate([new, F])
+        pairs = intersecting_pairs(V, allF, np.arange(2 * s), np.arange(2 * s, len(allF)))
+        if len(pairs):
+            q, other_face = pairs[:, 0], pairs[:, 1] - 2 * s
+            own = replaced[idx][q % s]
+            real = (other_face != own[:, 0]) & (other_face != own[:, 1])
+            bad[q[real]] = True
+        ok[idx] &= ~(bad[:s] | bad[s:])
         return ok
 
     return allowed

@@ -207,6 +207,26 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
     return np.asarray(faces, np.int64)
 
 
+def _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations):
+    """Optional fairing (beyond the paper) then the bilateral filter of Sec. III.D on the new vertices."""
+    V = V.copy()
+    k = ctx.size
+    if fairing != "none" and interior.any():
+        V[k:] = fair_patch_in_context(ctx.vertices, ctx.faces, k, V[k:], F,
+                                      order=1 if fairing == "membrane" else 2)
+    if iterations > 0 and interior.any():
+        V = bilateral_filter(V, F, interior, sigma_c * scale, sigma_s * scale, iterations)
+    return V
+
+
+def _crosses(ctx, V, F):
+    """Does the patch (V loop-first, F) intersect itself or the surrounding faces?"""
+    from ..geometry.intersections import intersecting_pairs
+
+    return bool(len(patch_crossings(ctx, V, F))
+                or len(intersecting_pairs(V, F, np.arange(len(F)), np.arange(len(F)))))
+
+
 def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairing="none"):
     """Fill one hole by Hu et al.'s three steps (Sec. III.B-III.D).
 
@@ -228,20 +248,30 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     fixed = np.concatenate([loop_edges, ctx.forbidden_edges.reshape(-1, 2)])
     V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
                                      allowed=patch_guard(ctx))
-    # Swaps can fold a patch through a strongly curved border; redo those rare holes with
-    # every swap near the border checked against the surrounding faces.
-    info["guarded_refinement"] = False
-    if len(patch_crossings(ctx, V, F)) and not len(patch_crossings(ctx, ctx.points, F0)):
-        V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
-                                         allowed=patch_guard(ctx, check_surroundings=True))
-        info["guarded_refinement"] = True
     t2 = time.perf_counter()
     interior = np.arange(len(V)) >= k
-    if fairing != "none" and interior.any():
-        V[k:] = fair_patch_in_context(ctx.vertices, ctx.faces, k, V[k:], F,
-                                      order=1 if fairing == "membrane" else 2)
-    if iterations > 0 and interior.any():
-        V = bilateral_filter(V, F, interior, sigma_c * scale, sigma_s * scale, iterations)
+    Vb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations)
+    info["refinement"], info["bilateral_iterations"] = "plain", iterations
+    if _crosses(ctx, Vb, F):
+        # Swaps can fold a patch through a strongly curved border or onto itself: redo the
+        # refinement with every swap checked for intersections, and as a last resort without
+        # swaps (centroid splits alone never create an intersection).
+        for mode, guard in (("guarded", patch_guard(ctx, check_intersections=True)),
+                            ("splits only", lambda V, F, A, B, r: np.zeros(len(A), bool))):
+            if not _crosses(ctx, V, F) or _crosses(ctx, ctx.points, F0):
+                break
+            V, F, scale, info2 = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
+                                              allowed=guard)
+            info.update(info2, refinement=mode)
+        interior = np.arange(len(V)) >= k
+        # The filter moves vertices along their normals; on a large, nearly flat patch that
+        # can fold it. Use as many iterations as keep it free of intersections.
+        for n_iter in range(iterations, -1, -1):
+            Vb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, n_iter)
+            if n_iter == 0 or not _crosses(ctx, Vb, F):
+                break
+        info["bilateral_iterations"] = n_iter
+    V = Vb
     t3 = time.perf_counter()
     info.update(initial_faces=len(F0), triangulation_seconds=t1 - t0, refinement_seconds=t2 - t1,
                 filter_seconds=t3 - t2)

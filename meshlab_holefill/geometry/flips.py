@@ -51,9 +51,10 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
         Edges that must not be swapped (and must not be created).
     max_rounds : int
     allowed : callable, optional
-        ``allowed(V, A, B) -> (s,) bool`` for candidate swaps whose new triangles are
-        A[i] = (a, d, c) and B[i] = (b, c, d); lets the caller refuse swaps that would leave
-        the hole (e.g. through the surrounding mesh).
+        ``allowed(V, F, A, B, replaced) -> (s,) bool`` for candidate swaps whose new
+        triangles are A[i] = (a, d, c) and B[i] = (b, c, d), replacing faces replaced[i] of the
+        current faces F; lets the caller refuse swaps that would leave the hole (e.g. through
+        the surrounding mesh).
 
     Returns
     -------
@@ -100,8 +101,9 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
             ok &= ~np.isin(old_key, fixed) & ~np.isin(new_key, fixed)
         cand = np.flatnonzero(ok)
         if allowed is not None and len(cand):
-            cand = cand[allowed(V, np.stack([a[cand], d[cand], c[cand]], axis=1),
-                                   np.stack([b[cand], c[cand], d[cand]], axis=1))]
+            cand = cand[allowed(V, F, np.stack([a[cand], d[cand], c[cand]], axis=1),
+                                np.stack([b[cand], c[cand], d[cand]], axis=1),
+                                np.stack([f1[cand], f2[cand]], axis=1))]
         if len(cand) == 0:
             break
         # Independent set: a face takes part in at most one swap per round; a few claiming
