@@ -172,6 +172,8 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--skip-speed", action="store_true")
+    ap.add_argument("--update-readme", action="store_true",
+                    help="replace the README's Results section with this run's tables")
     args = ap.parse_args(argv)
     selected = [s for s in args.filters.split(",") if s]
     rows_f = fillers(selected)
@@ -190,9 +192,25 @@ def main(argv=None):
         text += (f"\n\n**Speed**: {speed['faces']} faces, holes of {speed['hole_edges']} boundary edges; "
                  "seconds to fill all three (beyond loading):\n\n| filter | seconds | closed |\n|---|---|---|\n")
         text += "\n".join(f"| {n} | {speed[n]['seconds']:.3f} | {speed[n]['closed_holes']} |" for n in names)
+    command = "scripts/benchmark.py " + " ".join(argv if argv is not None else sys.argv[1:])
+    text = (f"Measured by `.venv/bin/python {command.strip()}` on {time.strftime('%Y-%m-%d')} "
+            f"({os.cpu_count()} cores). Distances in per mille of the bounding-box diagonal.\n" + text)
     with open(os.path.join(args.out, "benchmark.md"), "w") as fh:
         fh.write(text + "\n")
+    if args.update_readme:
+        update_readme(text)
     print(text)
+
+
+def update_readme(text, path=os.path.join(os.path.dirname(__file__), "..", "README.md")):
+    """Replace what stands between the README's results markers."""
+    with open(path) as fh:
+        readme = fh.read()
+    start, end = "<!-- results:start -->", "<!-- results:end -->"
+    head, rest = readme.split(start, 1)
+    _, tail = rest.split(end, 1)
+    with open(path, "w") as fh:
+        fh.write(head + start + "\n" + text.strip() + "\n" + end + tail)
 
 
 if __name__ == "__main__":
