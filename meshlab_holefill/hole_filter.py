@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from .geometry.intersections import faces_intersecting
-from .holes import boundary_loops, hole_context, vertex_face_incidence
+from .holes import boundary_loops, edge_summary, hole_context, vertex_face_incidence
 from .meshset_io import (check_manifold_edges, current_mesh_arrays, extend_attributes,
                          replace_current_mesh)
 from .patch import HoleFillError, merge_patches, validate_patch
@@ -82,9 +82,10 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3):
     """
     t_start = time.perf_counter()
     arrays = current_mesh_arrays(ms)
-    check_manifold_edges(arrays.F, arrays.label)
     V, F = arrays.V, arrays.F
-    loops = boundary_loops(F)
+    he, he_faces, bad_edges = edge_summary(F)
+    check_manifold_edges(F, arrays.label, bad_edges)
+    loops = boundary_loops(F, (he, he_faces))
     selected_faces = arrays.face_attrs["selected"].ravel() > 0
     report, todo = [], []
     for i, loop in enumerate(loops):

@@ -21,13 +21,25 @@ class MeshTopologyError(ValueError):
     """The mesh violates an assumption of the hole fillers (named in the message)."""
 
 
-def _edge_keys(F):
-    """Undirected key of every half-edge of F (face-major order: f*3 + corner), (3m,) int64."""
+def _edge_runs(F):
+    """Sort the 3m half-edges of F by undirected edge; one sort serves every edge query.
+
+    Returns
+    -------
+    order : (3m,) int64   half-edge ids (f*3 + corner) sorted by undirected edge
+    starts, counts : (e,) int64   runs of half-edges sharing an undirected edge
+    a, b : (3m,) int64    half-edge endpoints (a -> b as the face traverses it)
+    """
     F = np.asarray(F, dtype=np.int64)
     a = F.ravel()
     b = np.roll(F, -1, axis=1).ravel()
     n = int(F.max()) + 1 if F.size else 1
-    return np.minimum(a, b) * n + np.maximum(a, b), a, b
+    keys = np.minimum(a, b) * n + np.maximum(a, b)
+    order = np.argsort(keys)
+    sk = keys[order]
+    boundary = np.flatnonzero(np.r_[True, sk[1:] != sk[:-1]])
+    counts = np.diff(np.r_[boundary, len(sk)])
+    return order, boundary, counts, a, b
 
 
 def edge_face_counts(F):
@@ -41,10 +53,9 @@ def edge_face_counts(F):
     """
     if len(F) == 0:
         return np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
-    keys, a, b = _edge_keys(F)
-    uniq, first, counts = np.unique(keys, return_index=True, return_counts=True)
-    edges = np.sort(np.stack([a[first], b[first]], axis=1), axis=1)
-    return edges, counts
+    order, starts, counts, a, b = _edge_runs(F)
+    first = order[starts]
+    return np.sort(np.stack([a[first], b[first]], axis=1), axis=1), counts
 
 
 def nonmanifold_edges(F):
@@ -56,7 +67,7 @@ def nonmanifold_edges(F):
 def boundary_halfedges(F):
     """Half-edges whose undirected edge belongs to exactly one face.
 
-    Vectorised: one sort of the 3m edge keys, O(m log m) in numpy, no Python loop.
+    Vectorised: one sort of the 3m edge keys, no Python loop.
 
     Returns
     -------
@@ -67,15 +78,8 @@ def boundary_halfedges(F):
     """
     if len(F) == 0:
         return np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
-    keys, a, b = _edge_keys(F)
-    order = np.argsort(keys, kind="stable")
-    sk = order_keys = keys[order]
-    lonely = np.ones(len(sk), bool)
-    same = sk[1:] == sk[:-1]
-    lonely[1:] &= ~same
-    lonely[:-1] &= ~same
-    idx = order[lonely]
-    del order_keys
+    order, starts, counts, a, b = _edge_runs(F)
+    idx = order[starts[counts == 1]]
     return np.stack([a[idx], b[idx]], axis=1), idx // 3
 
 
@@ -105,7 +109,24 @@ class BoundaryLoop:
         return len(self.vertices)
 
 
-def boundary_loops(F):
+def edge_summary(F):
+    """Boundary half-edges (with their faces) and non-manifold edges from a single sort.
+
+    Returns
+    -------
+    halfedges : (b, 2) int64, faces : (b,) int64, nonmanifold : (p, 2) int64
+    """
+    if len(F) == 0:
+        z = np.zeros((0, 2), np.int64)
+        return z, np.zeros(0, np.int64), z
+    order, starts, counts, a, b = _edge_runs(F)
+    idx = order[starts[counts == 1]]
+    bad = order[starts[counts > 2]]
+    return (np.stack([a[idx], b[idx]], axis=1), idx // 3,
+            np.sort(np.stack([a[bad], b[bad]], axis=1), axis=1))
+
+
+def boundary_loops(F, halfedges=None):
     """Split the boundary edges of a mesh into simple closed loops.
 
     The boundary half-edges are found vectorised; tracing walks each boundary edge once
@@ -116,13 +137,15 @@ def boundary_loops(F):
     Parameters
     ----------
     F : (m, 3) int
+    halfedges : tuple, optional
+        ``boundary_halfedges(F)`` when already computed.
 
     Returns
     -------
     loops : list of BoundaryLoop
         Sorted by decreasing number of edges.
     """
-    he, faces = boundary_halfedges(F)
+    he, faces = boundary_halfedges(F) if halfedges is None else halfedges
     if len(he) == 0:
         return []
     # Patch orientation: the patch runs each border half-edge backwards.

@@ -79,9 +79,12 @@ def current_mesh_arrays(ms):
     return arrays
 
 
-def check_manifold_edges(F, label=""):
-    """Raise MeshTopologyError when an edge is shared by more than two faces."""
-    bad = nonmanifold_edges(F)
+def check_manifold_edges(F, label="", bad=None):
+    """Raise MeshTopologyError when an edge is shared by more than two faces.
+
+    ``bad`` may pass the non-manifold edges when already computed (``holes.edge_summary``).
+    """
+    bad = nonmanifold_edges(F) if bad is None else bad
     if len(bad):
         raise MeshTopologyError(
             f"mesh '{label}' has {len(bad)} non-manifold edges (e.g. vertices {bad[0].tolist()}); "
