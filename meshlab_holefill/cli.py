@@ -140,6 +140,61 @@ def build_parser():
 _SUBCOMMANDS = []
 
 
+def cmd_run(args, extra):
+    from .mlx import read_filter_script, run_filter_script, save_filter_script
+
+    script = read_filter_script(args.script)  # all problems reported before the mesh is even loaded
+    if args.check:
+        for step in script.steps:
+            params = ", ".join(f"{k}={_show_value(v)}" for k, v in step.kwargs.items())
+            print(f"#{step.index} line {step.line}: {step.mlx_name!r} -> {step.filter}"
+                  f"{' (meshlab_holefill)' if step.ours else ''}({params})")
+        print(f"{script.source}: {len(script.steps)} filter(s), no problems")
+        return 0
+    if args.input is None or args.output is None:
+        raise SystemExit("meshlab-holefill run: INPUT and OUTPUT are required (unless --check)")
+    ms = _load(args.input)
+    results = run_filter_script(ms, script)
+    ms.save_current_mesh(args.output)
+    if args.record:
+        save_filter_script(ms, args.record)
+    if args.json:
+        print(json.dumps(results, indent=2, default=float))
+    else:
+        for step, result in zip(script.steps, results):
+            summary = ", ".join(f"{k}={v:.3f}" if isinstance(v, float) else f"{k}={v}"
+                                for k, v in result.items() if k != "holes")
+            print(f"#{step.index} {step.mlx_name}" + (f": {summary}" if summary else ""))
+    failed = sum(r.get("failed_holes", 0) for r in results)
+    return 0 if failed == 0 else 1
+
+
+def _show_value(value):
+    import pymeshlab
+
+    if isinstance(value, (pymeshlab.PureValue, pymeshlab.PercentageValue)):
+        return f"{type(value).__name__}({value.value():g})"
+    if isinstance(value, pymeshlab.Color):
+        return f"Color({value.red()}, {value.green()}, {value.blue()}, {value.alpha()})"
+    if isinstance(value, np.ndarray):
+        return repr(value.tolist())
+    return repr(value)
+
+
+def _register_run(sub):
+    p = sub.add_parser("run", help="run a MeshLab .mlx filter script (built-in filters and ours) on a mesh")
+    p.add_argument("script", help=".mlx file (MeshLab FilterScript XML)")
+    p.add_argument("input", nargs="?")
+    p.add_argument("output", nargs="?")
+    p.add_argument("--check", action="store_true", help="only validate the script and list its steps")
+    p.add_argument("--record", metavar="MLX", help="also write the filters applied as an .mlx script")
+    p.add_argument("--json", action="store_true", help="print the result dictionaries as JSON")
+    p.set_defaults(func=cmd_run)
+
+
+_SUBCOMMANDS.append(_register_run)
+
+
 def main(argv=None):
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)

@@ -7,6 +7,7 @@ the command line, and the MeshLab ``.mlx`` names.
 from __future__ import annotations
 
 import numbers
+import weakref
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -233,32 +234,95 @@ def apply_filter(ms, name, **kwargs):
     dict
         The filter's result dictionary (built-in filters that return nothing give {}).
     """
+    global _DEPTH
     if name in FILTERS:
         spec = FILTERS[name]
         params = resolve_params(spec, kwargs, ms)
-        result = spec.run(ms, **params)
+        call = FilterCall(name, dict(kwargs), resolved=dict(params), bbox_diagonal=_bbox_diagonal(ms))
+        _DEPTH += 1
+        try:
+            result = spec.run(ms, **params)
+        finally:
+            _DEPTH -= 1
     elif is_builtin_filter(name):
+        defaults = _parameter_values(ms, name) if _DEPTH == 0 else None
         result = getattr(pymeshlab.MeshSet, name)(ms, **kwargs)
         result = {} if result is None else result
+        call = FilterCall(name, dict(kwargs), defaults=defaults)
+        if _DEPTH == 0:
+            call.meshlab_record = _meshlab_record_of_last_call(ms, name)
     else:
         raise FilterParameterError(f"unknown filter '{name}': not one of ours ({', '.join(filter_list())}) "
                                    "nor a pymeshlab filter")
-    _record(ms, name, kwargs)
+    if _DEPTH == 0:  # a filter of ours calling apply_filter inside is not a step of the user's script
+        _HISTORY.setdefault(ms, []).append(call)
     return result
 
 
-# A filter log per MeshSet, for writing .mlx scripts of what was applied.
-_HISTORY: dict[int, list] = {}
+@dataclass
+class FilterCall:
+    """One filter applied through :func:`apply_filter`, as recorded for writing .mlx scripts.
+
+    Attributes
+    ----------
+    name : str
+        Python filter name.
+    kwargs : dict
+        The keyword arguments as given.
+    resolved : dict or None
+        Our filters: every parameter after validation (defaults filled in, lengths absolute).
+    bbox_diagonal : float
+        Our filters: bounding-box diagonal of the current mesh before the call (MeshLab writes
+        it as the ``max`` of RichAbsPerc parameters).
+    meshlab_record : object or None
+        Built-in filters: pymeshlab's own record of the call (every parameter with its MeshLab
+        name, type and value), see :func:`meshlab_holefill.mlx.pymeshlab_last_filter`.
+    defaults : dict or None
+        Built-in filters: ``ms.filter_parameter_values(name)`` just before the call, the
+        mesh-dependent defaults at full precision (pymeshlab's record has 6 digits).
+    """
+
+    name: str
+    kwargs: dict
+    resolved: dict | None = None
+    bbox_diagonal: float = 0.0
+    meshlab_record: Any = None
+    defaults: dict | None = None
 
 
-def _record(ms, name, kwargs):
-    _HISTORY.setdefault(id(ms), []).append((name, dict(kwargs)))
+def _parameter_values(ms, name):
+    try:
+        return ms.filter_parameter_values(name)
+    except Exception:  # e.g. a missing component: the filter itself will say so
+        return None
+
+
+def _meshlab_record_of_last_call(ms, name):
+    from .mlx import pymeshlab_last_filter  # mlx imports this module
+
+    try:
+        return pymeshlab_last_filter(ms, name)
+    except Exception:  # the record only makes the written .mlx complete; never fail a filter for it
+        return None
+
+
+# The filters applied to each MeshSet through apply_filter, for writing .mlx scripts. Keyed
+# by the MeshSet itself (weakly): a log dies with its MeshSet, and a new MeshSet that gets a
+# dead one's id() starts with an empty log.
+_HISTORY: "weakref.WeakKeyDictionary[pymeshlab.MeshSet, list[FilterCall]]" = weakref.WeakKeyDictionary()
+_DEPTH = 0  # > 0 while one of our filters runs
+
+
+def filter_calls(ms):
+    """List of :class:`FilterCall` applied to ``ms`` through this package, oldest first."""
+    return list(_HISTORY.get(ms, []))
 
 
 def filter_history(ms):
     """List of (filter name, keyword arguments) applied to ``ms`` through this package."""
-    return list(_HISTORY.get(id(ms), []))
+    return [(call.name, dict(call.kwargs)) for call in _HISTORY.get(ms, [])]
 
 
 def clear_filter_history(ms):
-    _HISTORY.pop(id(ms), None)
+    """Forget the filters recorded for ``ms``."""
+    _HISTORY.pop(ms, None)
