@@ -443,7 +443,7 @@ def our_param_value(spec, element, param_name, mlx_type, base_dir):
     if param.kind in ("float", "length"):
         value = float(value)
     try:
-        value = registry._convert(param, value, spec.name, None)
+        value = registry.convert_param(param, value, spec.name, None)
     except FilterParameterError as exc:
         raise ParamValueError(str(exc).split(": ", 1)[-1]) from None
     return param.name, value

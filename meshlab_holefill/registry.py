@@ -103,7 +103,8 @@ def _bbox_diagonal(ms):
     return float(ms.current_mesh().bounding_box().diagonal())
 
 
-def _convert(spec: ParamSpec, value, filter_name, ms):
+def convert_param(spec: ParamSpec, value, filter_name, ms):
+    """Validate and convert one parameter value (lengths to absolute); raises FilterParameterError."""
     where = f"filter '{filter_name}', parameter '{spec.name}'"
     kind = spec.kind
     if kind == "bool":
@@ -165,7 +166,7 @@ def resolve_params(spec: FilterSpec, kwargs: dict, ms=None):
             f"valid parameters: {', '.join(known)}")
     out = {}
     for name, p in known.items():
-        out[name] = _convert(p, kwargs.get(name, p.default), spec.name, ms)
+        out[name] = convert_param(p, kwargs.get(name, p.default), spec.name, ms)
     return out
 
 
