@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .quality import unique_edges
+from .quality import corner_angles, unique_edges
 
 
 def adjacency_matrix(F, n):
@@ -35,15 +35,8 @@ def uniform_laplacian(F, n):
 
 def cotangent_weights(V, F):
     """Per-face cotangents of the three corner angles, (m, 3): column k is cot of the angle at F[:, k]."""
-    V = np.asarray(V, dtype=np.float64)
-    out = np.empty((len(F), 3))
-    for k in range(3):
-        p = V[F[:, k]]
-        u = V[F[:, (k + 1) % 3]] - p
-        w = V[F[:, (k + 2) % 3]] - p
-        cross = np.linalg.norm(np.cross(u, w), axis=1)
-        out[:, k] = np.einsum("ij,ij->i", u, w) / np.maximum(cross, 1e-300)
-    return out
+    angles = corner_angles(V, F)
+    return np.cos(angles) / np.maximum(np.sin(angles), 1e-300)
 
 
 def cotangent_laplacian(V, F, n=None):
