@@ -15,13 +15,15 @@ from .registry import (FILTERS, FilterParameterError, apply_filter, clear_filter
 from .mlx import (MlxRunError, MlxScriptError, filter_script_xml, read_filter_script, run_filter_script,
                   save_filter_script)
 
+from . import compare  # a callable module: meshlab_holefill.compare(meshes, report="dir")
+
 __version__ = "0.1.0"
 
 _register_all()
 
 __all__ = [
     "FILTERS", "FilterParameterError", "HoleContext", "HoleFillError", "MeshTopologyError", "Patch",
-    "apply_filter", "boundary_loops", "filter_history", "filter_list", "hole_context",
+    "apply_filter", "boundary_loops", "compare", "filter_history", "filter_list", "hole_context",
     "print_filter_parameter_list",
     "MlxRunError", "MlxScriptError", "clear_filter_history", "filter_calls", "filter_script_xml",
     "read_filter_script", "run_filter_script", "save_filter_script",

@@ -195,6 +195,49 @@ def _register_run(sub):
 _SUBCOMMANDS.append(_register_run)
 
 
+def cmd_compare(args, extra):
+    import shlex
+
+    from .compare import compare
+    from .report import _md_table, summary_table, write_report
+
+    result = compare(args.meshes, holes=args.holes, sizes=args.sizes.split(","), seed=args.seed,
+                     filters=args.filters, refinehole=args.refinehole, timeout=args.timeout,
+                     maxholesize=args.maxholesize, progress=not args.quiet)
+    if args.report:
+        options = [f"--report {args.report}", f"--holes {args.holes}", f"--sizes {args.sizes}", f"--seed {args.seed}"]
+        options += [f"--filters {shlex.quote(f)}" for f in args.filters or []]
+        options += ["--refinehole"] * args.refinehole + ["--no-pictures"] * args.no_pictures
+        command = "meshlab-holefill compare " + " ".join([shlex.quote(m) for m in args.meshes] + options)
+        write_report(result, args.report, pictures=not args.no_pictures, command=command)
+        print(f"report: {args.report}/report.md ({result.wall_seconds:.1f} s)")
+    print(_md_table(*summary_table(result)))
+    return 0
+
+
+def _register_compare(sub):
+    p = sub.add_parser("compare", help="compare hole fillers on meshes (holes with ground truth cut into closed "
+                                       "meshes) and write a report")
+    p.add_argument("meshes", nargs="+", metavar="MESH")
+    p.add_argument("--report", metavar="DIR", help="write report.md/.html, results.json/.csv and pictures here")
+    p.add_argument("--holes", type=int, default=4, help="holes cut into each closed mesh (default 4)")
+    p.add_argument("--sizes", default="small,medium,large", help="hole size classes, cycled (small~20, medium~60, "
+                                                                   "large~150 boundary edges)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--filters", action="append",
+                   help="fillers, comma-separated, each NAME or NAME:param=value[:param=value]; 'ours', 'baseline'; "
+                        "maxholesize=all covers every hole (default: all of ours + meshing_close_holes twice)")
+    p.add_argument("--refinehole", action="store_true", help="also run meshing_close_holes with refinehole=True")
+    p.add_argument("--timeout", type=float, default=300.0, help="seconds before a run is killed (default 300)")
+    p.add_argument("--maxholesize", type=int, default=1000, help="largest natural hole evaluated (boundary edges)")
+    p.add_argument("--no-pictures", action="store_true", help="tables only")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_compare)
+
+
+_SUBCOMMANDS.append(_register_compare)
+
+
 def main(argv=None):
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)

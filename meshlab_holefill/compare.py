@@ -1,24 +1,35 @@
-"""Holes with known ground truth, and the metrics that compare hole fillers on them.
+"""Compare hole fillers on a user's meshes: holes with known ground truth, metrics, one report.
 
-``cut_holes`` removes face regions from a closed mesh and keeps them as ground truth;
-``evaluate_fill`` measures a filled mesh against it (distances via MeshLab's own
-Hausdorff sampler, triangle quality, density match, intersections, changed originals).
+``compare(meshes, report="dir")`` is the one call (also ``meshlab-holefill compare``; this
+module is callable, so ``meshlab_holefill.compare(...)`` works): a closed mesh gets holes cut
+with ground truth (:func:`cut_holes`), a mesh with holes is filled as it is; every filler runs
+in an isolated worker (:mod:`.comparison`); :func:`hole_metrics` measures each patch; the
+report (:mod:`.report`, :mod:`.render`) has tables, charts and pictures.
+
+This module holds the hole cutting; the metrics are in :mod:`.metrics` (re-exported here).
 """
 from __future__ import annotations
 
+import sys
 import time
-from dataclasses import dataclass
+import types
+from dataclasses import dataclass, field
 
 import numpy as np
-import pymeshlab
 import scipy.sparse as sp
 
-from .geometry.intersections import faces_intersecting
-from .geometry.quality import edge_lengths, face_normals, triangle_quality
-from .holes import boundary_loops, nonmanifold_edges
+from .geometry.quality import edge_lengths, face_normals
+from .holes import boundary_loops
+# The metrics live in .metrics; they are part of this module's API too.
+from .metrics import (QUALITY_BINS, assign_patches, border_dihedrals, closest_faces,  # noqa: F401
+                      closest_point_on_triangles, compact_mesh, hausdorff_one_way, hole_metrics, mesh_checks,
+                      patch_metrics)
 
-# Target boundary sizes (edges) of the hole classes.
+# Target boundary sizes (edges) of the hole classes ("irregular" is kept for old callers:
+# a large irregular hole).
 SIZE_CLASSES = {"small": 20, "medium": 60, "large": 150, "irregular": 250}
+# Star outline of an irregular hole: radius modulated by 45 %, stretched 1.6 x along one axis.
+IRREGULAR_SHAPE = {"amplitude": 0.45, "stretch": 1.6}
 
 
 @dataclass
@@ -30,11 +41,17 @@ class CutHole:
     size_class : str
     removed_faces : (r, 3) int64  faces of the original mesh that were removed (original indices)
     boundary_edges : int
+    shape : str  "compact" (round outline) or "irregular" (lobed, stretched outline)
+    center : (3,) float64  centroid of the seed face
+    face_indices : (r,) int64  positions of the removed faces in the original F
     """
 
     size_class: str
     removed_faces: np.ndarray
     boundary_edges: int
+    shape: str = "compact"
+    center: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    face_indices: np.ndarray | None = None
 
 
 def face_adjacency(F):
@@ -57,12 +74,22 @@ def _region_boundary(F, region):
 
 
 def star_region(F, centroids, adjacency, seed_face, normal, radius, amplitude=0.0, lobes=3, phase=0.0,
-                stretch=1.0):
+                stretch=1.0, border=None):
     """Face region around a seed face inside a (noisy) star-shaped outline, made a topological disk.
 
     A face is inside when its centroid, seen in the tangent plane of the seed, lies within
     radius * (1 + amplitude * sin(lobes * theta + phase)) (x stretched by ``stretch``); the
     region is the inside component containing the seed, with enclosed islands filled in.
+
+    Parameters
+    ----------
+    F : (m, 3) int  (only its length is used)
+    centroids : (m, 3) float64
+    adjacency : (m, m) sparse face adjacency
+    border : (m,) bool, optional
+        For a local window of a larger mesh: faces with a neighbour outside the window. The
+        complement components touching it are "outside"; the others are enclosed islands.
+        Without it the biggest complement component is the outside.
 
     Returns
     -------
@@ -87,13 +114,39 @@ def star_region(F, centroids, adjacency, seed_face, normal, radius, amplitude=0.
     rest = np.flatnonzero(~mask)
     n_comp, lab = connected_components(adjacency[rest][:, rest], directed=False)
     if n_comp > 1:
-        biggest = np.argmax(np.bincount(lab))
-        mask[rest[lab != biggest]] = True
+        touching = np.unique(lab[border[rest]]) if border is not None else np.zeros(0, np.int64)
+        outside = np.isin(lab, touching) if len(touching) else lab == np.argmax(np.bincount(lab))
+        mask[rest[~outside]] = True
     return np.flatnonzero(mask)
 
 
-def cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, max_tries=50):
+def hole_plan(count, sizes=("small", "medium", "large")):
+    """Size class and shape of each of ``count`` holes: sizes cycle, shapes alternate.
+
+    Returns
+    -------
+    list of (size_class, shape) with shape "compact" or "irregular".
+    """
+    sizes = list(sizes)
+    return [(sizes[i % len(sizes)], "compact" if i % 2 == 0 else "irregular") for i in range(count)]
+
+
+def _seed_order(centroids, center, rng, tries):
+    """Seed faces to try: random, or the faces nearest a requested centre."""
+    if center is None:
+        return rng.integers(len(centroids), size=tries)
+    d = np.linalg.norm(centroids - np.asarray(center, np.float64), axis=1)
+    near = np.argpartition(d, min(tries, len(d) - 1))[:tries]
+    return near[np.argsort(d[near])]
+
+
+def cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, max_tries=50, shapes=None,
+              centers=None, strict=True):
     """Cut one hole per requested size class into a closed mesh, holes kept apart and simple.
+
+    Each hole is a star-shaped face region grown until its boundary reaches the class's
+    target edge count (0.8 to 1.5 times the target is accepted); the remaining mesh keeps
+    simple, unpinched boundary loops, and later holes stay three face rings away.
 
     Parameters
     ----------
@@ -101,6 +154,13 @@ def cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, max
     F : (m, 3) int
     sizes : sequence of str (keys of SIZE_CLASSES)
     seed : int
+    max_tries : int  seed faces tried per hole
+    shapes : sequence of str, optional
+        "compact" or "irregular" per hole; by default a hole is irregular iff its class is.
+    centers : (h, 3) float64, optional
+        Grow hole i from the faces nearest centers[i] (the same holes on remeshed copies).
+    strict : bool
+        Raise when a hole cannot be cut; otherwise leave it out.
 
     Returns
     -------
@@ -117,25 +177,38 @@ def cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, max
     blocked = np.zeros(len(F), bool)
     removed = np.zeros(len(F), bool)
     holes = []
-    for size in sizes:
+    for h, size in enumerate(sizes):
+        shape_name = shapes[h] if shapes is not None else ("irregular" if size == "irregular" else "compact")
+        irregular = shape_name == "irregular"
         target = SIZE_CLASSES[size]
-        for _ in range(max_tries):
-            seed_face = int(rng.integers(len(F)))
+        center = None if centers is None else centers[h]
+        # Only a window around the seed is examined, so the cost per hole does not grow with the mesh.
+        window_radius = mean_edge * target * (0.9 if irregular else 0.5)
+        for seed_face in _seed_order(centroids, center, rng, max_tries):
+            seed_face = int(seed_face)
             if blocked[seed_face]:
                 continue
-            irregular = size == "irregular"
-            shape = dict(amplitude=0.45 if irregular else 0.0, lobes=int(rng.integers(2, 5)),
-                         phase=float(rng.uniform(0, 2 * np.pi)), stretch=1.6 if irregular else 1.0)
+            local = np.flatnonzero(np.linalg.norm(centroids - centroids[seed_face], axis=1) < window_radius)
+            local_adj = adjacency[local][:, local]
+            outside_links = np.asarray(adjacency[local].sum(axis=1)).ravel() - np.asarray(local_adj.sum(axis=1)).ravel()
+            border = outside_links > 0
+            seed_local = int(np.searchsorted(local, seed_face))
+            shape = dict(amplitude=IRREGULAR_SHAPE["amplitude"] if irregular else 0.0,
+                         lobes=int(rng.integers(2, 5)), phase=float(rng.uniform(0, 2 * np.pi)),
+                         stretch=IRREGULAR_SHAPE["stretch"] if irregular else 1.0)
             # Grow the outline until the boundary reaches the target length.
             radius = mean_edge * target / (2 * np.pi) * 0.25
             region, edges, simple = None, 0, False
             for _ in range(80):
-                region = star_region(F, centroids, adjacency, seed_face, normals[seed_face], radius, **shape)
+                region_local = star_region(local, centroids[local], local_adj, seed_local, normals[seed_face],
+                                           radius, border=border, **shape)
+                region = local[region_local]
                 edges, simple = _region_boundary(F, region)
-                if edges >= target or not simple:
+                if edges >= target or not simple or border[region_local].any():
                     break
                 radius *= 1.05
-            if not simple or edges < 0.8 * target or edges > 1.5 * target or blocked[region].any():
+            if (not simple or border[region_local].any() or edges < 0.8 * target or edges > 1.5 * target
+                    or blocked[region].any()):
                 continue
             # The remaining mesh must stay free of pinched vertices around the new hole.
             trial = removed.copy()
@@ -144,7 +217,7 @@ def cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, max
             if any(lp.pinched for lp in loops) or len(loops) != len(holes) + 1:
                 continue
             removed = trial
-            holes.append(CutHole(size, F[region], edges))
+            holes.append(CutHole(size, F[region], edges, shape_name, centroids[seed_face].copy(), np.sort(region)))
             # Keep later holes two face rings away from this one.
             ring = np.zeros(len(F), bool)
             ring[region] = True
@@ -153,113 +226,9 @@ def cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, max
             blocked |= ring
             break
         else:
-            raise RuntimeError(f"could not cut a simple '{size}' hole after {max_tries} tries")
+            if strict:
+                raise RuntimeError(f"could not cut a simple '{size}' hole after {max_tries} tries")
     return F[~removed], holes
-
-
-def hausdorff_one_way(src_V, src_F, dst_V, dst_F, samples=20000):
-    """Distances from surface src to surface dst (MeshLab's Hausdorff sampler).
-
-    Returns
-    -------
-    dict with ``mean``, ``rms``, ``max`` (absolute units).
-    """
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(src_V, np.float64), face_matrix=np.asarray(src_F, np.int32)))
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(dst_V, np.float64), face_matrix=np.asarray(dst_F, np.int32)))
-    res = ms.get_hausdorff_distance(sampledmesh=0, targetmesh=1, samplevert=True, sampleedge=True,
-                                    sampleface=True, samplenum=samples, maxdist=pymeshlab.PercentageValue(100))
-    return {"mean": float(res["mean"]), "rms": float(res["RMS"]), "max": float(res["max"])}
-
-
-def compact_mesh(V, F):
-    """Keep only the vertices F uses; returns (V', F') with F' reindexed."""
-    used = np.unique(np.asarray(F).ravel())
-    remap = np.full(len(V), -1, np.int64)
-    remap[used] = np.arange(len(used))
-    return np.asarray(V)[used], remap[np.asarray(F)]
-
-
-def assign_patches(F_new, loop_vertex_sets):
-    """Split new faces into per-hole patches.
-
-    Parameters
-    ----------
-    F_new : (q, 3) int  new faces (global indices)
-    loop_vertex_sets : list of (k_i,) int  boundary vertices of each hole
-
-    Returns
-    -------
-    list of (q_i,) int64 arrays: positions in F_new of the faces of each hole's patch
-    """
-    from scipy.sparse.csgraph import connected_components
-
-    q = len(F_new)
-    if q == 0:
-        return [np.zeros(0, np.int64) for _ in loop_vertex_sets]
-    n_comp, label = connected_components(face_adjacency(F_new), directed=False)
-    owner = np.full(n_comp, -1)
-    for h, verts in enumerate(loop_vertex_sets):
-        touching = np.isin(F_new, verts).any(axis=1)
-        owner[np.unique(label[touching])] = h
-    return [np.flatnonzero(owner[label] == h) for h in range(len(loop_vertex_sets))]
-
-
-def mesh_checks(V0, F0, V1, F1):
-    """Whole-mesh checks after a fill: originals unchanged, manifoldness, boundary left, intersections.
-
-    Returns
-    -------
-    dict with ``originals_changed`` (moved original vertices + changed original faces),
-    ``nonmanifold_edges``, ``boundary_edges_left``, ``intersecting_new_faces``,
-    ``new_faces``, ``new_vertices``.
-    """
-    n0, m0 = len(V0), len(F0)
-    moved = int(np.count_nonzero(np.any(V1[:n0] != V0, axis=1))) if len(V1) >= n0 else n0
-    changed = int(np.count_nonzero(np.any(F1[:m0] != F0, axis=1))) if len(F1) >= m0 else m0
-    new = np.arange(m0, len(F1))
-    hits = faces_intersecting(V1, F1, new, np.arange(len(F1))) if len(new) else []
-    return {"originals_changed": moved + changed, "nonmanifold_edges": int(len(nonmanifold_edges(F1))),
-            "boundary_edges_left": int(sum(len(lp) for lp in boundary_loops(F1))),
-            "intersecting_new_faces": int(len(hits)), "new_faces": int(len(F1) - m0),
-            "new_vertices": int(len(V1) - n0)}
-
-
-def patch_metrics(V0, F0, V1, patch_faces, loop_vertices, ground_truth=None, diag=None):
-    """Metrics of one hole's patch.
-
-    Parameters
-    ----------
-    V0, F0 : mesh with holes;  V1 : vertices of the filled mesh
-    patch_faces : (q, 3) int  the patch faces (global indices into V1)
-    loop_vertices : (k,) int  the hole's boundary vertices
-    ground_truth : (V, F) of the removed surface, optional
-    diag : float  length for the per-mille figures (bounding-box diagonal)
-
-    Returns
-    -------
-    dict: ``faces``, ``quality_mean/min/share07``, ``quality_values``, ``edge_ratio`` (mean new
-    edge length / mean length of the mesh edges around the hole), and with ground truth
-    ``dist_patch_to_gt_{mean,rms,max}`` and ``dist_gt_to_patch_{...}``, each also ``_permille``.
-    """
-    out = {"faces": int(len(patch_faces))}
-    if len(patch_faces) == 0:
-        return out
-    q = triangle_quality(V1, patch_faces)
-    out.update(quality_mean=float(q.mean()), quality_min=float(q.min()),
-               quality_share07=float((q >= 0.7).mean()), quality_values=q)
-    near = np.flatnonzero(np.isin(F0, loop_vertices).any(axis=1))
-    old_len = edge_lengths(V0, F0[near]).mean() if len(near) else np.nan
-    out["edge_ratio"] = float(edge_lengths(V1, patch_faces).mean() / old_len)
-    if ground_truth is not None:
-        pV, pF = compact_mesh(V1, patch_faces)
-        gV, gF = ground_truth
-        for name, (a, b) in {"patch_to_gt": ((pV, pF), (gV, gF)), "gt_to_patch": ((gV, gF), (pV, pF))}.items():
-            for key, value in hausdorff_one_way(a[0], a[1], b[0], b[1]).items():
-                out[f"dist_{name}_{key}"] = value
-                if diag:
-                    out[f"dist_{name}_{key}_permille"] = 1000.0 * value / diag
-    return out
 
 
 def run_filter_timed(ms, name, **params):
@@ -269,3 +238,41 @@ def run_filter_timed(ms, name, **params):
     t0 = time.perf_counter()
     res = apply_filter(ms, name, **params)
     return res, time.perf_counter() - t0
+
+
+def compare(meshes, report=None, **options):
+    """Fill holes in meshes with every filler and measure them; optionally write a report.
+
+    Parameters
+    ----------
+    meshes : sequence of str (mesh files), pymeshlab.Mesh, (V, F) tuples or comparison.MeshCase
+    report : str, optional
+        Directory for report.md, report.html, results.json, results.csv and pictures.
+    **options
+        Passed on to :func:`meshlab_holefill.comparison.run_comparison`: ``holes`` (per closed
+        mesh, default 4), ``sizes`` ("small", "medium", "large"), ``seed``, ``filters`` (names,
+        optionally ``name:param=value``), ``refinehole``, ``timeout`` (seconds per run),
+        ``maxholesize`` (largest natural hole evaluated), ``progress``.
+
+    Returns
+    -------
+    comparison.Comparison  (``runs``, ``holes`` rows, ``cases``, ``fillers``)
+    """
+    from .comparison import run_comparison
+
+    result = run_comparison(meshes, **options)
+    if report is not None:
+        from .report import write_report
+
+        write_report(result, report)
+    return result
+
+
+class _CallableModule(types.ModuleType):
+    """Lets ``meshlab_holefill.compare(...)`` call :func:`compare` while the module stays importable."""
+
+    def __call__(self, *args, **kwargs):
+        return compare(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

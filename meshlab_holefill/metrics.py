@@ -1,0 +1,308 @@
+"""Metrics of a filled hole against its ground truth and its surroundings.
+
+Distances via MeshLab's own Hausdorff sampler (both ways) and exact closest points, normal
+deviation, triangle quality 2r/R (Field; Hu et al. Sec. IV), density match (edge ratio),
+dihedral continuity across the hole border, intersections and changed originals.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pymeshlab
+
+from .geometry.intersections import faces_intersecting
+from .geometry.quality import edge_lengths, face_areas, face_normals, triangle_quality
+from .holes import boundary_loops, nonmanifold_edges
+
+QUALITY_BINS = np.linspace(0.0, 1.0, 21)
+
+
+def hausdorff_one_way(src_V, src_F, dst_V, dst_F, samples=20000):
+    """Distances from surface src to surface dst (MeshLab's Hausdorff sampler).
+
+    Returns
+    -------
+    dict with ``mean``, ``rms``, ``max`` (absolute units).
+    """
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(src_V, np.float64), face_matrix=np.asarray(src_F, np.int32)))
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(dst_V, np.float64), face_matrix=np.asarray(dst_F, np.int32)))
+    res = ms.get_hausdorff_distance(sampledmesh=0, targetmesh=1, samplevert=True, sampleedge=True,
+                                    sampleface=True, samplenum=samples, maxdist=pymeshlab.PercentageValue(100))
+    return {"mean": float(res["mean"]), "rms": float(res["RMS"]), "max": float(res["max"])}
+
+
+def compact_mesh(V, F):
+    """Keep only the vertices F uses; returns (V', F') with F' reindexed."""
+    used = np.unique(np.asarray(F).ravel())
+    remap = np.full(len(V), -1, np.int64)
+    remap[used] = np.arange(len(used))
+    return np.asarray(V)[used], remap[np.asarray(F)]
+
+
+def assign_patches(F_new, loop_vertex_sets):
+    """Split new faces into per-hole patches.
+
+    Parameters
+    ----------
+    F_new : (q, 3) int  new faces (global indices)
+    loop_vertex_sets : list of (k_i,) int  boundary vertices of each hole
+
+    Returns
+    -------
+    list of (q_i,) int64 arrays: positions in F_new of the faces of each hole's patch
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    q = len(F_new)
+    if q == 0:
+        return [np.zeros(0, np.int64) for _ in loop_vertex_sets]
+    from .compare import face_adjacency
+
+    n_comp, label = connected_components(face_adjacency(F_new), directed=False)
+    owner = np.full(n_comp, -1)
+    for h, verts in enumerate(loop_vertex_sets):
+        touching = np.isin(F_new, verts).any(axis=1)
+        owner[np.unique(label[touching])] = h
+    return [np.flatnonzero(owner[label] == h) for h in range(len(loop_vertex_sets))]
+
+
+def mesh_checks(V0, F0, V1, F1, return_hits=False):
+    """Whole-mesh checks after a fill: originals unchanged, manifoldness, boundary left, intersections.
+
+    Returns
+    -------
+    dict with ``originals_changed`` (moved original vertices + changed original faces),
+    ``nonmanifold_edges``, ``boundary_edges_left``, ``intersecting_new_faces``,
+    ``new_faces``, ``new_vertices``; with ``return_hits`` also the (h,) int64 indices into F1
+    of the intersecting new faces as a second value.
+    """
+    n0, m0 = len(V0), len(F0)
+    moved = int(np.count_nonzero(np.any(V1[:n0] != V0, axis=1))) if len(V1) >= n0 else n0
+    changed = int(np.count_nonzero(np.any(F1[:m0] != F0, axis=1))) if len(F1) >= m0 else m0
+    new = np.arange(m0, len(F1))
+    hits = faces_intersecting(V1, F1, new, np.arange(len(F1))) if len(new) else np.zeros(0, np.int64)
+    out = {"originals_changed": moved + changed, "nonmanifold_edges": int(len(nonmanifold_edges(F1))),
+           "boundary_edges_left": int(sum(len(lp) for lp in boundary_loops(F1))),
+           "intersecting_new_faces": int(len(hits)), "new_faces": int(len(F1) - m0),
+           "new_vertices": int(len(V1) - n0)}
+    return (out, np.asarray(hits, np.int64)) if return_hits else out
+
+
+def patch_metrics(V0, F0, V1, patch_faces, loop_vertices, ground_truth=None, diag=None):
+    """Metrics of one hole's patch.
+
+    Parameters
+    ----------
+    V0, F0 : mesh with holes;  V1 : vertices of the filled mesh
+    patch_faces : (q, 3) int  the patch faces (global indices into V1)
+    loop_vertices : (k,) int  the hole's boundary vertices
+    ground_truth : (V, F) of the removed surface, optional
+    diag : float  length for the per-mille figures (bounding-box diagonal)
+
+    Returns
+    -------
+    dict: ``faces``, ``quality_mean/min/share07``, ``quality_values``, ``edge_ratio`` (mean new
+    edge length / mean length of the mesh edges around the hole), and with ground truth
+    ``dist_patch_to_gt_{mean,rms,max}`` and ``dist_gt_to_patch_{...}``, each also ``_permille``.
+    """
+    out = {"faces": int(len(patch_faces))}
+    if len(patch_faces) == 0:
+        return out
+    q = triangle_quality(V1, patch_faces)
+    out.update(quality_mean=float(q.mean()), quality_min=float(q.min()),
+               quality_share07=float((q >= 0.7).mean()), quality_values=q)
+    near = np.flatnonzero(np.isin(F0, loop_vertices).any(axis=1))
+    old_len = edge_lengths(V0, F0[near]).mean() if len(near) else np.nan
+    out["edge_ratio"] = float(edge_lengths(V1, patch_faces).mean() / old_len)
+    if ground_truth is not None:
+        pV, pF = compact_mesh(V1, patch_faces)
+        gV, gF = ground_truth
+        for name, (a, b) in {"patch_to_gt": ((pV, pF), (gV, gF)), "gt_to_patch": ((gV, gF), (pV, pF))}.items():
+            for key, value in hausdorff_one_way(a[0], a[1], b[0], b[1]).items():
+                out[f"dist_{name}_{key}"] = value
+                if diag:
+                    out[f"dist_{name}_{key}_permille"] = 1000.0 * value / diag
+    return out
+
+
+def closest_point_on_triangles(X, A, B, C):
+    """Closest point to X[i] on triangle (A[i], B[i], C[i]) (Ericson, Real-Time Collision Detection 5.1.5).
+
+    Parameters
+    ----------
+    X, A, B, C : (N, 3) float64
+
+    Returns
+    -------
+    (N, 3) float64
+    """
+    ab, ac, ap = B - A, C - A, X - A
+    d1, d2 = _dot(ab, ap), _dot(ac, ap)
+    bp = X - B
+    d3, d4 = _dot(ab, bp), _dot(ac, bp)
+    cp = X - C
+    d5, d6 = _dot(ab, cp), _dot(ac, cp)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    denom = va + vb + vc
+    safe = np.where(np.abs(denom) > 1e-300, denom, 1.0)
+    v, w = vb / safe, vc / safe
+    out = A + v[:, None] * ab + w[:, None] * ac  # inside the face
+    # Edge and vertex regions, later assignments taking precedence in Voronoi order.
+    t_ab = np.clip(d1 / np.where(d1 - d3 != 0, d1 - d3, 1.0), 0, 1)
+    sel = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+    out[sel] = (A + t_ab[:, None] * ab)[sel]
+    t_ac = np.clip(d2 / np.where(d2 - d6 != 0, d2 - d6, 1.0), 0, 1)
+    sel = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+    out[sel] = (A + t_ac[:, None] * ac)[sel]
+    e43, e56 = d4 - d3, d5 - d6
+    t_bc = np.clip(e43 / np.where(e43 + e56 != 0, e43 + e56, 1.0), 0, 1)
+    sel = (va <= 0) & (e43 >= 0) & (e56 >= 0)
+    out[sel] = (B + t_bc[:, None] * (C - B))[sel]
+    out[(d1 <= 0) & (d2 <= 0)] = A[(d1 <= 0) & (d2 <= 0)]
+    out[(d3 >= 0) & (d4 <= d3)] = B[(d3 >= 0) & (d4 <= d3)]
+    out[(d6 >= 0) & (d5 <= d6)] = C[(d6 >= 0) & (d5 <= d6)]
+    return out
+
+
+def _dot(a, b):
+    return np.einsum("ij,ij->i", a, b)
+
+
+def closest_faces(X, V, F, candidates=32):
+    """Nearest point of a triangle surface for each query point.
+
+    Exact against all faces for small problems; otherwise exact against the ``candidates``
+    faces with the nearest centroids (enough on the regular, fine surfaces compared here).
+
+    Parameters
+    ----------
+    X : (q, 3) float64
+    V : (n, 3) float64, F : (t, 3) int
+
+    Returns
+    -------
+    distance : (q,) float64, face : (q,) int64, point : (q, 3) float64
+    """
+    X = np.asarray(X, np.float64)
+    T = np.asarray(V, np.float64)[np.asarray(F, np.int64)]
+    if len(X) * len(F) <= 2_000_000 or len(F) <= candidates:
+        cand = np.broadcast_to(np.arange(len(F)), (len(X), len(F)))
+    else:
+        from scipy.spatial import cKDTree
+
+        _, cand = cKDTree(T.mean(axis=1)).query(X, k=candidates)
+    q, k = cand.shape
+    rows = np.repeat(np.arange(q), k)
+    flat = cand.ravel()
+    P = closest_point_on_triangles(X[rows], T[flat, 0], T[flat, 1], T[flat, 2])
+    d = np.linalg.norm(P - X[rows], axis=1).reshape(q, k)
+    best = np.argmin(d, axis=1)
+    face = cand[np.arange(q), best]
+    return d[np.arange(q), best], face.astype(np.int64), P.reshape(q, k, 3)[np.arange(q), best]
+
+
+def border_dihedrals(V, F_mesh, halfedges, mesh_faces, F_patch):
+    """Angle between the normals of the two faces meeting at each hole-border edge, degrees.
+
+    0 means the patch continues the surface without a crease.
+
+    Parameters
+    ----------
+    V : (n, 3) float64  vertices of the filled mesh (originals first)
+    F_mesh : (m, 3) int  faces of the mesh with holes
+    halfedges : (b, 2) int  the hole's boundary half-edges, in the direction of their mesh face
+    mesh_faces : (b,) int  the mesh face owning each half-edge
+    F_patch : (q, 3) int  patch faces (indices into V)
+
+    Returns
+    -------
+    (b,) float64, NaN where no patch face holds the edge
+    """
+    F_patch = np.asarray(F_patch, np.int64)
+    out = np.full(len(halfedges), np.nan)
+    if len(F_patch) == 0 or len(halfedges) == 0:
+        return out
+    n = int(max(len(V), F_patch.max() + 1))
+    a = F_patch.ravel()
+    b = np.roll(F_patch, -1, axis=1).ravel()
+    keys = a * n + b
+    order = np.argsort(keys)
+    # The patch traverses each border edge opposite to the mesh face.
+    want = halfedges[:, 1].astype(np.int64) * n + halfedges[:, 0]
+    pos = np.clip(np.searchsorted(keys[order], want), 0, len(keys) - 1)
+    found = keys[order][pos] == want
+    patch_face = order[pos] // 3
+    n_mesh = face_normals(V, np.asarray(F_mesh)[mesh_faces])
+    n_patch = face_normals(V, F_patch[patch_face])
+    cos = np.clip(_dot(n_mesh, n_patch), -1.0, 1.0)
+    out[found] = np.degrees(np.arccos(cos[found]))
+    return out
+
+
+def hole_metrics(V0, F0, V1, patch_faces, loop_vertices, border, ground_truth=None, diag=None, analytic=None):
+    """All metrics of one hole's patch (those needing ground truth only when it is given).
+
+    Parameters
+    ----------
+    V0 : (n, 3) float64, F0 : (m, 3) int  the mesh with holes
+    V1 : (n + p, 3) float64  vertices of the filled mesh (originals first)
+    patch_faces : (q, 3) int  this hole's patch (indices into V1)
+    loop_vertices : (k,) int  the hole's boundary vertices
+    border : ((k, 2) int, (k,) int)  the hole's boundary half-edges in F0 and their faces
+    ground_truth : ((n + g, 3) float64, (r, 3) int), optional
+        The removed surface, indexed like V1 (originals first, then g interior vertices).
+    diag : float  bounding-box diagonal for per-mille figures
+    analytic : callable, optional  (N, 3) points -> (N,) distances to the exact surface
+
+    Returns
+    -------
+    metrics : dict of scalars (and ``quality_hist``, counts over QUALITY_BINS); with ground truth
+        also the sums for Xie & Zou's Eq. 17 over the new vertices SP_i: ``eq17_distance_sum``
+        (sum of E_i), ``eq17_distance_max`` and ``eq17_abs_coordinate_max`` (max |SP_ij|)
+    arrays : dict with ``quality`` (q,) and, with ground truth, ``face_distance`` (q,) (distance
+        of each face centroid to the ground truth)
+    """
+    patch_faces = np.asarray(patch_faces, np.int64)
+    arrays = {}
+    gt_compact = compact_mesh(*ground_truth) if ground_truth is not None else None
+    metrics = patch_metrics(V0, F0, V1, patch_faces, loop_vertices, gt_compact, diag)
+    if len(patch_faces) == 0:
+        return metrics, arrays
+    q = metrics.pop("quality_values")
+    arrays["quality"] = q
+    metrics["quality_max"] = float(q.max())
+    metrics["quality_hist"] = np.histogram(q, QUALITY_BINS)[0].tolist()
+    used = np.unique(patch_faces.ravel())
+    metrics["new_vertices"] = int(np.count_nonzero(used >= len(V0)))
+    angles = border_dihedrals(V1, F0, border[0], border[1], patch_faces)
+    metrics["border_dihedral_mean_deg"] = float(np.nanmean(angles)) if np.isfinite(angles).any() else None
+    metrics["border_dihedral_max_deg"] = float(np.nanmax(angles)) if np.isfinite(angles).any() else None
+    if ground_truth is not None:
+        gV, gF = ground_truth
+        gt_angles = border_dihedrals(gV, F0, border[0], border[1], gF)
+        metrics["gt_border_dihedral_mean_deg"] = float(np.nanmean(gt_angles))
+        both = np.isfinite(angles) & np.isfinite(gt_angles)
+        metrics["border_dihedral_excess_deg"] = float(np.mean(np.abs(angles[both] - gt_angles[both]))) if both.any() else None
+        centroids = V1[patch_faces].mean(axis=1)
+        dist, face, _ = closest_faces(centroids, gV, gF)
+        arrays["face_distance"] = dist
+        n_patch = face_normals(V1, patch_faces)
+        n_gt = face_normals(gV, np.asarray(gF)[face])
+        deviation = np.degrees(np.arccos(np.clip(_dot(n_patch, n_gt), -1.0, 1.0)))
+        area = face_areas(V1, patch_faces)
+        metrics["normal_dev_mean_deg"] = float(np.sum(deviation * area) / max(area.sum(), 1e-300))
+        metrics["normal_dev_max_deg"] = float(deviation.max())
+        new = used[used >= len(V0)]
+        if len(new):  # the parts of Xie & Zou's Eq. 17 (pooled over holes by the report)
+            e, _, _ = closest_faces(V1[new], gV, gF)
+            metrics.update(eq17_distance_sum=float(e.sum()), eq17_distance_max=float(e.max()),
+                           eq17_abs_coordinate_max=float(np.abs(V1[new]).max()))
+    if analytic is not None:
+        new = used[used >= len(V0)]
+        if len(new):
+            d = np.abs(analytic(V1[new]))
+            metrics["analytic_dist_mean"] = float(d.mean())
+            metrics["analytic_dist_max"] = float(d.max())
+            if diag:
+                metrics["analytic_dist_mean_permille"] = 1000.0 * float(d.mean()) / diag
+    return metrics, arrays

@@ -1,0 +1,249 @@
+"""Tests of the comparison: hole cutting, metrics on cases with known answers, isolation, report."""
+from __future__ import annotations
+
+import csv
+import json
+import os
+
+import numpy as np
+import pymeshlab
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import meshlab_holefill
+from meshlab_holefill import compare as cmp
+from meshlab_holefill.comparison import (Filler, IsolatedRunner, MeshCase, parse_fillers, prepare_case,
+                                         run_comparison)
+from meshlab_holefill.holes import boundary_halfedges, boundary_loops
+
+SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
+
+
+def grid(n=24, equilateral=False):
+    """Flat triangulated square (z = 0) with n x n cells; equilateral rows when asked."""
+    i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+    x = i + (0.5 * (j % 2) if equilateral else 0.0)
+    y = j * (np.sqrt(3) / 2 if equilateral else 1.0)
+    V = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1).astype(np.float64)
+    idx = lambda a, b: a * (n + 1) + b  # noqa: E731
+    F = []
+    for a in range(n):
+        for b in range(n):
+            p, q, r, s = idx(a, b), idx(a + 1, b), idx(a + 1, b + 1), idx(a, b + 1)
+            if equilateral and b % 2 == 0:
+                F += [[p, q, s], [q, r, s]]
+            else:
+                F += [[p, q, r], [p, r, s]]
+    return V, np.asarray(F, np.int64)
+
+
+def sphere(subdiv=4):
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=subdiv)
+    m = ms.current_mesh()
+    return np.asarray(m.vertex_matrix(), np.float64), np.asarray(m.face_matrix(), np.int64)
+
+
+def _hole_setup(V, F, removed):
+    """Mesh with the removed faces taken out, the hole's loop/border and its ground truth."""
+    case = prepare_case(MeshCase("t", V, F, removed=removed))
+    assert len(case.holes) == 1
+    return case, case.holes[0]
+
+
+# ------------------------------------------------------------------- metrics, known answers
+
+def test_flat_hole_filled_flat_has_zero_distance_and_no_crease():
+    V, F = grid()
+    removed = np.linalg.norm(V[F].mean(axis=1)[:, :2] - 12.0, axis=1) < 5.0
+    case, hole = _hole_setup(V, F, removed)
+    # A different flat triangulation of the same hole: a fan from a new centre vertex.
+    centre = case.V0[hole.loop].mean(axis=0)
+    V1 = np.vstack([case.V0, centre])
+    k = len(hole.loop)
+    # loop is in patch orientation: a patch face holds (loop[i], loop[i+1])
+    patch = np.stack([np.full(k, len(case.V0)), hole.loop, hole.loop[np.r_[1:k, 0]]], axis=1)
+    metrics, arrays = cmp.hole_metrics(case.V0, case.F0, V1, patch, hole.loop, hole.border, hole.ground_truth,
+                                       case.diag)
+    # MeshLab's sampler works in single precision
+    assert metrics["dist_patch_to_gt_max"] < 1e-6 * case.diag and metrics["dist_gt_to_patch_max"] < 1e-6 * case.diag
+    assert metrics["normal_dev_max_deg"] < 1e-6
+    assert metrics["border_dihedral_max_deg"] < 1e-6 and metrics["border_dihedral_excess_deg"] < 1e-6
+    assert np.all(arrays["face_distance"] < 1e-9)
+    assert metrics["new_vertices"] == 1 and metrics["faces"] == k
+
+
+def test_equilateral_triangle_has_quality_one_and_density_ratio_one():
+    V, F = grid(8, equilateral=True)
+    tri = V[F]
+    lengths = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2)
+    assert np.allclose(lengths, 1.0)
+    removed = np.zeros(len(F), bool)
+    removed[len(F) // 2 + 3] = True  # one interior triangle: a 3-edge hole
+    case, hole = _hole_setup(V, F, removed)
+    patch = hole.ground_truth[1]  # filled exactly with the removed triangle
+    metrics, _ = cmp.hole_metrics(case.V0, case.F0, case.V0, patch, hole.loop, hole.border, hole.ground_truth,
+                                  case.diag)
+    assert metrics["quality_mean"] == pytest.approx(1.0) and metrics["quality_min"] == pytest.approx(1.0)
+    assert metrics["quality_share07"] == 1.0 and metrics["quality_hist"][-1] == 1
+    assert metrics["edge_ratio"] == pytest.approx(1.0)
+    assert metrics["dist_patch_to_gt_max"] < 1e-12
+
+
+def test_lifted_patch_distance_and_normal_deviation_known():
+    """A flat patch lifted by h over a flat hole: distance h, then a flipped patch deviates 180 degrees."""
+    V, F = grid()
+    removed = np.linalg.norm(V[F].mean(axis=1)[:, :2] - 12.0, axis=1) < 5.0
+    case, hole = _hole_setup(V, F, removed)
+    gV, gF = hole.ground_truth
+    n0 = len(case.V0)
+    h = 0.25
+    centre = case.V0[hole.loop].mean(axis=0) + [0, 0, h]
+    V1 = np.vstack([case.V0, centre])
+    k = len(hole.loop)
+    fan = np.stack([np.full(k, n0), hole.loop, hole.loop[np.r_[1:k, 0]]], axis=1)
+    d, _, _ = cmp.closest_faces(V1[[n0]], gV, gF)
+    assert d[0] == pytest.approx(h)
+    flipped = fan[:, ::-1]
+    metrics, _ = cmp.hole_metrics(case.V0, case.F0, V1, flipped, hole.loop, hole.border, hole.ground_truth,
+                                  case.diag)
+    assert metrics["normal_dev_mean_deg"] > 170.0
+
+
+def test_border_dihedral_of_a_right_angle_fold():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.5, -1, 0], [0.5, 0, 1.0]])
+    F_mesh = np.array([[0, 2, 1]])  # traverses edge (1, 0)
+    he = np.array([[1, 0]])
+    patch = np.array([[0, 1, 3]])  # traverses (0, 1): the opposite direction, as a patch must
+    angle = cmp.border_dihedrals(V, F_mesh, he, np.array([0]), patch)
+    assert angle[0] == pytest.approx(90.0)
+    assert np.isnan(cmp.border_dihedrals(V, F_mesh, he, np.array([0]), patch[:, ::-1])[0])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10_000))
+def test_closest_point_on_triangle_beats_dense_sampling(seed):
+    rng = np.random.default_rng(seed)
+    T = rng.normal(size=(3, 3))
+    X = rng.normal(size=(1, 3)) * 2
+    P = cmp.closest_point_on_triangles(X, T[[0]], T[[1]], T[[2]])[0]
+    s, t = np.meshgrid(np.linspace(0, 1, 120), np.linspace(0, 1, 120))
+    ok = s + t <= 1
+    samples = T[0] + s[ok, None] * (T[1] - T[0]) + t[ok, None] * (T[2] - T[0])
+    sampled = np.linalg.norm(samples - X, axis=1).min()
+    exact = np.linalg.norm(P - X[0])
+    assert exact <= sampled + 1e-12
+    assert exact >= sampled - 0.03 * np.linalg.norm(T - T.mean(axis=0), axis=1).max()
+
+
+# --------------------------------------------------------------------------- hole cutting
+
+def test_cut_holes_simple_apart_with_ground_truth():
+    V, F = sphere(4)
+    plan = cmp.hole_plan(4, ("small", "medium"))
+    F_cut, holes = cmp.cut_holes(V, F, sizes=[p[0] for p in plan], shapes=[p[1] for p in plan], seed=3)
+    assert [h.shape for h in holes] == ["compact", "irregular", "compact", "irregular"]
+    loops = boundary_loops(F_cut)
+    assert len(loops) == 4 and not any(lp.pinched for lp in loops)
+    for h in holes:
+        target = cmp.SIZE_CLASSES[h.size_class]
+        assert 0.8 * target <= h.boundary_edges <= 1.5 * target
+    # holes are apart: no two holes share a vertex
+    sets = [set(np.unique(h.removed_faces)) for h in holes]
+    assert all(not (a & b) for i, a in enumerate(sets) for b in sets[i + 1:])
+    # removed + remaining faces are the original mesh
+    assert sum(len(h.removed_faces) for h in holes) + len(F_cut) == len(F)
+
+
+def test_prepared_ground_truth_closes_the_mesh():
+    V, F = sphere(4)
+    case = prepare_case(MeshCase("s", V, F), holes=2, sizes=("small", "medium"), seed=1)
+    assert case.kind == "cut holes" and len(case.holes) == 2
+    for hole in case.holes:
+        gV, gF = hole.ground_truth
+        assert np.allclose(gV[: len(case.V0)], case.V0)
+        he, _ = boundary_halfedges(np.concatenate([case.F0, gF]))
+        assert not np.isin(he, hole.loop).all(axis=1).any()  # the ground truth closes its hole exactly
+
+
+# ------------------------------------------------------------------------- fillers, isolation
+
+def test_parse_fillers():
+    fillers = parse_fillers("min_angle_bilateral:iterations=2:fairing=none,meshing_close_holes:maxholesize=all,"
+                            "refinehole=true")
+    assert fillers[0].filter == "meshing_close_holes_min_angle_bilateral"
+    assert fillers[0].params == {"iterations": 2, "fairing": "none"}
+    assert fillers[1].params == {"maxholesize": "all", "refinehole": True}
+    default = parse_fillers(None)
+    assert {f.filter for f in default} == set(meshlab_holefill.filter_list()) | {"meshing_close_holes"}
+    assert len(parse_fillers(None, refinehole=True)) == len(default) + 1
+    with pytest.raises(ValueError):
+        parse_fillers("no_such_filter")
+
+
+def test_runner_survives_crash_and_hang():
+    with IsolatedRunner() as runner:
+        crashed = runner.run({"kind": "call", "function": "os._exit", "kwargs": {"status": 3}}, timeout=30)
+        assert crashed["status"] == "crashed" and "3" in crashed["error"]
+        hung = runner.run({"kind": "call", "function": "time.sleep", "args": [30]}, timeout=1.0)
+        assert hung["status"] == "timeout"
+        ok = runner.run({"kind": "call", "function": "math.hypot", "args": [3, 4]}, timeout=30)
+        assert ok["status"] == "ok" and ok["value"] == 5.0
+
+
+def test_failing_filter_is_reported_and_others_run():
+    V, F = sphere(3)
+    fillers = [Filler("broken", "meshing_close_holes_min_angle_bilateral", {"no_such_param": 1}),
+               Filler("close all", "meshing_close_holes", {"maxholesize": "all"})]
+    result = run_comparison([MeshCase("s", V, F)], holes=2, sizes=("small",), filters=fillers, progress=False)
+    runs = {r["filler"]: r for r in result.runs}
+    assert runs["broken"]["status"] == "error" and "no_such_param" in runs["broken"]["error"]
+    assert runs["close all"]["status"] == "ok" and runs["close all"]["closed_holes"] == 2
+    assert all(not r["closed"] and r["reason"].startswith("error") for r in result.holes if r["filler"] == "broken")
+
+
+# ----------------------------------------------------------------------------------- report
+
+def test_compare_report_end_to_end(tmp_path):
+    V, F = sphere(4)
+    case = MeshCase("sphere", V, F, analytic=lambda X: np.linalg.norm(X, axis=1) - 1.0)
+    result = meshlab_holefill.compare([case, os.path.join(SAMPLES, "bunny10k_textured.obj")],
+                                      report=str(tmp_path), holes=2, sizes=("small", "medium"),
+                                      filters="min_angle_bilateral,baseline", progress=False)
+    labels = [f.label for f in result.fillers]
+    assert len(labels) == 3
+    n_holes = 2 + 5
+    assert len(result.holes) == n_holes * 3
+    for name in ["report.md", "report.html", "results.json", "results.csv", "metrics.png",
+                 "quality_histograms.png", "error_time_vs_size.png"]:
+        assert (tmp_path / name).stat().st_size > 0, name
+    assert len(list((tmp_path / "holes").glob("*.png"))) == n_holes
+    rows = list(csv.DictReader(open(tmp_path / "results.csv")))
+    assert len(rows) == n_holes * 3
+    data = json.load(open(tmp_path / "results.json"))
+    assert len(data["holes"]) == n_holes * 3
+    md, page = (tmp_path / "report.md").read_text(), (tmp_path / "report.html").read_text()
+    for c in result.cases:
+        assert c["case"] in md and c["case"] in page
+    assert md.count("| sphere |") == page.count("<td>sphere</td>") + page.count("<td class='best'>sphere</td>") == 2
+    by = {(r["case"], r["hole"], r["filler"]): r for r in result.holes}
+    hu = "meshing_close_holes_min_angle_bilateral"
+    for h in range(2):  # ground truth and analytic metrics on the cut holes
+        r = by[("sphere", h, hu)]
+        assert r["closed"] and r["dist_patch_to_gt_mean_permille"] < 20 and r["analytic_dist_mean"] < 0.05
+    natural = by[("bunny10k_textured.obj", 0, hu)]
+    assert natural["closed"] and "dist_patch_to_gt_mean" not in natural and natural["quality_mean"] > 0.5
+    default = [r for r in result.holes if r["filler"] == "meshing_close_holes (default)" and r["boundary_edges"] >= 30]
+    assert default and all("maxholesize" in r["reason"] for r in default)
+
+
+def test_cli_compare(tmp_path, capsys):
+    from meshlab_holefill.cli import main
+
+    code = main(["compare", os.path.join(SAMPLES, "bone.ply"), "--holes", "1", "--sizes", "small",
+                 "--filters", "meshing_close_holes", "--report", str(tmp_path), "--quiet", "--no-pictures"])
+    assert code == 0
+    out = capsys.readouterr().out
+    assert "meshing_close_holes" in out and "1/1" in out
+    assert "meshlab-holefill compare" in (tmp_path / "report.md").read_text()
