@@ -1,0 +1,452 @@
+"""Hole patching by point correspondences, differential evolution and constrained triangulation (HPDE).
+
+Xie and Zou, "A triangulation-based hole patching method using differential evolution",
+Computer-Aided Design 45 (2013), Algorithm 2, steps 2-7: base points at equal arc length on
+the boundary are split in two by PCA when the boundary folds (Sec. 4.2), paired across the
+hole (Sec. 4.3); through each pair a section plane cuts the ring of border triangles
+(Sec. 4.4); on it, points between two circular arcs given by the end tangents are predicted
+with equal spacing and, by DE/rand/1/bin, equal turning angles (Sec. 4.5); the projected
+boundary and predicted points are triangulated with the boundary kept (Sec. 4.6), then
+smoothed, decimated and edge-swapped (Sec. 4.7). Step 1 (smoothing noisy input) is not used.
+
+Readings of passages the paper leaves open (each documented at the function that makes it):
+
+* Sec. 4.2. EdgeLen = mean edge length of the triangles touching the loop (the ring of Fig.
+  4). Eq. 8: each PCA run holds at least max(4, ceil(n / 6)) base points; the dihedral angle
+  is pi minus the angle between the surface-oriented plane normals, and "smaller than A_c"
+  has a 1e-6 rad slack (the cube of Fig. 15(b) meets at exactly pi/2 and is segmented).
+* Sec. 4.3. The boundary direction at a base point (Q_t Q_{t+1}, Fig. 2) is that of the base
+  points two either side, and the intersection angle is measured towards the hole, so a
+  linking line leaving the hole fails I_c too; the failing end of a pair is skipped alone,
+  both ends when both fail. Eq. 10 tries every start and minimises over the starts whose
+  pairs mostly (>= 1/2) pass I_c; a pairing (Eq. 9 or 10) keeping fewer than half of the
+  base points yields to the other choice when that one keeps more.
+* Sec. 4.4. Eq. 11 uses one-sided differences at the ends of the chain and the surface
+  normal where the chord sheet's normal leans more than 45 degrees from it. AP is where the
+  section plane leaves the border triangle of the base point; TV = BP - AP.
+* Sec. 4.5. Arcs are at most half circles; a pair whose end tangents point away from each
+  other is dropped. Eq. 14 minimises the sum of squared deviations of the m + 2 turning
+  angles along AP_i, P_1, PP_1..PP_m, P_2, AP_{n-i+1} from their mean; the population is
+  the Eq. 16 vector plus copies perturbed by up to 1/4 of the bound width; NumIter
+  (``generations``) = 100; Algorithm 1 is followed literally (selection on the raw trial,
+  then reflection, then the objective renewed).
+* Sec. 4.6. Prediction points outside the projected boundary polygon or within 0.25 EdgeLen
+  of it are left out. Layouts are tried until one gives a patch without fold-over and not
+  crossing the surrounding rings: the paper's choice, the other plane layout, a disc layout
+  (beyond the paper), then the same with the other prediction (segmented / not). Fold-overs:
+  a face turned against its projection plane after the mapping back, or two neighbouring
+  faces (or a face and the mesh face across a loop edge) bent by more than 150 degrees;
+  swaps and local relaxation repair what they can, prediction points left on folds are
+  dropped for up to 4 rounds. A loop-only triangulation with Liepa's weights is the last
+  resort. A chord duplicating a mesh edge is split at its midpoint.
+* Sec. 4.7. NumSmooth passes of Taubin's lambda|mu filter (0.33, -0.34), uniform weights,
+  boundary fixed; edges shorter than ``decimation_rate`` (0.6) * EdgeLen collapse to their
+  midpoint, onto the loop vertex when one end is on the loop; min-angle swaps keep each new
+  triangle within 60 degrees of the old pair's normal. ``relax`` (beyond the paper, on by
+  default for the quality target): obtuse-edge splits, collapse of slivers on the loop and
+  tangential relaxation, undone if it folds.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..patch import HoleFillError, Patch
+from ..registry import ParamSpec
+from . import hpde_folds as folds
+from . import hpde_mesh as mesh_steps
+from . import hpde_optimisation as optimisation
+from . import hpde_prediction as prediction
+from . import hpde_sections as sections
+
+RINGS = 2
+
+PARAMS = [
+    ParamSpec("population_factor", "float", 3.0,
+              "DE population size per section plane N = factor * m (Sec. 4.8: N = 3 m).", minimum=1.0, maximum=50.0),
+    ParamSpec("mutation", "float", 0.8, "DE mutation factor F of Eq. 2 (Sec. 4.8: 0.8).", minimum=0.0, maximum=2.0),
+    ParamSpec("crossover", "float", 0.05, "DE crossover probability CR of Eq. 3 (Sec. 4.8: 0.05).",
+              minimum=0.0, maximum=1.0),
+    ParamSpec("generations", "int", 100,
+              "DE generations (NumIter; the paper gives no value).", minimum=0, maximum=100000),
+    ParamSpec("critical_dihedral", "float", 90.0,
+              "A_c in degrees: the boundary is split in two planes when their dihedral angle is below it "
+              "(Sec. 4.2; pi/2 in the paper).", minimum=0.0, maximum=180.0),
+    ParamSpec("critical_intersection", "float", 12.0,
+              "I_c in degrees: base points whose linking line meets the boundary at a smaller angle are "
+              "skipped (Sec. 4.3; pi/15 in the paper).", minimum=0.0, maximum=90.0),
+    ParamSpec("num_smooth", "int", 60, "NumSmooth: Taubin smoothing passes of the patch (Sec. 4.7; 60).",
+              minimum=0, maximum=10000),
+    ParamSpec("decimation_rate", "float", 0.6,
+              "Edges shorter than this times EdgeLen are collapsed to their midpoints (Sec. 4.7-4.8; the "
+              "paper gives no value).", minimum=0.0, maximum=2.0),
+    ParamSpec("seed", "int", 0, "Random seed of the differential evolution.", minimum=0, maximum=2**31 - 1),
+    ParamSpec("relax", "int", 10,
+              "Beyond the paper: passes of tangential relaxation (then min-angle swaps) after the mesh "
+              "optimisation, evening out the triangles without changing the shape; on by default to meet the "
+              "quality target (2r/R mean >= 0.85, min >= 0.3); 0 = the paper.",
+              minimum=0, maximum=1000),
+]
+
+CLEARANCE = 0.25  # prediction points nearer than this * EdgeLen to the projected boundary are left out
+OUTLIER_ROUNDS = 4  # rounds of leaving out prediction points on faces that stay folded
+LAST_RESORT_ANGLE = np.radians(175.0)  # largest crease the loop-only last resort accepts
+RELAX_ROUNDS = 3  # rounds of sliver collapse + obtuse-edge splits + tangential relaxation + swaps (relax)
+SLIVER_ANGLE = np.radians(140.0)  # a free vertex this flat against a loop edge is collapsed onto it
+MIN_COVERAGE = 0.5  # a pairing keeping fewer base points than this share yields to the other choice
+GOOD_KEPT_SHARE = 0.5  # a layout keeping fewer prediction points is used only if no other keeps more
+
+
+def ring_edge_length(ctx):
+    """EdgeLen (Sec. 4.2): mean length of the edges of the ring of triangles adjacent to the hole."""
+    from ..geometry.quality import mean_edge_length
+
+    ring = ctx.faces[np.any(ctx.faces < ctx.size, axis=1)]
+    return mean_edge_length(ctx.vertices, ring)
+
+
+def base_point_normals(normals, base):
+    """Surface normal at each base point, interpolated along its loop edge, (n, 3)."""
+    k = len(normals)
+    N = (1 - base.t)[:, None] * normals[base.edge] + base.t[:, None] * normals[(base.edge + 1) % k]
+    return N / np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
+
+
+def border_third_vertices(ctx):
+    """Third corner W of the border triangle of each loop edge, (k, 3)."""
+    k = ctx.size
+    tri = ctx.faces[ctx.border_faces]
+    i = np.arange(k)[:, None]
+    other = (tri != i) & (tri != (i + 1) % k)
+    # A border face whose third corner is also a loop vertex still has one "other" corner.
+    pick = np.argmax(other, axis=1)
+    return ctx.vertices[tri[np.arange(k), pick]]
+
+
+def segment_boundary(base, normals, critical_dihedral):
+    """Step 2 decision: Eq. 8 split and whether to segment (Sec. 4.2).
+
+    Returns
+    -------
+    dict with ``split`` (i0, j0) or None, ``dihedral`` (radians or None), ``segmented`` (bool),
+    ``planes`` ((centroid, oriented normal) for PS_1 and PS_2, or None).
+    """
+    i0, j0, lams, plane_normals = sections.pca_segmentation(base.points)
+    if i0 is None:
+        return {"split": None, "dihedral": None, "segmented": False, "planes": None}
+    n = len(base)
+    ps1 = np.r_[np.arange(j0, n), np.arange(0, i0)]
+    ps2 = np.arange(i0, j0)
+    angle, n1, n2 = sections.dihedral_angle(plane_normals[0], plane_normals[1],
+                                            normals[ps1].sum(axis=0), normals[ps2].sum(axis=0))
+    planes = ((base.points[ps1].mean(axis=0), n1), (base.points[ps2].mean(axis=0), n2))
+    return {"split": (i0, j0), "dihedral": angle, "segmented": angle <= critical_dihedral + sections.ANGLE_SLACK,
+            "planes": planes}
+
+
+def predict_points(ctx, base, normals, split, I_c, edge_len, de_options):
+    """Steps 3-5: correspondences, section planes and DE prediction (Sec. 4.3-4.5).
+
+    Returns
+    -------
+    points : (q, 3) float64
+    owner : (q, 2) int64  base points (a, b) of the pair each point was predicted for
+    fraction : (q,) float64  position along the chord, in (0, 1)
+    info : dict
+    """
+    P = ctx.points
+    tangent, inward = sections.boundary_frames(base.points, normals)
+    pairs, cinfo = sections.correspondences(base.points, tangent, inward, split, I_c)
+    info = {"pairs": int(len(pairs)), "skipped_base_points": cinfo["skipped"], "M": 0, "predicted": 0,
+            "de_generations": 0, "dropped_pairs": 0}
+    empty = (np.zeros((0, 3)), np.zeros((0, 2), np.int64), np.zeros(0), info)
+    if len(pairs) == 0:
+        return empty
+    a, b = pairs[:, 0], pairs[:, 1]
+    Nv, flat = sections.section_normals(base.points, pairs, normals[a] + normals[b])
+    W = border_third_vertices(ctx)
+    AP_a, TV_a = sections.ring_intersections(P, base.edge[a], base.points[a], Nv, W[base.edge[a]])
+    AP_b, TV_b = sections.ring_intersections(P, base.edge[b], base.points[b], Nv, W[base.edge[b]])
+    P1, P2, TV1, TV2 = base.points[a], base.points[b], TV_a, -TV_b
+    ok = prediction.forward_tangents(P1, P2, TV1, TV2)
+    info.update(section_normal_fallbacks=int(flat.sum()), dropped_pairs=int((~ok).sum()))
+    if not ok.any():
+        return empty
+    pairs, P1, P2, TV1, TV2, Nv = pairs[ok], P1[ok], P2[ok], TV1[ok], TV2[ok], Nv[ok]
+    m, M = prediction.prediction_counts(np.linalg.norm(P2 - P1, axis=1), edge_len)
+    problem, frames = prediction.section_problems(P1, P2, TV1, TV2, Nv, m)
+    Y, f, g = prediction.predict_y(problem, **de_options)
+    points, plane, fraction = prediction.predicted_points(P1, frames, problem, Y)
+    info.update(M=M, predicted=int(len(points)), de_generations=int(g), de_objective_mean=float(np.mean(f)))
+    return points, pairs[plane], fraction, info
+
+
+def pairing_coverage(base, normals, split, I_c):
+    """Share of the base points that the correspondences of Sec. 4.3 keep in a pair."""
+    tangent, inward = sections.boundary_frames(base.points, normals)
+    pairs, _ = sections.correspondences(base.points, tangent, inward, split, I_c)
+    return 2.0 * len(pairs) / max(len(base), 1)
+
+
+def plane_map_for(base, normals, seg, segmented):
+    """The triangulation plane(s) of Sec. 4.6: the two fitted planes unfolded, or the PCA plane."""
+    if segmented:
+        (c1, n1), (c2, n2) = seg["planes"]
+        if np.linalg.norm(np.cross(n1, n2)) > 1e-6:
+            return mesh_steps.PlaneMap(c1, n1, (c2, n2))
+    from ..geometry.pca import fit_plane
+
+    c, n, _, _ = fit_plane(base.points)
+    if n @ normals.sum(axis=0) < 0:
+        n = -n
+    return mesh_steps.PlaneMap(c, n)
+
+
+def triangulate(ctx, base, normals, seg, layout, prediction_result, edge_len, excluded):
+    """Step 6 for one layout: 'plane', 'two planes' (Sec. 4.6) or the 'disc' fallback.
+
+    Parameters
+    ----------
+    excluded : (q,) bool  prediction points left out (outliers of earlier rounds)
+
+    Returns
+    -------
+    V : (k + q', 3) float64,  F : (t, 3) int64,  ids : (q',) int64 prediction point of each V[k:]
+
+    Raises
+    ------
+    HoleFillError  non-simple layout, or a fold-over after mapping the triangulation back.
+    """
+    points, owner, fraction, _ = prediction_result
+    P = ctx.points
+    clearance = CLEARANCE * edge_len
+    use = np.flatnonzero(~excluded)
+    if layout == "disc":
+        # The disc keeps every chord inside; drop points whose chord left the hole in 3D
+        # (the 2D inside test of the plane layouts).
+        _, inward = sections.boundary_frames(base.points, normals)
+        use = use[mesh_steps.inside_boundary(points[use], base.points, inward, clearance)]
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+        offsets = mesh_steps.lateral_offsets(P, ctx.loop_normals)
+        Q, X = mesh_steps.disc_coordinates(arc, base.perimeter, len(base), owner[use, 0], owner[use, 1],
+                                           fraction[use], offsets)
+        V, F, _, kept = mesh_steps.triangulate_planar(P, points[use], Q, X, clearance)
+    else:
+        pmap = plane_map_for(base, normals, seg, layout == "two planes")
+        V, F, orientation, kept = mesh_steps.triangulate_projection(P, points[use], pmap, clearance)
+        if folds.fold_overs(V, F, pmap.reference_normals(V, F, orientation)).any():
+            raise HoleFillError(f"fold-over after mapping the {layout} triangulation back to 3D")
+    return V, F, use[kept]
+
+
+def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, decimation_rate, relax=0):
+    """Step 7 (Sec. 4.7) with the fold repairs: smoothing, decimation, min-angle swaps.
+
+    Returns
+    -------
+    V, F : the patch (loop vertices first)
+    stats : dict  ``kept``, ``collapses``, ``swaps``, ``fold_repairs``
+    bad_ids : (r,) int64  prediction points on faces still folded (empty when the patch is clean)
+    """
+    k = ctx.size
+    stats = {"kept": int(len(V) - k)}
+    n_before = len(V)
+    V, F, splits = mesh_steps.split_forbidden_edges(V, F, ctx.forbidden_edges)
+    ids = np.concatenate([ids, np.full(len(V) - n_before, -1, np.int64)])  # -1: not a prediction point
+    stats["forbidden_splits"] = int(splits)
+    V, F, repairs = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
+    V = optimisation.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth)
+    V, F, collapses, keep = optimisation.decimate_short_edges(V, F, k, decimation_rate * edge_len, ctx.forbidden_edges)
+    ids = ids[keep[k:] - k]
+    F, swaps = optimisation.swap_edges_min_angle(V, F, ctx.forbidden_edges)
+    V, F, more = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
+    splits = 0
+    snapshot = (V, F, ids, swaps, collapses)
+    for _ in range(RELAX_ROUNDS if relax > 0 else 0):
+        # Not the vertices split off an obtuse edge: they start flat and the relaxation moves them.
+        eligible = np.concatenate([np.zeros(k, bool), ids != -2])
+        V, F, c, keep = optimisation.decimate_short_edges(V, F, k, 1e-9 * edge_len, ctx.forbidden_edges, max_rounds=5,
+                                                        sliver_angle=SLIVER_ANGLE, sliver_eligible=eligible)
+        ids = ids[keep[k:] - k]
+        collapses += c
+        n_before = len(V)
+        V, F, s = optimisation.split_obtuse_edges(V, F, k)
+        ids = np.concatenate([ids, np.full(len(V) - n_before, -2, np.int64)])  # -2: obtuse split
+        splits += s
+        V, F, r3, keep = optimisation.remove_valence_three(V, F, k, ctx.forbidden_edges)
+        ids = ids[keep[k:] - k]
+        collapses += r3
+        V = optimisation.tangential_relax(V, F, np.arange(len(V)) < k, passes=relax)
+        F, more_swaps = optimisation.swap_edges_min_angle(V, F, ctx.forbidden_edges)
+        swaps += more_swaps
+        if s == 0 and c == 0:
+            break
+    stats["obtuse_splits"] = int(splits)
+    if relax > 0 and folds.local_folds(V, F, mesh_normals).any():
+        V, F, again = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
+        more += again
+        if (folds.local_folds(V, F, mesh_normals) & ~folds.boundary_ears(F, k)).any():
+            V, F, ids, swaps, collapses = snapshot  # the relaxation folded what it could not repair: undo it
+            stats["relax_undone"] = True
+    stats.update(collapses=int(collapses), swaps=int(swaps), fold_repairs=int(repairs + more))
+    bad = folds.local_folds(V, F, mesh_normals)
+    # A fold of an ear (three consecutive loop vertices) is the boundary's own shape (a 3-edge
+    # hole in a crumpled scan has no other patch); it is kept and counted, the filter's
+    # intersection check still applies. Any other fold must go.
+    loop_only = folds.boundary_ears(F, k)
+    stats["boundary_folds"] = int((bad & loop_only).sum())
+    stats["folds_left"] = int((bad & ~loop_only).sum())
+    verts = np.unique(F[bad & ~loop_only].ravel())
+    bad_ids = ids[verts[verts >= k] - k]
+    return V, F, stats, bad_ids[bad_ids >= 0]
+
+
+def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=100, critical_dihedral=90.0,
+         critical_intersection=12.0, num_smooth=60, decimation_rate=0.6, seed=0, relax=10):
+    """Fill one hole by HPDE, Algorithm 2 steps 2-7.
+
+    Attempts (first clean one wins): the paper's choice (segmented prediction with two
+    unfolded planes, or unsegmented with the PCA plane), the other plane layout and the disc
+    layout with the same prediction, then the three layouts with the other prediction. An
+    attempt is clean when no fold-over is left after smoothing, optimisation and repairs and
+    the patch does not cross the surrounding rings; one that kept under half of the prediction
+    points is used only if no other keeps more. The loop-only triangulation is the last
+    resort; if it also fails, HoleFillError names every attempt's reason.
+
+    Parameters
+    ----------
+    ctx : HoleContext
+    population_factor, mutation, crossover, generations, critical_dihedral, critical_intersection,
+    num_smooth, decimation_rate, seed, relax : see PARAMS
+
+    Returns
+    -------
+    Patch
+        ``info``: ``base_points`` (n), ``segmented`` (prediction), ``layout``, ``dihedral_deg``,
+        ``pairs``, ``skipped_base_points``, ``M``, ``predicted``, ``kept`` (prediction points
+        triangulated), ``collapses``, ``rate`` (new vertices / prediction points, the paper's
+        Rate), ``swaps``, ``fold_repairs``, ``outliers`` and per-step seconds.
+    """
+    t0 = time.perf_counter()
+    k = ctx.size
+    P = ctx.points
+    edge_len = float(ring_edge_length(ctx))
+    if k < 3 or edge_len <= 0:
+        raise HoleFillError("degenerate hole")
+    base = sections.base_points(P, edge_len)
+    normals = base_point_normals(ctx.loop_normals, base)
+    seg = segment_boundary(base, normals, np.radians(critical_dihedral))
+    t1 = time.perf_counter()
+    de_options = dict(N_factor=population_factor, F=mutation, CR=crossover, generations=generations, seed=seed)
+    # Attempts: the paper's choice (segmented prediction with two unfolded planes, or the
+    # unsegmented one with the PCA plane), then the other plane layout and the disc with the
+    # same prediction, then the same three layouts with the other prediction.
+    # Reading: a pairing that keeps fewer than half of the base points (the Eq. 9 pairs of a
+    # hole whose two PCA runs are its two long sides run along the boundary and are skipped by
+    # I_c) covers the hole badly; then the other choice goes first if it covers more.
+    first = bool(seg["segmented"])
+    if seg["split"] is not None:
+        coverage = {s: pairing_coverage(base, normals, seg["split"] if s else None, np.radians(critical_intersection))
+                    for s in (True, False)}
+        if coverage[first] < MIN_COVERAGE and coverage[not first] > coverage[first]:
+            first = not first
+    choices = [first] + ([not first] if seg["split"] is not None else [])
+    attempts = []
+    for segmented in choices:
+        plane_layouts = ["two planes", "plane"] if segmented else ["plane", "two planes"]
+        if seg["split"] is None:
+            plane_layouts = ["plane"]
+        attempts += [(segmented, layout) for layout in plane_layouts + ["disc"]]
+    predictions, reasons, best = {}, [], None
+    mesh_normals = folds.border_normals(ctx)
+    prediction_seconds = 0.0
+    for segmented, layout in attempts:
+        t2 = time.perf_counter()
+        if segmented not in predictions:
+            predictions[segmented] = predict_points(ctx, base, normals, seg["split"] if segmented else None,
+                                                    np.radians(critical_intersection), edge_len, de_options)
+        result = predictions[segmented]
+        prediction_seconds += time.perf_counter() - t2
+        excluded = np.zeros(len(result[0]), bool)
+        for round_ in range(OUTLIER_ROUNDS):
+            try:
+                t3 = time.perf_counter()
+                V, F, ids = triangulate(ctx, base, normals, seg, layout, result, edge_len, excluded)
+                t4 = time.perf_counter()
+                V, F, stats, bad_ids = smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth,
+                                                           decimation_rate, relax)
+                t5 = time.perf_counter()
+            except HoleFillError as exc:
+                reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: {exc}")
+                break
+            if stats["folds_left"] == 0 and folds.intersects_surroundings(ctx, V, F):
+                reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
+                               "patch crosses the surrounding mesh")
+                break
+            if stats["folds_left"] == 0:
+                info = dict(result[3])
+                kept = stats["kept"] / max(info["predicted"], 1)
+                info.update(base_points=len(base), segmented=bool(segmented), layout=layout,
+                            dihedral_deg=None if seg["dihedral"] is None else float(np.degrees(seg["dihedral"])),
+                            outliers=int(excluded.sum()), rate=float((len(V) - k) / max(info["predicted"], 1)),
+                            kept_share=float(kept), boundary_seconds=t1 - t0, prediction_seconds=prediction_seconds,
+                            triangulation_seconds=t4 - t3, optimisation_seconds=t5 - t4, **stats)
+                patch = Patch(vertices=V[k:], faces=F, info=info)
+                if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
+                    return patch
+                # The layout lost many prediction points: keep it, but try the others first.
+                if best is None or kept > best.info["kept_share"]:
+                    best = patch
+                reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
+                               f"kept only {kept:.0%} of the prediction points")
+                break
+            if len(bad_ids) == 0:
+                reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
+                               "fold-over after smoothing and mesh optimisation")
+                break
+            excluded[bad_ids] = True
+        else:
+            reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
+                           f"fold-over after smoothing and mesh optimisation ({OUTLIER_ROUNDS} rounds)")
+    if best is not None:
+        best.info["attempts_failed"] = "; ".join(reasons)
+        return best
+    # Last resort (beyond the paper): the loop alone, triangulated by Liepa's weights or flat
+    # in the PCA plane. Teeth of a crumpled scan border force sharp creases there, so up to
+    # LAST_RESORT_ANGLE is accepted (a triangle flipped onto its neighbour is at 180 degrees).
+    candidates = [folds.loop_triangulation(P, mesh_normals, ctx.forbidden_edges,
+                                           blocked=folds.crossing_triangles(ctx))[0]]
+    try:
+        pmap = plane_map_for(base, normals, seg, False)
+        candidates.append(mesh_steps.triangulate_projection(P, np.zeros((0, 3)), pmap, 0.0)[1])
+    except HoleFillError:
+        pass
+    fe = np.sort(np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2), axis=1)
+    for F in candidates:
+        if F is None or len(F) == 0:
+            continue
+        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        if len(fe) and np.isin(fe[:, 0] * k + fe[:, 1], E[:, 0] * k + E[:, 1]).any():
+            continue
+        if folds.local_folds(P, F, mesh_normals, max_angle=LAST_RESORT_ANGLE).any():
+            continue
+        if folds.intersects_surroundings(ctx, P, F):
+            continue
+        info = {"base_points": len(base), "segmented": False, "layout": "loop only", "pairs": 0, "predicted": 0,
+                "rate": 0.0, "attempts_failed": "; ".join(reasons), "boundary_seconds": t1 - t0,
+                "prediction_seconds": prediction_seconds}
+        V = P
+        if relax > 0:
+            # The relaxation's splits give the loop-only patch interior vertices; kept if clean.
+            Vr, Fr = P, F
+            for _ in range(RELAX_ROUNDS):
+                Vr, Fr, s_ = optimisation.split_obtuse_edges(Vr, Fr, k)
+                Vr = optimisation.tangential_relax(Vr, Fr, np.arange(len(Vr)) < k, passes=relax)
+                if s_ == 0:
+                    break
+            if not folds.local_folds(Vr, Fr, mesh_normals, max_angle=LAST_RESORT_ANGLE).any() and \
+                    not folds.intersects_surroundings(ctx, Vr, Fr):
+                V, F = Vr, Fr
+        return Patch(vertices=V[k:], faces=F, info=info)
+    raise HoleFillError("; ".join(reasons))

@@ -1,0 +1,170 @@
+"""Differential evolution DE/rand/1/bin (Storn and Price 1997), vectorised and batched.
+
+The algorithm is Algorithm 1 of Xie and Zou (2013, Sec. 3), step by step: mutation
+V_i = X_r1 + F (X_r2 - X_r3) (Eq. 2) with r1, r2, r3 mutually different, binomial crossover
+(Eq. 3, at least the component rn_i from V_i), greedy selection U_i vs X_i (Eq. 4), then the
+new generation is constrained to the bounds by reflection (Eq. 5) and the objective values of
+the reflected individuals are renewed (step 9).
+
+Vectorisation: one generation updates all N individuals at once (the for-loop of Algorithm 1
+is a sweep whose individuals do not see each other's updates, as in the classical synchronous
+DE). Several independent problems of different dimension and population size can be solved
+in one call ("batch"): arrays carry a leading batch axis, problem b uses its first
+``pop_size[b]`` individuals and first ``dims[b]`` components; the unused components must have
+lower == upper (they stay fixed).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def reflect_into_bounds(X, lower, upper):
+    """Constrain variables to [l, u] by reflection at the violated bound (Eq. 5).
+
+    X_ij -> min(2 l_j - X_ij, u_j) if X_ij < l_j;  max(2 u_j - X_ij, l_j) if X_ij > u_j.
+
+    Parameters
+    ----------
+    X : (..., N, n) float64
+    lower, upper : (..., n) float64, broadcast against X without its population axis.
+
+    Returns
+    -------
+    (..., N, n) float64
+    """
+    lo = lower[..., None, :]
+    hi = upper[..., None, :]
+    out = np.where(X < lo, np.minimum(2.0 * lo - X, hi), X)
+    return np.where(out > hi, np.maximum(2.0 * hi - out, lo), out)
+
+
+def _distinct_triples(rng, pop_size, shape):
+    """Indices r1, r2, r3, mutually different, each uniform in [0, pop_size[b]).
+
+    Algorithm 1, step 4 asks only that r1, r2, r3 differ from each other (not from i), so a
+    population of 3 suffices (Xie and Zou use N = 3 m, so N = 3 when m = 1).
+
+    Parameters
+    ----------
+    pop_size : (B,) int >= 3
+    shape : (B, N)
+
+    Returns
+    -------
+    r1, r2, r3 : (B, N) int64
+    """
+    N = pop_size[:, None].astype(np.float64)
+    u = rng.random((3,) + shape)
+    r1 = np.floor(u[0] * N).astype(np.int64)
+    r2 = np.floor(u[1] * (N - 1)).astype(np.int64)
+    r2 += r2 >= r1
+    lo, hi = np.minimum(r1, r2), np.maximum(r1, r2)
+    r3 = np.floor(u[2] * (N - 2)).astype(np.int64)
+    r3 += r3 >= lo
+    r3 += r3 >= hi
+    return r1, r2, r3
+
+
+def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0.05, generations=100,
+                  seed=0, init=None, tol=0.0, bounds="paper"):
+    """Minimise a batch of box-constrained problems by DE/rand/1/bin (Algorithm 1).
+
+    Parameters
+    ----------
+    objective : callable
+        ``objective(X) -> f`` with X : (B, N, n) float64 and f : (B, N) float64; evaluated
+        once per generation on all trial individuals (vectorised over population and batch).
+    lower, upper : (B, n) or (n,) float64
+        Bounds l_j <= x_j <= u_j. A 1-D input is one problem (B = 1) and the result is 1-D.
+    pop_size : int or (B,) int, optional
+        N per problem, >= 3 (default 10 n). Rows beyond pop_size[b] are padding.
+    dims : (B,) int, optional
+        Number of used components per problem (default n): the random crossover component
+        rn_i is drawn among them. Unused components need lower == upper.
+    F : float
+        Mutation factor in [0, 1] (Eq. 2).
+    CR : float
+        Crossover probability (Eq. 3).
+    generations : int
+        Maximum number of generations (the stopping condition of Algorithm 1, line 2).
+    seed : int or numpy.random.Generator
+    init : (B, N, n) float64, optional
+        Initial population (reflected into the bounds); default uniform in the box
+        (Algorithm 1, line 1).
+    tol : float
+        Optional early stop when, for every problem, the spread max f - min f of its population
+        is <= tol (0 disables it).
+    bounds : {'paper', 'trial'}
+        'paper' follows Algorithm 1 literally: select on f of the raw trial (Eq. 4), reflect the
+        new generation (Eq. 5) and renew f of the reflected individuals (step 9, a second
+        evaluation). 'trial' reflects each trial before it is evaluated (the usual DE practice;
+        one evaluation per generation, selection stays greedy).
+
+    Returns
+    -------
+    best : (B, n) float64 (or (n,) for a 1-D problem)
+        Best individual of the last generation (always inside the bounds).
+    best_f : (B,) float64 (or float)
+    generations_run : int
+    """
+    if bounds not in ("paper", "trial"):
+        raise ValueError(f"unknown bounds handling {bounds!r}")
+    single = np.ndim(lower) == 1
+    lower = np.atleast_2d(np.asarray(lower, np.float64))
+    upper = np.atleast_2d(np.asarray(upper, np.float64))
+    B, n = lower.shape
+    if np.any(upper < lower):
+        raise ValueError("upper bound below lower bound")
+    if pop_size is None:
+        pop_size = 10 * n
+    pop = np.broadcast_to(np.asarray(pop_size, np.int64), (B,)).copy()
+    if np.any(pop < 3):
+        raise ValueError("DE/rand/1 needs a population of at least 3")
+    dims = np.full(B, n, np.int64) if dims is None else np.asarray(dims, np.int64)
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    Nmax = int(pop.max())
+    active = np.arange(Nmax)[None, :] < pop[:, None]  # (B, N)
+
+    if init is None:
+        X = lower[:, None, :] + rng.random((B, Nmax, n)) * (upper - lower)[:, None, :]
+    else:
+        X = reflect_into_bounds(np.asarray(init, np.float64).reshape(B, Nmax, n), lower, upper)
+    fX = np.asarray(objective(X), np.float64)
+    fX = np.where(active, fX, np.inf)
+    rows = np.arange(B)[:, None]
+    g = 0
+    for g in range(1, generations + 1):
+        r1, r2, r3 = _distinct_triples(rng, pop, (B, Nmax))
+        V = X[rows, r1] + F * (X[rows, r2] - X[rows, r3])  # Eq. 2
+        rn = np.floor(rng.random((B, Nmax)) * dims[:, None]).astype(np.int64)
+        take = (rng.random((B, Nmax, n)) <= CR) | (np.arange(n)[None, None, :] == rn[..., None])
+        U = np.where(take, V, X)  # Eq. 3
+        if bounds == "trial":
+            U = reflect_into_bounds(U, lower, upper)
+        fU = np.asarray(objective(U), np.float64)
+        better = (fU <= fX) & active  # Eq. 4
+        X = np.where(better[..., None], U, X)
+        fX = np.where(better, fU, fX)
+        if bounds == "paper":
+            Xr = reflect_into_bounds(X, lower, upper)  # Eq. 5 on the new generation
+            moved = np.any(Xr != X, axis=2) & active
+        if bounds == "paper" and moved.any():
+            X = Xr
+            # Step 9: renew f of the reflected individuals only (gathered per problem).
+            count = moved.sum(axis=1)
+            K = int(count.max())
+            order = np.argsort(~moved, axis=1, kind="stable")[:, :K]
+            f_new = np.asarray(objective(X[rows, order]), np.float64)
+            take_new = np.arange(K)[None, :] < count[:, None]
+            problem_of = np.repeat(np.arange(B)[:, None], K, axis=1)
+            fX[problem_of[take_new], order[take_new]] = f_new[take_new]
+        if tol > 0:
+            f_act = np.where(active, fX, np.nan)
+            if np.all(np.nanmax(f_act, axis=1) - np.nanmin(f_act, axis=1) <= tol):
+                break
+    best_idx = np.argmin(np.where(active, fX, np.inf), axis=1)
+    best = X[np.arange(B), best_idx]
+    best_f = fX[np.arange(B), best_idx]
+    if single:
+        return best[0], float(best_f[0]), g
+    return best, best_f, g

@@ -1,0 +1,602 @@
+"""Tests of the HPDE filter (Xie and Zou 2013): each step of Algorithm 2 and the whole filter."""
+import itertools
+import os
+
+import numpy as np
+import pymeshlab
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import meshlab_holefill  # noqa: F401  (registers the filters)
+from meshlab_holefill.algorithms import differential_evolution as hpde
+from meshlab_holefill.algorithms import (hpde_experiment, hpde_folds, hpde_mesh, hpde_optimisation,
+                                         hpde_prediction, hpde_sections)
+from meshlab_holefill.geometry.de import de_rand_1_bin, reflect_into_bounds
+from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
+from meshlab_holefill.holes import boundary_loops, hole_context
+from meshlab_holefill.patch import validate_patch
+
+FILTER = "meshing_close_holes_differential_evolution"
+SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
+
+
+# ----------------------------------------------------------------------------- fixtures
+
+def grid_plane(n=24, size=1.0):
+    """Flat square grid in z = 0, (V, F) with upward normals."""
+    t = np.linspace(0, size, n + 1)
+    X, Y = np.meshgrid(t, t, indexing="ij")
+    V = np.stack([X.ravel(), Y.ravel(), np.zeros(X.size)], axis=1)
+    idx = np.arange(V.shape[0]).reshape(n + 1, n + 1)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    return V, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+
+
+def grid_cube(n=16):
+    """Closed unit cube [0, 1]^3, n x n squares per face, outward normals."""
+    index, V, F = {}, [], []
+
+    def vid(key):
+        if key not in index:
+            index[key] = len(V)
+            V.append(np.array(key, float) / n)
+        return index[key]
+
+    for axis in range(3):
+        u, w = [a for a in range(3) if a != axis]
+        for side in (0, n):
+            out = np.zeros(3)
+            out[axis] = 1.0 if side else -1.0
+            for i, j in itertools.product(range(n), range(n)):
+                def corner(a, b):
+                    key = [0, 0, 0]
+                    key[axis], key[u], key[w] = side, a, b
+                    return vid(tuple(key))
+                q = [corner(i, j), corner(i + 1, j), corner(i + 1, j + 1), corner(i, j + 1)]
+                for tri in ((q[0], q[1], q[2]), (q[0], q[2], q[3])):
+                    P = np.array([V[x] for x in tri])
+                    if np.cross(P[1] - P[0], P[2] - P[0]) @ out < 0:
+                        tri = (tri[0], tri[2], tri[1])
+                    F.append(tri)
+    return np.array(V), np.array(F, np.int64)
+
+
+def cut(V, F, center, radius):
+    """Remove the faces whose centroid is within radius of center; returns (F_cut, removed faces)."""
+    inside = np.linalg.norm(V[F].mean(axis=1) - np.asarray(center), axis=1) < radius
+    return F[~inside], F[inside]
+
+
+def context(V, F_cut):
+    """HoleContext of the cut hole (the smallest loop: a grid plane also has its outer border)."""
+    loops = boundary_loops(F_cut)
+    return hole_context(V, F_cut, loops[-1], rings=hpde.RINGS)
+
+
+def sphere_mesh(subdiv=4):
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=subdiv)
+    m = ms.current_mesh()
+    return np.asarray(m.vertex_matrix(), np.float64), np.asarray(m.face_matrix(), np.int64)
+
+
+@pytest.fixture(scope="module")
+def sphere_hole():
+    V, F = sphere_mesh(4)
+    F_cut, removed = cut(V, F, (0, 0, 1.0), 0.55)
+    return V, F_cut, removed, context(V, F_cut)
+
+
+@pytest.fixture(scope="module")
+def cube_edge_hole():
+    V, F = grid_cube(16)
+    F_cut, removed = cut(V, F, (0.5, 0.0, 0.0), 0.3)
+    return V, F_cut, removed, context(V, F_cut)
+
+
+def patch_points(ctx, patch):
+    return patch.all_points(ctx.points)
+
+
+# ----------------------------------------------------------------- step 2: Sec. 4.2
+
+def test_base_points_count_and_equal_arc_length(sphere_hole):
+    _, _, _, ctx = sphere_hole
+    e = hpde.ring_edge_length(ctx)
+    base = hpde_sections.base_points(ctx.points, e)
+    perimeter = np.linalg.norm(np.roll(ctx.points, -1, axis=0) - ctx.points, axis=1).sum()
+    assert len(base) == int(np.floor(perimeter / (0.8 * e)))
+    # Each base point lies on its loop edge, at arc length j * BudLen / n.
+    P, k = ctx.points, ctx.size
+    on_edge = P[base.edge] + base.t[:, None] * (P[(base.edge + 1) % k] - P[base.edge])
+    assert np.allclose(on_edge, base.points)
+    seg = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    arc = np.concatenate([[0], np.cumsum(seg)])[base.edge] + base.t * seg[base.edge]
+    assert np.allclose(np.diff(arc), perimeter / len(base))
+
+
+def test_ring_edge_length_is_mean_of_adjacent_triangles():
+    V, F = grid_plane(10)
+    F_cut, _ = cut(V, F, (0.5, 0.5, 0), 0.2)
+    ctx = context(V, F_cut)
+    assert hpde.ring_edge_length(ctx) == pytest.approx(np.mean([0.1] * 2 + [0.1 * np.sqrt(2)]), rel=0.15)
+
+
+def test_pca_segmentation_matches_brute_force_eq8():
+    rng = np.random.default_rng(3)
+    BP = rng.normal(size=(20, 3)) * [3, 2, 0.5]
+    i0, j0, lams, _ = hpde_sections.pca_segmentation(BP, min_size=4)
+    best, arg = np.inf, None
+    for i, j in itertools.combinations(range(20), 2):
+        ps2 = BP[i:j]
+        ps1 = np.concatenate([BP[j:], BP[:i]])
+        if len(ps1) < 4 or len(ps2) < 4:
+            continue
+        lam = max(np.linalg.eigvalsh(np.cov(ps1.T, bias=True))[0], np.linalg.eigvalsh(np.cov(ps2.T, bias=True))[0])
+        if lam < best:
+            best, arg = lam, (i, j)
+    assert (i0, j0) == arg
+    assert max(lams) == pytest.approx(best)
+
+
+def test_cube_edge_hole_is_segmented_along_the_characteristic_line(cube_edge_hole):
+    _, _, _, ctx = cube_edge_hole
+    e = hpde.ring_edge_length(ctx)
+    base = hpde_sections.base_points(ctx.points, e)
+    normals = hpde.base_point_normals(ctx.loop_normals, base)
+    seg = hpde.segment_boundary(base, normals, np.pi / 2)
+    assert seg["segmented"]
+    assert np.degrees(seg["dihedral"]) == pytest.approx(90.0, abs=1.0)
+    i0, j0 = seg["split"]
+    # Each run lies on one face of the cube (y = 0 or z = 0); the split points on the edge.
+    runs = [np.r_[np.arange(j0, len(base)), np.arange(0, i0)], np.arange(i0, j0)]
+    faces = []
+    for run in runs:
+        inner = base.points[run[1:-1]]
+        on_y, on_z = np.all(np.abs(inner[:, 1]) < 1e-9), np.all(np.abs(inner[:, 2]) < 1e-9)
+        assert on_y != on_z
+        faces.append(on_y)
+    assert faces[0] != faces[1]
+
+
+def test_planar_hole_is_not_segmented():
+    V, F = grid_plane(24)
+    F_cut, _ = cut(V, F, (0.5, 0.5, 0), 0.3)
+    ctx = context(V, F_cut)
+    base = hpde_sections.base_points(ctx.points, hpde.ring_edge_length(ctx))
+    seg = hpde.segment_boundary(base, hpde.base_point_normals(ctx.loop_normals, base), np.pi / 2)
+    assert not seg["segmented"] and np.degrees(seg["dihedral"]) > 170
+
+
+# ----------------------------------------------------------------- step 3: Sec. 4.3
+
+def test_best_start_minimises_eq10_by_brute_force():
+    rng = np.random.default_rng(0)
+    angle = np.sort(rng.uniform(0, 2 * np.pi, 31))
+    BP = np.stack([3 * np.cos(angle), np.sin(angle), 0 * angle], axis=1)
+    sp, dist = hpde_sections.best_start(BP)
+    n = len(BP)
+    brute = [sum(np.linalg.norm(BP[(s + i) % n] - BP[(s - 1 - i) % n]) for i in range(n // 2)) for s in range(n)]
+    assert np.allclose(dist, brute)
+    assert sp == int(np.argmin(brute))
+
+
+def test_ellipse_pairs_cross_the_short_way_and_respect_ic():
+    t = np.linspace(0, 2 * np.pi, 60, endpoint=False)
+    BP = np.stack([3 * np.cos(t), np.sin(t), 0 * t], axis=1)
+    normals = np.tile([0, 0, 1.0], (60, 1))
+    tangent, inward = hpde_sections.boundary_frames(BP, normals)
+    I_c = np.pi / 15
+    pairs, info = hpde_sections.correspondences(BP, tangent, inward, None, I_c)
+    assert len(pairs) > 15
+    chords = BP[pairs[:, 1]] - BP[pairs[:, 0]]
+    # Chords across the short axis (y), never along the long one.
+    assert np.all(np.abs(chords[:, 1]) > np.abs(chords[:, 0]))
+    for a, b in pairs:
+        line = (BP[b] - BP[a]) / np.linalg.norm(BP[b] - BP[a])
+        ang = hpde_sections.intersection_angle(np.stack([line, -line]), tangent[[a, b]], inward[[a, b]])
+        assert np.all(ang >= I_c) and np.all(ang <= np.pi - I_c)
+    # Near the ends of the axis the chords are nearly tangent: those base points are skipped.
+    assert info["skipped"] > 0
+
+
+def test_forced_pairing_eq9_keeps_the_index_sum(cube_edge_hole):
+    _, _, _, ctx = cube_edge_hole
+    base = hpde_sections.base_points(ctx.points, hpde.ring_edge_length(ctx))
+    normals = hpde.base_point_normals(ctx.loop_normals, base)
+    i0, j0 = hpde.segment_boundary(base, normals, np.pi / 2)["split"]
+    tangent, inward = hpde_sections.boundary_frames(base.points, normals)
+    # I_c = -pi switches the modification off: the pure Eq. 9 pairing.
+    pairs, _ = hpde_sections.correspondences(base.points, tangent, inward, (i0, j0), I_c=-np.pi)
+    n = len(base)
+    self_paired = 1 if n % 2 else (2 if (i0 + j0) % 2 == 0 else 0)  # a with 2 a = i0 + j0 (mod n)
+    assert len(pairs) == (n - self_paired) // 2
+    assert np.all((pairs.sum(axis=1) - (i0 + j0)) % n == 0)
+    assert any(set(p) == {i0, j0} for p in pairs.tolist())
+
+
+# ----------------------------------------------------------------- step 4: Sec. 4.4
+
+def test_section_planes_contain_the_chord_and_cut_the_ring_triangles(sphere_hole):
+    _, _, _, ctx = sphere_hole
+    e = hpde.ring_edge_length(ctx)
+    base = hpde_sections.base_points(ctx.points, e)
+    normals = hpde.base_point_normals(ctx.loop_normals, base)
+    tangent, inward = hpde_sections.boundary_frames(base.points, normals)
+    pairs, _ = hpde_sections.correspondences(base.points, tangent, inward)
+    a, b = pairs[:, 0], pairs[:, 1]
+    Nv, _ = hpde_sections.section_normals(base.points, pairs, normals[a] + normals[b])
+    lv = base.points[a] - base.points[b]
+    assert np.allclose(np.einsum("ij,ij->i", Nv, lv), 0, atol=1e-9)
+    W = hpde.border_third_vertices(ctx)
+    AP, TV = hpde_sections.ring_intersections(ctx.points, base.edge[a], base.points[a], Nv, W[base.edge[a]])
+    # AP lies on the section plane and on an edge of the ring triangle of the base point.
+    assert np.allclose(np.einsum("ij,ij->i", AP - base.points[a], Nv), 0, atol=1e-9)
+    k = ctx.size
+    Q0, Q1, Wa = ctx.points[base.edge[a]], ctx.points[(base.edge[a] + 1) % k], W[base.edge[a]]
+    d0 = np.linalg.norm(np.cross(AP - Q0, Wa - Q0), axis=1)
+    d1 = np.linalg.norm(np.cross(AP - Q1, Wa - Q1), axis=1)
+    assert np.all(np.minimum(d0, d1) < 1e-9)
+    # TV points from the ring into the hole: towards the chord's other end.
+    assert np.mean(np.einsum("ij,ij->i", TV, base.points[b] - base.points[a]) > 0) > 0.8
+
+
+def test_section_normal_eq11_for_parallel_chords():
+    # Chords across a rectangle in z = 0: Nv is along x, the direction the chain advances.
+    x = np.linspace(0, 4, 9)
+    BP = np.concatenate([np.stack([x, 0 * x, 0 * x], 1), np.stack([x[::-1], 0 * x + 1, 0 * x], 1)])
+    pairs = np.stack([np.arange(9), 17 - np.arange(9)], axis=1)
+    Nv, fallback = hpde_sections.section_normals(BP, pairs, np.tile([0, 0, 1.0], (9, 1)))
+    assert not fallback.any()
+    assert np.allclose(np.abs(Nv[:, 0]), 1.0)
+
+
+# ----------------------------------------------------------------- step 5: Sec. 4.5
+
+@pytest.mark.parametrize("theta", [-1.2, -0.3, 0.0, 1e-8, 0.5, np.pi / 2])
+def test_arc_points_are_equally_spaced_on_a_circle_eq13(theta):
+    L = 2.0
+    s = np.linspace(0, 1, 8)[None, :]
+    x, y = hpde_prediction.arc_points(np.array([theta]), np.array([L]), s)
+    P = np.stack([x[0], y[0]], axis=1)
+    assert np.allclose(P[0], 0) and np.allclose(P[-1], [L, 0])
+    steps = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    assert np.allclose(steps, steps[0], rtol=1e-6)
+    if abs(theta) > 1e-6:  # concyclic, tangent angle theta at the start
+        R = L / (2 * np.sin(abs(theta)))
+        center = np.array([L / 2, -np.sign(theta) * np.sqrt(max(R * R - L * L / 4, 0))])
+        assert np.allclose(np.linalg.norm(P - center, axis=1), R)
+        assert np.arctan2(P[1, 1], P[1, 0]) == pytest.approx(theta * (1 - 1 / 7), abs=1e-6)
+    yh = hpde_prediction.arc_height(np.array([theta]), np.array([L]), x)
+    assert np.allclose(yh, y, atol=1e-9)
+
+
+def test_prediction_counts_eq15():
+    lengths = np.array([1.0, 2.5, 4.0])
+    m, M = hpde_prediction.prediction_counts(lengths, 0.5)
+    assert M == 9
+    assert m.tolist() == [int(np.floor(L / 4.0 * 9)) + 1 for L in lengths]
+
+
+def make_problem(theta_l, theta_u, m, L=3.0):
+    """One section plane with end tangents at theta_l (leaving P1) and -theta_u (arriving at P2)."""
+    tv1 = np.array([np.cos(theta_l), np.sin(theta_l), 0])
+    tv2 = np.array([np.cos(-theta_u), np.sin(-theta_u), 0])
+    problem, frames = hpde_prediction.section_problems(
+        np.zeros((1, 3)), np.array([[L, 0, 0]]), tv1[None], tv2[None], np.array([[0, 0, 1.0]]), np.array([m]))
+    return problem, frames
+
+
+def test_eq12_x_average_and_eq16_start_between_the_arcs():
+    problem, _ = make_problem(0.6, 0.2, 5)
+    s = np.arange(1, 6) / 6
+    xl, _ = hpde_prediction.arc_points(np.array([0.6]), np.array([3.0]), s[None])
+    xu, _ = hpde_prediction.arc_points(np.array([0.2]), np.array([3.0]), s[None])
+    assert np.allclose(problem.x[0], 0.5 * (xl + xu)[0])
+    assert np.all(problem.lower <= problem.y_init + 1e-12) and np.all(problem.y_init <= problem.upper + 1e-12)
+    # Eq. 16 starts on L_arc near P1 and moves to U_arc near P2.
+    yl = hpde_prediction.arc_height(np.array([0.6]), np.array([3.0]), problem.x)[0]
+    assert abs(problem.y_init[0, 0] - yl[0]) < abs(problem.y_init[0, -1] - yl[-1])
+
+
+def test_angle_variation_is_zero_on_a_regular_chain():
+    # Symmetric tangents: the chain AP, P1, PP.., P2, AP' of equal turning angles is a regular
+    # polygon; its y-values make Eq. 14 vanish.
+    m, L = 3, 2.0
+    turn = 0.3
+    # Regular polygon with m + 1 chords from P1 to P2: chord directions theta0 - i * turn.
+    theta0 = turn * m / 2
+    dirs = theta0 - turn * np.arange(m + 1)
+    chord = L / np.cos(dirs).sum()
+    pts = np.cumsum(chord * np.stack([np.cos(dirs), np.sin(dirs)], axis=1), axis=0)
+    problem, _ = make_problem(theta0 + turn, theta0 + turn, m, L)
+    problem.x[0] = pts[:m, 0]
+    problem._chain = None
+    f = hpde_prediction.angle_variation(problem, pts[None, None, :m, 1])
+    assert f[0, 0] == pytest.approx(0.0, abs=1e-20)
+    assert hpde_prediction.angle_variation(problem, pts[None, None, :m, 1] + 0.01)[0, 0] > 1e-6
+
+
+# ----------------------------------------------------------------- DE (Algorithm 1)
+
+def test_reflection_eq5():
+    lo, hi = np.array([0.0, -1.0]), np.array([1.0, 1.0])
+    X = np.array([[[-0.3, 1.5], [2.5, -4.0], [0.5, 0.2]]])
+    R = reflect_into_bounds(X, lo[None], hi[None])[0]
+    # Below l: min(2 l - x, u); above u: max(2 u - x, l).
+    assert np.allclose(R, [[0.3, 0.5], [0.0, 1.0], [0.5, 0.2]])
+
+
+@pytest.mark.parametrize("bounds", ["paper", "trial"])
+def test_de_solves_sphere_and_rosenbrock(bounds):
+    sphere = lambda X: (X ** 2).sum(-1)  # noqa: E731
+    x, f, _ = de_rand_1_bin(sphere, -5 * np.ones(5), 5 * np.ones(5), pop_size=30, CR=0.9, generations=400,
+                            seed=1, bounds=bounds)
+    assert f < 1e-8 and np.abs(x).max() < 1e-4
+    rosen = lambda X: (100 * (X[..., 1:] - X[..., :-1] ** 2) ** 2 + (1 - X[..., :-1]) ** 2).sum(-1)  # noqa: E731
+    x, f, _ = de_rand_1_bin(rosen, -2 * np.ones(2), 2 * np.ones(2), pop_size=20, F=0.8, CR=0.05, generations=1500,
+                            seed=2, bounds=bounds)
+    assert f < 1e-6 and np.allclose(x, 1, atol=1e-2)
+
+
+def test_de_is_reproducible_and_batched():
+    f = lambda X: ((X - np.arange(3)) ** 2).sum(-1)  # noqa: E731
+    lo, hi = -5 * np.ones((4, 3)), 5 * np.ones((4, 3))
+    a = de_rand_1_bin(f, lo, hi, pop_size=[3, 5, 9, 12], generations=50, seed=7)
+    b = de_rand_1_bin(f, lo, hi, pop_size=[3, 5, 9, 12], generations=50, seed=7)
+    assert np.array_equal(a[0], b[0])
+    c = de_rand_1_bin(f, lo, hi, pop_size=[3, 5, 9, 12], generations=50, seed=8)
+    assert not np.array_equal(a[0], c[0])
+    assert a[0].shape == (4, 3) and np.all(a[1] <= f(np.zeros((4, 1, 3)))[..., 0] + 1e-12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 6), st.integers(3, 12), st.integers(0, 10_000))
+def test_de_stays_in_the_bounds(n, pop, seed):
+    rng = np.random.default_rng(seed)
+    lo = rng.uniform(-2, 0, n)
+    hi = lo + rng.uniform(0, 2, n)
+    seen = []
+
+    def f(X):
+        seen.append(X.copy())
+        return np.abs(X - 10).sum(-1)  # optimum outside the box: pushes against the bounds
+
+    x, fx, _ = de_rand_1_bin(f, lo, hi, pop_size=pop, generations=30, seed=seed)
+    assert np.all(x >= lo - 1e-12) and np.all(x <= hi + 1e-12)
+    assert fx <= f(seen[0][0]).min() + 1e-12  # never worse than the best initial individual
+
+
+@pytest.mark.parametrize("m", [1, 2])
+def test_de_on_eq14_matches_brute_force(m):
+    problem, _ = make_problem(0.7, 0.1, m)
+    lo, hi = problem.lower[0], problem.upper[0]
+    grids = [np.linspace(lo[i], hi[i], 401 if m == 1 else 201) for i in range(m)]
+    G = np.stack(np.meshgrid(*grids, indexing="ij"), axis=-1).reshape(-1, m)
+    f_grid = hpde_prediction.angle_variation(problem, G[None])[0]
+    Y, f, _ = hpde_prediction.predict_y(problem, generations=300, seed=0)
+    assert f[0] <= f_grid.min() + 1e-6
+    assert np.allclose(Y[0, :m], G[np.argmin(f_grid)], atol=2 * (hi - lo).max() / 200 + 1e-9)
+
+
+# ----------------------------------------------------------------- step 6: Sec. 4.6
+
+def test_unfolding_two_planes_is_isometric(cube_edge_hole):
+    _, _, _, ctx = cube_edge_hole
+    base = hpde_sections.base_points(ctx.points, hpde.ring_edge_length(ctx))
+    normals = hpde.base_point_normals(ctx.loop_normals, base)
+    seg = hpde.segment_boundary(base, normals, np.pi / 2)
+    pmap = hpde.plane_map_for(base, normals, seg, True)
+    assert pmap.segmented
+    # A point on face y = 0 and one on face z = 0: the unfolded distance is the path over the edge.
+    A, B = np.array([[0.5, 0.0, 0.2]]), np.array([[0.6, 0.3, 0.0]])
+    a2, b2 = pmap.to_2d(A), pmap.to_2d(B)
+    assert np.linalg.norm(a2 - b2) == pytest.approx(np.hypot(0.1, 0.2 + 0.3), rel=1e-9)
+    assert pmap.side(A)[0] != pmap.side(B)[0]
+
+
+def test_triangulation_keeps_every_loop_edge_and_detects_fold_overs(sphere_hole):
+    _, _, _, ctx = sphere_hole
+    e = hpde.ring_edge_length(ctx)
+    base = hpde_sections.base_points(ctx.points, e)
+    normals = hpde.base_point_normals(ctx.loop_normals, base)
+    seg = hpde.segment_boundary(base, normals, np.pi / 2)
+    result = hpde.predict_points(ctx, base, normals, None, np.pi / 15, e,
+                                 dict(N_factor=3, F=0.8, CR=0.05, generations=10, seed=0))
+    V, F, ids = hpde.triangulate(ctx, base, normals, seg, "plane", result, e, np.zeros(len(result[0]), bool))
+    from meshlab_holefill.patch import Patch
+
+    validate_patch(Patch(V[ctx.size:], F), ctx.points, ctx.forbidden_edges)
+    assert np.array_equal(V[ctx.size:], result[0][ids])
+    pmap = hpde.plane_map_for(base, normals, seg, False)
+    ref = pmap.reference_normals(V, F, 1)
+    assert not hpde_folds.fold_overs(V, F, ref).any()
+    # Drag one predicted point across its ring within the plane: faces flip and are detected.
+    free = np.flatnonzero(np.bincount(F.ravel(), minlength=len(V))[ctx.size:] >= 5)[0] + ctx.size
+    nb = np.unique(F[np.any(F == free, axis=1)])
+    far = nb[np.argmax(np.linalg.norm(V[nb] - V[free], axis=1))]
+    W = V.copy()
+    W[free] += 2.5 * (V[far] - V[free])
+    assert hpde_folds.fold_overs(W, F, ref).any()
+    assert hpde_folds.local_folds(W, F).any() and not hpde_folds.local_folds(V, F).any()
+
+
+def test_disc_layout_keeps_chords_apart():
+    Q, X = hpde_mesh.disc_coordinates(np.arange(12.0), 12.0, 12, np.array([1, 2, 3]), np.array([10, 9, 8]),
+                                      np.array([0.5, 0.5, 0.5]))
+    assert np.allclose(np.linalg.norm(Q, axis=1), 12 / (2 * np.pi))
+    assert np.all(np.diff(X[:, 1]) > 0)  # nested, parallel chords
+
+
+# ----------------------------------------------------------------- step 7: Sec. 4.7
+
+def test_taubin_smoothing_keeps_boundary_and_a_planar_patch_planar():
+    V, F = grid_plane(8)
+    rng = np.random.default_rng(0)
+    fixed = np.zeros(len(V), bool)
+    fixed[np.flatnonzero((V[:, 0] % 1 == 0) | (V[:, 1] % 1 == 0))] = True
+    W = V.copy()
+    W[~fixed, :2] += rng.normal(scale=0.02, size=((~fixed).sum(), 2))
+    S = hpde_optimisation.taubin_smooth(W, F, fixed, passes=60)
+    assert np.array_equal(S[fixed], W[fixed])
+    assert np.abs(S[:, 2]).max() == 0.0
+    # Non-shrinking: a bump keeps most of its height (plain Laplacian smoothing would flatten it).
+    B = V.copy()
+    r2 = ((V[:, :2] - 0.5) ** 2).sum(1)
+    B[:, 2] = np.where(fixed, 0, 0.3 * (0.25 - np.minimum(r2, 0.25)))
+    S = hpde_optimisation.taubin_smooth(B, F, fixed, passes=60)
+    lap = B.copy()
+    for _ in range(120):
+        lap = hpde_optimisation.taubin_smooth(lap, F, fixed, passes=1, lam=0.33, mu=0.0)
+    assert S[:, 2].max() > lap[:, 2].max()
+
+
+def test_decimation_collapses_short_edges_to_midpoints():
+    V, F = grid_plane(6)
+    k_boundary = np.flatnonzero((V[:, 0] % 1 == 0) | (V[:, 1] % 1 == 0))
+    order = np.r_[k_boundary, np.setdiff1d(np.arange(len(V)), k_boundary)]
+    inv = np.argsort(order)
+    V, F = V[order], inv[F]
+    k = len(k_boundary)
+    a = k + 3
+    nb = np.unique(F[np.any(F == a, axis=1)])
+    b = [x for x in nb if x >= k and x != a][0]
+    V2 = V.copy()
+    V2[b] = V[a] + 0.05 * (V[b] - V[a])  # one very short interior edge
+    mid = 0.5 * (V2[a] + V2[b])
+    Vd, Fd, collapses, keep = hpde_optimisation.decimate_short_edges(V2, F, k, 0.05)
+    assert collapses == 1 and len(Vd) == len(V) - 1 and len(Fd) == len(F) - 2
+    assert np.array_equal(Vd[:k], V2[:k])
+    assert np.any(np.all(np.isclose(Vd, mid), axis=1))
+    assert np.isin(np.arange(len(Vd)), Fd).all()
+
+
+def test_edge_swaps_raise_the_minimum_angle():
+    V = np.array([[0, 0, 0], [2, 0, 0], [1, 0.15, 0], [1, -0.15, 0.0]])
+    F = np.array([[0, 1, 2], [1, 0, 3]])
+    F2, swaps = hpde_optimisation.swap_edges_min_angle(V, F)
+    assert swaps == 1
+    assert corner_angles(V, F2).min() > corner_angles(V, F).min()
+
+
+def test_forbidden_edges_are_split():
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]])
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    V2, F2, n = hpde_mesh.split_forbidden_edges(V, F, [[0, 2]])
+    assert n == 1 and len(F2) == 4
+    E = np.sort(np.concatenate([F2[:, [0, 1]], F2[:, [1, 2]], F2[:, [2, 0]]]), axis=1)
+    assert not np.any((E[:, 0] == 0) & (E[:, 1] == 2))
+
+
+# ----------------------------------------------------------------- whole filter
+
+def check_patch(ctx, patch):
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    X = patch_points(ctx, patch)
+    assert not hpde_folds.local_folds(X, patch.faces, hpde_folds.border_normals(ctx)).any()
+    assert not hpde_folds.intersects_surroundings(ctx, X, patch.faces)
+    return X
+
+
+def test_planar_hole_patch_stays_planar():
+    V, F = grid_plane(30)
+    F_cut, _ = cut(V, F, (0.5, 0.5, 0), 0.33)
+    ctx = context(V, F_cut)
+    patch = hpde.fill(ctx)
+    X = check_patch(ctx, patch)
+    assert len(patch.vertices) > 10
+    assert np.abs(X[:, 2]).max() < 1e-12
+    q = triangle_quality(X, patch.faces)
+    assert q.mean() >= 0.85 and q.min() >= 0.3
+
+
+def test_sphere_hole_follows_the_sphere(sphere_hole):
+    V, _, removed, ctx = sphere_hole
+    patch = hpde.fill(ctx, seed=0)
+    X = check_patch(ctx, patch)
+    assert patch.info["layout"] == "plane" and not patch.info["segmented"]
+    r = np.linalg.norm(patch.vertices, axis=1)
+    e = hpde.ring_edge_length(ctx)
+    flat = np.abs(np.linalg.norm(ctx.points, axis=1).mean() * 0 + ctx.points[:, 2].mean() - 1.0)
+    assert np.abs(r - 1).mean() < 0.05 * e and np.abs(r - 1).max() < 0.2 * e < flat
+    q = triangle_quality(X, patch.faces)
+    assert q.mean() >= 0.85 and q.min() >= 0.3
+    # Eq. 17 errors of the patch against the removed triangles.
+    err = hpde_experiment.prediction_errors(patch.vertices, V[removed])
+    assert err["APE"] < 0.05 * e and err["MPE"] < 0.2 * e
+
+
+def test_reproducible_with_seed(sphere_hole):
+    _, _, _, ctx = sphere_hole
+    a, b = hpde.fill(ctx, seed=3), hpde.fill(ctx, seed=3)
+    assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+
+
+def test_cube_edge_hole_segmented_and_near_the_cube(cube_edge_hole):
+    V, _, removed, ctx = cube_edge_hole
+    patch = hpde.fill(ctx)
+    check_patch(ctx, patch)
+    assert patch.info["segmented"] and patch.info["layout"] == "two planes"
+    X = patch.vertices
+    to_cube = np.minimum(np.abs(X[:, 1]), np.abs(X[:, 2]))  # distance to the faces y = 0, z = 0
+    e = hpde.ring_edge_length(ctx)
+    assert to_cube.max() < 0.5 * e
+    # The smoothing rounds the characteristic line (Fig. 15(b)); most points stay on the faces.
+    assert np.median(to_cube) < 0.15 * e
+    flat = hpde.fill(ctx, critical_dihedral=45.0)  # not segmented
+    assert not flat.info["segmented"]
+    assert to_cube.mean() <= np.minimum(np.abs(flat.vertices[:, 1]), np.abs(flat.vertices[:, 2])).mean()
+
+
+def test_cube_corner_hole_closes_near_the_cube():
+    V, F = grid_cube(16)
+    F_cut, removed = cut(V, F, (0.0, 0.0, 0.0), 0.35)
+    ctx = context(V, F_cut)
+    e = hpde.ring_edge_length(ctx)
+    # The paper's A_c = pi/2 does not segment a corner: the best Eq. 8 split (one face against
+    # the other two) leaves planes at about 156 degrees.
+    plain = hpde.fill(ctx)
+    assert not plain.info["segmented"] and plain.info["dihedral_deg"] > 120
+    # With A_c above that angle the corner is segmented (Eq. 9 pairs) and still closes well.
+    patch = hpde.fill(ctx, critical_dihedral=170.0)
+    assert patch.info["segmented"]
+    for p in (plain, patch):
+        check_patch(ctx, p)
+        d = np.min(np.abs(p.vertices), axis=1)  # distance to the nearest of the three faces
+        assert d.max() < 1.5 * e and d.mean() < 0.6 * e
+
+
+def test_filter_on_a_meshset_keeps_originals():
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(os.path.join(SAMPLES, "bunny10k_textured.obj"))
+    m = ms.current_mesh()
+    V0, F0 = m.vertex_matrix().copy(), m.face_matrix().copy()
+    res = getattr(ms, FILTER)(seed=0)
+    m = ms.current_mesh()
+    V1, F1 = m.vertex_matrix(), m.face_matrix()
+    assert np.array_equal(V1[:len(V0)], V0) and np.array_equal(F1[:len(F0)], F0)
+    assert res["closed_holes"] >= 4 and res["closed_holes"] + res["failed_holes"] == 5
+    from meshlab_holefill.holes import nonmanifold_edges
+
+    assert len(nonmanifold_edges(F1)) == 0
+    assert all(h["status"] in ("closed", "failed") for h in res["holes"])
+
+
+def test_parameters_are_registered():
+    spec = meshlab_holefill.FILTERS[FILTER]
+    names = {p.name for p in spec.params}
+    assert {"population_factor", "mutation", "crossover", "critical_dihedral", "critical_intersection",
+            "num_smooth", "generations", "seed", "maxholesize"} <= names
+    defaults = {p.name: p.default for p in spec.params}
+    assert defaults["population_factor"] == 3.0 and defaults["mutation"] == 0.8 and defaults["crossover"] == 0.05
+    assert defaults["critical_dihedral"] == 90.0 and defaults["critical_intersection"] == 12.0
+    assert defaults["num_smooth"] == 60
+
+
+def test_sphere_experiment_eq17():
+    res = hpde_experiment.sphere_experiment(seed=0)
+    assert res["NP"] == 1522 and res["NOT"] == 3040 and abs(res["NHT"] - 1210) < 20
+    assert len(res["holes"]) == 2
+    assert 0 < res["APE"] < res["MPE"] < 0.1
+    assert res["paper"]["APE"] == 7.35e-3
