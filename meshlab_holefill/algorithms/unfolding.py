@@ -1,34 +1,43 @@
 """Unfolding a boundary loop into a simple planar polygon (Brunton et al. 2009, Sec. 3.1).
 
 The loop is moved vertex by vertex by simulated annealing (Press et al., Numerical Recipes
-Sec. 10.9) to lower the planarity energy E_PE (the angles between the normals of consecutive
-vertex triples), never letting two non-adjacent segments come closer than epsilon, then
-projected to its best-fitting plane; the projection is accepted when the loop reaches it by a
-linear motion without self-intersection, otherwise annealing restarts.
+Sec. 10.9) to lower the planarity energy E_PE (the angles between the normals n_i of
+consecutive vertex triples), never letting two non-adjacent segments come closer than
+epsilon, and then projected to its best-fitting plane; the projection is accepted when the
+loop reaches it by a linear motion without self-intersection, otherwise annealing restarts.
 
-Readings of what Sec. 3.1 leaves open (each used by :func:`anneal_loop`):
+Readings of what Sec. 3.1 leaves open:
 
-* **Move.** One annealing step moves one vertex p_j by ``u * max(eps, c_j)`` along a unit
-  direction (u uniform in [0, 1)). ``c_j`` is the paper's d_MD restricted to the pairs the
-  move can change (the segments (p_{j-1}, p_j) and (p_j, p_{j+1}) against every segment not
-  adjacent to them); it is >= the global d_MD and gives the paper's guarantee for a one-vertex
-  move: the two moving segments travel less than their distance to every other segment, so
-  the loop cannot pass through itself. ``step_bound='global'`` uses the global d_MD instead.
-  A move that would leave d_MD <= eps is rejected (the constraint d_MD > eps).
-* **Direction.** "After an accepted step the next random direction stays within 10 degrees
-  of the previous one": every vertex remembers the direction of its last move; when that move
-  was accepted and lowered E_PE, the vertex's next direction is drawn within a 10 degree cone
-  around it, otherwise uniformly on the sphere.
-* **Schedule.** Acceptance ``exp(-dE / (k T))`` (Metropolis). The paper calls k (< 1) the rate
-  of cooling and T the start temperature; as in Press et al.'s example schedule the
-  temperature is lowered by the factor k after each stage, ``T <- k T``, a stage being one
-  sweep (m moves, every vertex once, in random order).
-* **Stopping rule.** A run ends when k T has fallen below ``1e-3`` times the start temperature
-  (66 stages for k = 0.9) or after ``sa_steps`` moves, whichever comes first.
-* **Restart.** A failed projection restarts the annealing from the original loop with the
-  next random numbers of the same generator (so a seed fixes the whole sequence).
-* **Units.** epsilon is relative to the loop's mean edge length (the paper's 1e-5 is in
-  model units), which makes the method scale invariant.
+* **Move.** One annealing step moves one vertex p_j by ``u * max(eps, d_MD)`` along a unit
+  direction (u uniform in [0, 1)), the paper's step bound. Vertices whose moves touch
+  disjoint energy terms are moved as one vectorised batch (:func:`colour_classes`); because
+  up to m / 4 vertices then move at once, each gets half that bound, which still keeps any
+  two segments from passing through each other. ``step_bound='local'`` replaces the global
+  d_MD by the clearance of the moved segments (>= d_MD, same guarantee). A move that would
+  leave d_MD <= eps is rejected (the constraint d_MD > eps).
+* **Energy.** d_PE(p_i) is the angle between the vectors n_i and n_{i+1}, in [0, pi], as
+  written in the paper (a zero normal, three collinear vertices, gives angle 0).
+* **Direction.** "Move each point along a direction within 10 degrees of the previous random
+  direction" after an accepted improving step: every vertex remembers the direction of its
+  last move; if that move was accepted and lowered E_PE, its next direction is drawn within a
+  10 degree cone around it, otherwise uniformly on the sphere.
+* **Schedule.** Acceptance ``exp(-dE / (k T))`` (Metropolis). The paper calls k < 1 the rate of
+  cooling and T the start temperature; as in Press et al.'s schedule the temperature drops by
+  the factor k after each stage, ``T <- k T``, a stage being one sweep (every vertex one move).
+* **Stopping rule.** At the start of every stage the loop's projection is tested; a run ends
+  as soon as it is simple (so a loop that already projects simply is accepted before any
+  move: 0 steps), when k T < 1e-3 T_start (66 stages for k = 0.9) or after ``sa_steps`` moves.
+  Running the schedule to the end regardless is worse: E_PE has no term keeping the loop's
+  shape or edge lengths, and on the bunny scan's holes, whose projections are simple from the
+  start, a full anneal diffused the loop into one whose projection self-intersects in most
+  runs.
+* **Restart.** A run without a simple projection restarts from the original loop with the
+  next random numbers of the same generator (one seed fixes the whole sequence).
+* **Units.** epsilon is relative to the loop's mean edge length (the paper's 1e-5 is in model
+  units), which makes the method scale invariant.
+
+Beyond the paper, :func:`develop_loop` gives a fallback polygon for loops the annealing does not
+unfold (loops wrapped around a tube or a knob project onto themselves from every side).
 """
 from __future__ import annotations
 
@@ -37,99 +46,13 @@ import math
 import numpy as np
 
 from ..geometry.pca import fit_plane, plane_frame
+from ..geometry.segments import (min_segment_distance, nonadjacent_mask, segment_distance_matrix,
+                                 segment_distance_rows)
 from ..patch import HoleFillError
 
 TEMPERATURE_FLOOR = 1e-3  # a run ends when k T < TEMPERATURE_FLOOR * T_start
 CONE_DEGREES = 10.0  # Sec. 3.1: next direction within 10 degrees of the previous one
-
-
-def segment_distances(A0, A1, B0, B1):
-    """Exact distance between segments [A0, A1] and [B0, B1], elementwise with broadcasting.
-
-    Closest points by the dot-product formulation (Ladd and Kavraki, cited in Sec. 3.1;
-    Ericson, Real-Time Collision Detection 5.1.9): the unconstrained parameters of the
-    closest points of the two carrier lines are clamped to the segments in the right order.
-    Degenerate (point) segments are handled.
-
-    Parameters
-    ----------
-    A0, A1, B0, B1 : (..., d) float64
-        Segment end points, d = 2 or 3, broadcast against each other.
-
-    Returns
-    -------
-    dist : (...) float64
-    """
-    d1 = A1 - A0
-    d2 = B1 - B0
-    r = A0 - B0
-    a = np.einsum("...i,...i->...", d1, d1)
-    e = np.einsum("...i,...i->...", d2, d2)
-    f = np.einsum("...i,...i->...", d2, r)
-    c = np.einsum("...i,...i->...", d1, r)
-    b = np.einsum("...i,...i->...", d1, d2)
-    denom = a * e - b * b
-    tiny = 1e-300
-    with np.errstate(divide="ignore", invalid="ignore"):
-        # Parallel (denom 0) or point segments: any s works, take 0.
-        s = np.where(denom > 1e-14 * a * e + tiny, np.clip((b * f - c * e) / np.where(denom > 0, denom, 1.0), 0.0, 1.0), 0.0)
-        t = np.where(e > tiny, (b * s + f) / np.where(e > tiny, e, 1.0), 0.0)
-        s_lo = np.where(a > tiny, np.clip(-c / np.where(a > tiny, a, 1.0), 0.0, 1.0), 0.0)
-        s_hi = np.where(a > tiny, np.clip((b - c) / np.where(a > tiny, a, 1.0), 0.0, 1.0), 0.0)
-    s = np.where(t < 0.0, s_lo, np.where(t > 1.0, s_hi, s))
-    t = np.clip(t, 0.0, 1.0)
-    diff = r + d1 * s[..., None] - d2 * t[..., None]
-    return np.sqrt(np.einsum("...i,...i->...", diff, diff))
-
-
-def nonadjacent_mask(m):
-    """Pairs of loop segments that share no vertex.
-
-    Segment i joins p_i and p_{(i+1) mod m}.
-
-    Returns
-    -------
-    mask : (m, m) bool, symmetric, False on the diagonal and for consecutive segments.
-    """
-    i = np.arange(m)
-    gap = np.abs(i[:, None] - i[None, :])
-    return (gap > 1) & (gap < m - 1)
-
-
-def segment_distance_matrix(P):
-    """Distances between all pairs of non-adjacent loop segments, in one numpy call.
-
-    Parameters
-    ----------
-    P : (m, d) float64  loop vertices
-
-    Returns
-    -------
-    D : (m, m) float64
-        D[i, j] = distance between segments i and j; +inf for adjacent pairs and i == j.
-    """
-    P = np.asarray(P, np.float64)
-    m = len(P)
-    Q = np.roll(P, -1, axis=0)
-    D = segment_distances(P[:, None, :], Q[:, None, :], P[None, :, :], Q[None, :, :])
-    D[~nonadjacent_mask(m)] = np.inf
-    return D
-
-
-def min_segment_distance(P):
-    """d_MD of Sec. 3.1: the smallest distance between two non-adjacent loop segments.
-
-    Parameters
-    ----------
-    P : (m, d) float64
-
-    Returns
-    -------
-    float  (+inf for m <= 3, where every pair of segments is adjacent)
-    """
-    if len(P) <= 3:
-        return math.inf
-    return float(segment_distance_matrix(P).min())
+NEAR_EDGES = 4.0  # exact segment distances within this many mean edge lengths, lower bounds beyond
 
 
 def triple_normals(P):
@@ -154,48 +77,60 @@ def planarity_energy(P):
     return float(planarity_terms(P).sum())
 
 
-# --- pure-Python kernels of one annealing step (a handful of 3-vectors: faster than numpy) ---
+def colour_classes(m):
+    """Vertex classes whose moves touch disjoint d_PE terms and non-adjacent segments.
 
-def _normal(a, b, c):
-    ux, uy, uz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
-    vx, vy, vz = c[0] - b[0], c[1] - b[1], c[2] - b[2]
-    return (uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx)
+    A move of p_j changes n_{j-2}, n_{j-1}, n_j and the terms d_PE(p_{j-3}) .. d_PE(p_j); two
+    vertices at cyclic distance >= 4 share none of these, so their Metropolis decisions are
+    independent and one class is processed as one vectorised batch, exactly as if its moves
+    were made one after the other. Classes: j mod 4 over the first 4 floor(m / 4) vertices
+    (the wrap-around gap is then >= 4 too), each remaining vertex alone.
 
-
-def _angle(n, q):
-    cx = n[1] * q[2] - n[2] * q[1]
-    cy = n[2] * q[0] - n[0] * q[2]
-    cz = n[0] * q[1] - n[1] * q[0]
-    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), n[0] * q[0] + n[1] * q[1] + n[2] * q[2])
-
-
-def _cone_direction(prev, g, r):
-    """Unit vector within CONE_DEGREES of unit ``prev``: tilt by atan(r tan(cone)) towards g's
-    component orthogonal to prev (g a standard normal 3-vector, r in [0, 1))."""
-    dot = g[0] * prev[0] + g[1] * prev[1] + g[2] * prev[2]
-    wx, wy, wz = g[0] - dot * prev[0], g[1] - dot * prev[1], g[2] - dot * prev[2]
-    wn = math.sqrt(wx * wx + wy * wy + wz * wz)
-    if wn == 0.0:
-        return prev
-    scale = r * math.tan(math.radians(CONE_DEGREES)) / wn
-    dx, dy, dz = prev[0] + scale * wx, prev[1] + scale * wy, prev[2] + scale * wz
-    dn = math.sqrt(dx * dx + dy * dy + dz * dz)
-    return (dx / dn, dy / dn, dz / dn)
+    Returns
+    -------
+    list of (b,) int64
+    """
+    full = 4 * (m // 4)
+    classes = [np.arange(c, full, 4) for c in range(4)] + [np.array([j]) for j in range(full, m)]
+    return [c for c in classes if len(c)]
 
 
-def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=20000, step_bound="local"):
+def _cross_normals(A, B, C):
+    """n = (a - b) x (c - b) row-wise, (b, 3)."""
+    return np.cross(A - B, C - B)
+
+
+def _angles(N1, N2):
+    """Angle between row vectors (0 where one is zero), (b,)."""
+    return np.arctan2(np.linalg.norm(np.cross(N1, N2), axis=1), (N1 * N2).sum(axis=1))
+
+
+def _cone_directions(prev, G, r):
+    """Unit vectors within CONE_DEGREES of the unit rows of ``prev``: each tilted by
+    atan(r tan(cone)) towards G's component orthogonal to it (G standard normal, r in [0, 1))."""
+    w = G - (G * prev).sum(axis=1)[:, None] * prev
+    wn = np.linalg.norm(w, axis=1)
+    w = w / np.where(wn > 0, wn, 1.0)[:, None]
+    d = prev + (r * np.tan(np.radians(CONE_DEGREES)))[:, None] * w
+    return d / np.linalg.norm(d, axis=1)[:, None]
+
+
+def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bound="global",
+                stop_when_simple=True, on_move=None):
     """One simulated-annealing run lowering E_PE subject to d_MD > eps (Sec. 3.1).
 
-    See the module docstring for the move, the 10 degree direction rule, the schedule and
-    the stopping rule. The energy change of a move is computed from the four d_PE terms it
-    touches (O(1)); the new distances of the two moved segments to all others are one numpy
-    call (O(m)), evaluated only for moves the Metropolis test accepts; the distance matrix
-    is updated in those two rows and columns.
+    A move displaces one vertex; the moves of a colour class (:func:`colour_classes`) are
+    proposed, tested (Metropolis) and applied together, which is equivalent to making them
+    one after the other because they touch disjoint energy terms. The energy change of a
+    move is computed from the four d_PE terms it touches (O(1) each); the constraint is
+    checked with one numpy call for the distances of all moved segments to all segments.
+    See the module docstring for the move length, the 10 degree direction rule, the
+    schedule and the stopping rule.
 
     Parameters
     ----------
     P : (m, 3) float64
-        Simple loop with d_MD > eps, m >= 4.
+        Simple loop with d_MD > eps.
     rng : numpy.random.Generator
     k : float
         Boltzmann constant / cooling factor (paper: 0.9).
@@ -205,97 +140,109 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=20000, step_b
         Absolute distance threshold of the constraint d_MD > eps.
     sa_steps : int
         Maximum number of moves in the run.
-    step_bound : {'local', 'global'}
-        Bound of a move's length: the moved segments' clearance or the global d_MD.
+    step_bound : {'global', 'local'}
+        Bound of a move's length: the global d_MD or the clearance of the moved segments.
+    stop_when_simple : bool
+        End the run at the first temperature stage whose loop projects to a simple polygon.
+    on_move : callable, optional
+        Called as ``on_move(P)`` with the new loop after every accepted batch of moves (tests).
 
     Returns
     -------
-    Q : (m, 3) float64
+    A : (m, 3) float64
         Annealed loop, still simple with d_MD > eps.
     stats : dict
-        ``steps``, ``accepted``, ``stages``, ``energy_start``, ``energy_end``, ``d_md``.
+        ``steps``, ``accepted``, ``stages``, ``energy_start``, ``energy_end``, ``d_md``,
+        ``simple`` (the run ended on a simple projection).
     """
     P = np.array(P, np.float64)
     m = len(P)
     if m < 4:
         return P, {"steps": 0, "accepted": 0, "stages": 0, "energy_start": 0.0, "energy_end": 0.0,
-                   "d_md": math.inf}
-    pts = [tuple(p) for p in P.tolist()]
-    normals = [_normal(pts[i], pts[(i + 1) % m], pts[(i + 2) % m]) for i in range(m)]
-    terms = [_angle(normals[i], normals[(i + 1) % m]) for i in range(m)]
-    energy = energy_start = math.fsum(terms)
-    D = segment_distance_matrix(P)
-    d_md = float(D.min())
+                   "d_md": math.inf, "simple": linear_motion_is_simple(project_to_best_plane(P)[0], eps)}
     mask = nonadjacent_mask(m)
-    Q = np.roll(P, -1, axis=0)  # Q[i] = end point of segment i (kept in sync with P)
-    last_dir = [None] * m
-    improving = [False] * m
+    # Exact distances only below `near`: far pairs keep a lower bound, which is all a step
+    # bound or the constraint needs.
+    near = NEAR_EDGES * float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean())
+    N = triple_normals(P)
+    T = _angles(N, np.roll(N, -1, axis=0))
+    energy_start = float(T.sum())
+    D = segment_distance_matrix(P, near)
+    d_md = float(D.min())
+    last_dir = np.zeros((m, 3))
+    improving = np.zeros(m, bool)
+    classes = colour_classes(m)
     kT = k * temperature
     kT_floor = TEMPERATURE_FLOOR * temperature
     steps = accepted = stages = 0
-    batch = max(m, 1)
-    while steps < sa_steps and kT >= kT_floor:
-        order = rng.permutation(m).tolist()
-        G = rng.standard_normal((batch, 3)).tolist()
-        U = rng.random((batch, 3)).tolist()
-        for s, j in enumerate(order):
-            if steps >= sa_steps:
+    simple = False
+    while True:
+        if stop_when_simple and linear_motion_is_simple(project_to_best_plane(P)[0], eps, near):
+            simple = True
+            break
+        if steps >= sa_steps or kT < kT_floor:
+            break
+        for ci in rng.permutation(len(classes)).tolist():
+            J = classes[ci][: max(sa_steps - steps, 0)]
+            if len(J) == 0:
                 break
-            steps += 1
-            g, (u_len, u_cone, u_acc) = G[s], U[s]
-            prev = last_dir[j]
-            if prev is not None and improving[j]:
-                d = _cone_direction(prev, g, u_cone)
-            else:
-                gn = math.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) or 1.0
-                d = (g[0] / gn, g[1] / gn, g[2] / gn)
-            last_dir[j] = d
-            jm, jp = (j - 1) % m, (j + 1) % m
-            clearance = d_md if step_bound == "global" else min(D[jm].min(), D[j].min())
-            length = u_len * max(eps, clearance)
-            p = pts[j]
-            q = (p[0] + length * d[0], p[1] + length * d[1], p[2] + length * d[2])
-            jm2, jm3, jp2 = (j - 2) % m, (j - 3) % m, (j + 2) % m
-            n_a = _normal(pts[jm2], pts[jm], q)   # n_{j-2}
-            n_b = _normal(pts[jm], q, pts[jp])    # n_{j-1}
-            n_c = _normal(q, pts[jp], pts[jp2])   # n_j
-            t0 = _angle(normals[jm3], n_a)
-            t1 = _angle(n_a, n_b)
-            t2 = _angle(n_b, n_c)
-            t3 = _angle(n_c, normals[jp])
-            dE = (t0 + t1 + t2 + t3) - (terms[jm3] + terms[jm2] + terms[jm] + terms[j])
-            if dE > 0.0 and u_acc >= math.exp(-dE / kT):
-                improving[j] = False
-                continue
-            # Constraint d_MD > eps: distances of the two moved segments to all segments.
-            qa = np.array(q)
-            A0 = np.array([pts[jm], q])
-            A1 = np.array([q, pts[jp]])
-            rows = segment_distances(A0[:, None, :], A1[:, None, :], P[None, :, :], Q[None, :, :])
-            rows[0, ~mask[jm]] = np.inf
-            rows[1, ~mask[j]] = np.inf
-            if rows.min() <= eps:
-                improving[j] = False
-                continue
-            improving[j] = dE < 0.0
-            accepted += 1
-            pts[j] = q
-            P[j] = qa
-            Q[jm] = qa
-            normals[jm2], normals[jm], normals[j] = n_a, n_b, n_c
-            terms[jm3], terms[jm2], terms[jm], terms[j] = t0, t1, t2, t3
-            energy += dE
-            D[jm, :] = rows[0]
-            D[:, jm] = rows[0]
-            D[j, :] = rows[1]
-            D[:, j] = rows[1]
+            steps += len(J)
+            G = rng.standard_normal((len(J), 3))
+            U = rng.random((len(J), 3))
+            dirs = G / np.linalg.norm(G, axis=1)[:, None]
+            cone = improving[J]
+            if cone.any():
+                dirs[cone] = _cone_directions(last_dir[J[cone]], G[cone], U[cone, 1])
+            last_dir[J] = dirs
+            jm, jp = (J - 1) % m, (J + 1) % m
+            jm2, jm3, jp2 = (J - 2) % m, (J - 3) % m, (J + 2) % m
             if step_bound == "global":
-                d_md = float(D.min())
+                clearance = np.full(len(J), d_md)
+            else:
+                clearance = np.minimum(D[jm].min(axis=1), D[J].min(axis=1))
+            # Moves of one class happen together: half the bound keeps any two moving segments
+            # from meeting (their distance is >= d_MD and shrinks by less than two half steps).
+            length = U[:, 0] * 0.5 * np.maximum(eps, clearance)
+            q = P[J] + length[:, None] * dirs
+            n_a = _cross_normals(P[jm2], P[jm], q)    # n_{j-2}
+            n_b = _cross_normals(P[jm], q, P[jp])     # n_{j-1}
+            n_c = _cross_normals(q, P[jp], P[jp2])    # n_j
+            t0, t1 = _angles(N[jm3], n_a), _angles(n_a, n_b)
+            t2, t3 = _angles(n_b, n_c), _angles(n_c, N[jp])
+            dE = (t0 + t1 + t2 + t3) - (T[jm3] + T[jm2] + T[jm] + T[J])
+            with np.errstate(over="ignore"):
+                acc = (dE <= 0.0) | (U[:, 2] < np.exp(-dE / kT))
+            # Constraint d_MD > eps on the moved segments, all moves of the class applied.
+            for _ in range(3):
+                if not acc.any():
+                    break
+                trial = P.copy()
+                trial[J[acc]] = q[acc]
+                ends = np.roll(trial, -1, axis=0)
+                moved = np.unique(np.concatenate([jm[acc], J[acc]]))
+                rows = segment_distance_rows(trial[moved], ends[moved], trial, ends, mask[moved], near)
+                bad = moved[rows.min(axis=1) <= eps]
+                if len(bad) == 0:
+                    break
+                acc &= ~(np.isin(J, bad) | np.isin(jm, bad))
+            else:
+                acc[:] = False
+            improving[J] = acc & (dE < 0.0)
+            if not acc.any():
+                continue
+            accepted += int(acc.sum())
+            P = trial
+            N[jm2[acc]], N[jm[acc]], N[J[acc]] = n_a[acc], n_b[acc], n_c[acc]
+            T[jm3[acc]], T[jm2[acc]], T[jm[acc]], T[J[acc]] = t0[acc], t1[acc], t2[acc], t3[acc]
+            D[moved, :] = rows
+            D[:, moved] = rows.T
+            d_md = float(D.min())
+            if on_move is not None:
+                on_move(P)
         stages += 1
         kT *= k
-    energy_end = float(planarity_energy(P))
     return P, {"steps": steps, "accepted": accepted, "stages": stages, "energy_start": energy_start,
-               "energy_end": energy_end, "d_md": float(min_segment_distance(P))}
+               "energy_end": planarity_energy(P), "d_md": min_segment_distance(P), "simple": simple}
 
 
 def project_to_best_plane(P):
@@ -322,7 +269,7 @@ def project_to_best_plane(P):
     return Q, projected, normal
 
 
-def linear_motion_is_simple(Q, eps):
+def linear_motion_is_simple(Q, eps, near=None):
     """Whether a simple loop reaches its projection by linear motion without self-intersection.
 
     Sec. 3.1 accepts the unfolding only if the annealed loop can be moved to its projection
@@ -341,6 +288,8 @@ def linear_motion_is_simple(Q, eps):
         Projected polygon.
     eps : float
         Absolute clearance.
+    near : float, optional
+        Distances beyond ``near`` (> eps) are only bounded from below (faster, same answer).
 
     Returns
     -------
@@ -350,17 +299,77 @@ def linear_motion_is_simple(Q, eps):
     if len(Q) == 3:
         a, b, c = Q
         return abs(float((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))) > eps * eps
-    return min_segment_distance(Q) > eps
+    return min_segment_distance(Q, near) > eps
 
 
-def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=20000,
-                step_bound="local"):
+def boundary_gap_angles(vertices, faces, k):
+    """Angle the hole leaves open at each loop vertex: 2 pi minus the mesh's corner angles there.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64  local vertices, loop first
+    faces : (f, 3) int  faces containing at least every face incident to the loop
+    k : int  loop size
+
+    Returns
+    -------
+    gap : (k,) float64 radians, in (0, 2 pi) for a manifold border vertex
+    """
+    from ..geometry.quality import corner_angles
+
+    faces = np.asarray(faces, np.int64)
+    A = corner_angles(vertices, faces)
+    total = np.bincount(faces.ravel(), weights=A.ravel(), minlength=len(vertices))[:k]
+    return 2.0 * np.pi - total
+
+
+def develop_loop(P, gap_angles):
+    """Planar polygon with the loop's edge lengths and the surface's angles at its vertices.
+
+    Not in the paper: the fallback unfolding used when annealing finds no simple projection
+    (loops wrapped around a tube or a knob). The polygon turns by pi - gap_angle at each
+    vertex, the opening the surrounding surface leaves, shifted equally so the turns sum to
+    2 pi (the Gaussian curvature of the missing surface spread along the loop), walks the
+    3D edge lengths, and is closed by the smallest relative change of the edge lengths
+    (least squares, one 2 x 2 solve). Like the surface's own development it keeps the
+    loop's concavities; it is counter-clockwise when the loop is in patch orientation.
+
+    Parameters
+    ----------
+    P : (m, 3) float64  loop in patch orientation
+    gap_angles : (m,) float64  from :func:`boundary_gap_angles`
+
+    Returns
+    -------
+    Q : (m, 2) float64  (check simplicity with :func:`linear_motion_is_simple`)
+    """
+    P = np.asarray(P, np.float64)
+    m = len(P)
+    alpha = np.clip(np.asarray(gap_angles, np.float64), 0.05, 2.0 * np.pi - 0.05)
+    alpha = alpha + ((m - 2) * np.pi - alpha.sum()) / m
+    turn = np.pi - alpha
+    theta = np.concatenate([[0.0], np.cumsum(turn[1:])])  # direction of edge i = (p_i, p_{i+1})
+    lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    directions = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    # min sum (dl_i / l_i)^2  subject to  sum_i (l_i + dl_i) d_i = 0
+    weights = lengths ** 2
+    gap = lengths @ directions
+    lam = np.linalg.solve((directions.T * weights) @ directions, gap)
+    new_lengths = lengths - weights * (directions @ lam)
+    edges = new_lengths[:, None] * directions
+    return np.concatenate([[[0.0, 0.0]], np.cumsum(edges, axis=0)[:-1]])
+
+
+def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000,
+                step_bound="global", fallback=None):
     """Unfold a boundary loop into a simple planar polygon (Sec. 3.1).
 
     Anneal (:func:`anneal_loop`), project to the best-fitting plane
     (:func:`project_to_best_plane`) and accept if the linear motion to the projection keeps
     the loop simple (:func:`linear_motion_is_simple`); otherwise restart from the original
-    loop, at most ``max_restarts`` annealing runs in all.
+    loop, at most ``max_restarts`` annealing runs in all. A ``fallback`` polygon (e.g.
+    :func:`develop_loop`), beyond the paper, is tried after the first failed run; if it is
+    simple it is used and the remaining restarts are skipped.
 
     Parameters
     ----------
@@ -372,22 +381,22 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
         Clearance threshold relative to the loop's mean edge length.
     max_restarts : int
         Maximum number of annealing runs (paper: 100).
+    fallback : (m, 2) float64, optional
 
     Returns
     -------
     Q : (m, 2) float64
         Simple planar polygon, vertex i the image of loop vertex i.
-    annealed : (m, 3) float64
-        The annealed loop whose projection Q is.
     info : dict
-        ``restarts`` (runs - 1), ``sa_steps`` (moves over all runs), ``accepted_steps``,
-        ``energy_start``, ``energy_end`` (E_PE of the accepted run), ``d_md_start``.
+        ``method`` ('annealing' or 'development'), ``restarts`` (annealing runs - 1),
+        ``sa_steps`` (moves over all runs), ``accepted_steps``, ``energy_pe_start``,
+        ``energy_pe_end`` (E_PE before and after the last run), ``d_md_start``.
 
     Raises
     ------
     HoleFillError
         For a degenerate loop (non-finite, touching itself, zero area) or when no run
-        gives a simple projection (e.g. a knotted loop).
+        gives a simple projection and the fallback is not simple either (e.g. a knotted loop).
     """
     P = np.asarray(P, np.float64)
     m = len(P)
@@ -403,17 +412,23 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
     if d_md <= eps:
         raise HoleFillError(f"boundary loop touches itself (d_MD = {d_md:.3g} <= epsilon = {eps:.3g}); "
                             "curve unfolding needs a simple loop")
-    total_steps = total_accepted = 0
-    for run in range(max(int(max_restarts), 1)):
+    info = {"method": "annealing", "restarts": 0, "sa_steps": 0, "accepted_steps": 0, "d_md_start": d_md}
+    runs = max(int(max_restarts), 1)
+    for run in range(runs):
         annealed, stats = anneal_loop(P, rng, k=k, temperature=temperature, eps=eps,
                                       sa_steps=sa_steps, step_bound=step_bound)
-        total_steps += stats["steps"]
-        total_accepted += stats["accepted"]
+        info.update(restarts=run, sa_steps=info["sa_steps"] + stats["steps"],
+                    accepted_steps=info["accepted_steps"] + stats["accepted"],
+                    energy_pe_start=stats["energy_start"], energy_pe_end=stats["energy_end"])
         Q, _, _ = project_to_best_plane(annealed)
         if linear_motion_is_simple(Q, eps):
-            return Q, annealed, {"restarts": run, "sa_steps": total_steps, "accepted_steps": total_accepted,
-                                 "energy_start": stats["energy_start"], "energy_end": stats["energy_end"],
-                                 "d_md_start": d_md}
-    raise HoleFillError(f"curve unfolding failed: no annealing run out of {max(int(max_restarts), 1)} gave a "
-                        "loop whose projection to its best-fitting plane is simple "
-                        "(knotted or strongly twisted boundary)")
+            return Q, info
+        if run == 0 and fallback is not None and linear_motion_is_simple(fallback, eps):
+            info["method"] = "development"
+            return np.asarray(fallback, np.float64), info
+    if m == 3:
+        raise HoleFillError("boundary loop is a degenerate (zero-area) triangle")
+    raise HoleFillError(f"curve unfolding failed: no annealing run out of {runs} gave a loop whose projection "
+                        "to its best-fitting plane is simple"
+                        + (", nor is the loop's development" if fallback is not None else "")
+                        + " (knotted or strongly wrapped boundary)")

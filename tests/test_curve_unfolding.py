@@ -1,0 +1,364 @@
+"""Brunton et al. 2009, curve unfolding: unfolding (Sec. 3.1), CDT (Sec. 3.2), refinement and
+embedding (Sec. 3.3), and the filter end to end."""
+import time
+
+import numpy as np
+import pymeshlab
+import pytest
+import scipy.optimize
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from meshlab_holefill import FILTERS, HoleFillError
+from meshlab_holefill.algorithms import curve_unfolding as cu
+from meshlab_holefill.algorithms.embedding import embed_patch, embedding_energy, energy_rows
+from meshlab_holefill.algorithms.unfolding import (anneal_loop, boundary_gap_angles, colour_classes, develop_loop,
+                                                   linear_motion_is_simple, planarity_energy, planarity_terms,
+                                                   project_to_best_plane, unfold_loop)
+from meshlab_holefill.geometry.intersections import faces_intersecting
+from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
+from meshlab_holefill.geometry.segments import min_segment_distance, segment_distances
+from meshlab_holefill.holes import boundary_loops, hole_context, nonmanifold_edges
+from meshlab_holefill.patch import validate_patch
+
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+
+
+# ----------------------------------------------------------------------------- shapes
+
+def wrapped_rectangle(n_arc=20, n_side=3, wrap=200.0, height=1.0):
+    """Boundary of a rectangle wrapped around the unit cylinder: its best-plane projection overlaps itself."""
+    th = np.radians(np.linspace(0, wrap, n_arc))
+    bottom = np.c_[np.cos(th), np.sin(th), np.zeros(n_arc)]
+    top = np.c_[np.cos(th[::-1]), np.sin(th[::-1]), np.full(n_arc, height)]
+    z = np.linspace(0, height, n_side + 1)[1:-1]
+    up = np.c_[np.full_like(z, np.cos(th[-1])), np.full_like(z, np.sin(th[-1])), z]
+    down = np.c_[np.ones_like(z), np.zeros_like(z), z[::-1]]
+    return np.vstack([bottom, up, top, down])
+
+
+def trefoil(n=36):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.c_[np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)]
+
+
+def tube(n_around=36, n_up=10, height=3.0):
+    """Open unit cylinder, outward-facing triangles."""
+    th = np.linspace(0, 2 * np.pi, n_around, endpoint=False)
+    T, Z = np.meshgrid(th, np.linspace(0, height, n_up))
+    V = np.stack([np.cos(T).ravel(), np.sin(T).ravel(), Z.ravel()], axis=1)
+    idx = np.arange(n_up * n_around).reshape(n_up, n_around)
+    a, b = idx[:-1].ravel(), np.roll(idx, -1, axis=1)[:-1].ravel()
+    c, d = np.roll(idx, -1, axis=1)[1:].ravel(), idx[1:].ravel()
+    return V, np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+
+
+def tube_hole_context(wrap=200.0):
+    """A hole wrapped `wrap` degrees around a tube, z in [1, 2]: no side sees it without overlap."""
+    V, F = tube()
+    C = V[F].mean(axis=1)
+    angle = np.degrees(np.arctan2(C[:, 1], C[:, 0])) % 360
+    F = F[~((angle < wrap) & (C[:, 2] > 1) & (C[:, 2] < 2))]
+    loop = [lp for lp in boundary_loops(F) if len(lp) != 36][0]
+    return hole_context(V, F, loop, rings=cu.RINGS)
+
+
+def mean_edge(P):
+    return float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean())
+
+
+def edge_set(F):
+    return {tuple(e) for f in np.asarray(F).tolist() for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
+
+
+@pytest.fixture(scope="module")
+def bunny_loops():
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("bunny10k_textured.obj"))
+    V, F = mesh_arrays(ms)
+    return V, F, boundary_loops(F)
+
+
+# ----------------------------------------------------------------------------- Sec. 3.1 building blocks
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-2, 2), min_size=12, max_size=12), st.sampled_from(["general", "parallel", "point"]))
+def test_segment_distance_is_exact(coords, kind):
+    A0, A1, B0, B1 = np.reshape(coords, (4, 3))
+    if kind == "parallel":
+        B1 = B0 + 0.7 * (A1 - A0)
+    elif kind == "point":
+        A1 = A0.copy()
+    d = float(segment_distances(A0, A1, B0, B1))
+    s = np.linspace(0, 1, 301)
+    X, Y = A0 + np.outer(s, A1 - A0), B0 + np.outer(s, B1 - B0)
+    brute = np.sqrt(((X[:, None] - Y[None]) ** 2).sum(-1)).min()
+    assert d <= brute + 1e-12  # never above a sampled distance ...
+    step = max(np.linalg.norm(A1 - A0), np.linalg.norm(B1 - B0)) / 300
+    assert brute - d <= step + 1e-12  # ... and within the sampling resolution of the true minimum
+
+
+def test_planarity_energy_is_zero_for_a_convex_planar_loop_and_counts_inflections():
+    t = np.linspace(0, 2 * np.pi, 12, endpoint=False)
+    circle = np.c_[np.cos(t), np.sin(t), np.zeros(12)]
+    assert planarity_energy(circle) == pytest.approx(0, abs=1e-12)
+    # One reflex vertex flips one normal n_i: two terms of pi (angle between vectors, as written).
+    L = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0]], float)
+    assert planarity_energy(L) == pytest.approx(2 * np.pi)
+    # A non-planar loop has positive energy; the terms are angles in [0, pi].
+    bent = circle + np.c_[np.zeros(12), np.zeros(12), 0.3 * np.sin(2 * t)]
+    terms = planarity_terms(bent)
+    assert np.all((terms >= 0) & (terms <= np.pi)) and terms.sum() > 0.1
+
+
+@pytest.mark.parametrize("m", range(4, 23))
+def test_colour_classes_partition_the_loop_into_independent_moves(m):
+    classes = colour_classes(m)
+    flat = np.concatenate(classes)
+    assert sorted(flat.tolist()) == list(range(m))
+    for c in classes:
+        gap = np.abs(c[:, None] - c[None, :])
+        gap = np.minimum(gap, m - gap)
+        assert np.all(gap[~np.eye(len(c), dtype=bool)] >= 4)
+
+
+def test_batched_moves_change_the_energy_by_the_sum_of_single_moves():
+    rng = np.random.default_rng(3)
+    P = np.c_[np.cos(np.linspace(0, 2 * np.pi, 16, endpoint=False)), np.sin(np.linspace(0, 2 * np.pi, 16, endpoint=False)),
+              np.zeros(16)] + 0.1 * rng.normal(size=(16, 3))
+    J = colour_classes(16)[0]
+    moves = 0.05 * rng.normal(size=(len(J), 3))
+    single = 0.0
+    for j, dv in zip(J, moves):
+        Q = P.copy()
+        Q[j] += dv
+        single += planarity_energy(Q) - planarity_energy(P)
+    Q = P.copy()
+    Q[J] += moves
+    assert planarity_energy(Q) - planarity_energy(P) == pytest.approx(single, abs=1e-10)
+
+
+def test_annealing_keeps_the_loop_simple_throughout(bunny_loops):
+    V, _, loops = bunny_loops
+    P = V[loops[0].vertices]
+    eps = 1e-5 * mean_edge(P)
+    states = [P]
+
+    def check(Q):
+        assert min_segment_distance(Q) > eps
+        # No vertex moves by half d_MD or more: two segments d_MD apart cannot meet on the way,
+        # so the motion between two states is free of crossings, not only the states.
+        assert np.linalg.norm(Q - states[-1], axis=1).max() < 0.5 * min_segment_distance(states[-1])
+        for t in (0.25, 0.5, 0.75):
+            assert min_segment_distance((1 - t) * states[-1] + t * Q) > eps
+        states.append(Q.copy())
+
+    A, stats = anneal_loop(P, np.random.default_rng(0), eps=eps, sa_steps=40 * len(P), stop_when_simple=False,
+                           on_move=check)
+    assert stats["accepted"] > 0 and len(states) > 20
+    assert stats["d_md"] > eps
+
+
+def test_linear_motion_to_the_projection_is_checked_exactly(bunny_loops):
+    V, _, loops = bunny_loops
+    P = V[loops[0].vertices]
+    A, _ = anneal_loop(P, np.random.default_rng(1), eps=1e-5 * mean_edge(P), sa_steps=20 * len(P),
+                       stop_when_simple=False)
+    Q, projected, normal = project_to_best_plane(A)
+    assert np.abs((projected - projected.mean(0)) @ normal).max() < 1e-12  # planar
+    if linear_motion_is_simple(Q, 1e-9):
+        for t in np.linspace(0, 1, 11):
+            assert min_segment_distance(A + t * (projected - A)) > 0
+    # A loop wrapped around a cylinder collides with itself on the way to its projection.
+    W = wrapped_rectangle()
+    assert not linear_motion_is_simple(project_to_best_plane(W)[0], 1e-9)
+
+
+def test_annealing_unfolds_a_wrapped_loop_and_is_reproducible():
+    W = wrapped_rectangle()
+    Q, info = unfold_loop(W, np.random.default_rng(0))
+    assert info["method"] == "annealing" and info["sa_steps"] > 0
+    assert linear_motion_is_simple(Q, 1e-5 * mean_edge(W))
+    Q2, info2 = unfold_loop(W, np.random.default_rng(0))
+    assert np.array_equal(Q, Q2) and info == info2
+
+
+def test_a_knotted_loop_fails_clearly_in_bounded_time():
+    t0 = time.perf_counter()
+    with pytest.raises(HoleFillError, match="unfolding failed"):
+        unfold_loop(trefoil(), np.random.default_rng(0), max_restarts=5)
+    assert time.perf_counter() - t0 < 10
+
+
+@pytest.mark.parametrize("loop, message", [
+    (np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 0, 0], [0, 1, 0]], float), "touches itself"),
+    (np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0]], float), "zero-area"),
+    (np.array([[0, 0, 0], [1, 0, 0], [np.nan, 1, 0]], float), "non-finite"),
+    (np.array([[0, 0, 0], [2, 0, 0], [0, 1, 0], [2, 1, 0]], float), "touches itself"),  # a bow tie
+])
+def test_degenerate_loops_fail_clearly(loop, message):
+    t0 = time.perf_counter()
+    with pytest.raises(HoleFillError, match=message):
+        unfold_loop(loop, np.random.default_rng(0))
+    assert time.perf_counter() - t0 < 5
+
+
+def test_development_of_a_planar_hole_is_the_hole_itself():
+    V, F = grid(14, 14)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.3)
+    loop = [lp for lp in boundary_loops(F) if len(lp) < 52][0]
+    ctx = hole_context(V, F, loop, rings=2)
+    Q = develop_loop(ctx.points, boundary_gap_angles(ctx.vertices, ctx.faces, ctx.size))
+    D2 = np.linalg.norm(Q[:, None] - Q[None], axis=2)
+    D3 = np.linalg.norm(ctx.points[:, None, :2] - ctx.points[None, :, :2], axis=2)
+    assert np.abs(D2 - D3).max() < 1e-9  # congruent: same lengths and angles
+
+
+# ----------------------------------------------------------------------------- Sec. 3.2 and 3.3
+
+def star_polygon(radii):
+    t = np.linspace(0, 2 * np.pi, len(radii), endpoint=False)
+    return np.c_[np.cos(t), np.sin(t)] * np.asarray(radii)[:, None]
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(0.3, 1.0), min_size=5, max_size=30))
+def test_cdt_keeps_every_boundary_edge_and_adds_no_steiner_point(radii):
+    Q = star_polygon(radii)
+    points, F = cu.constrained_delaunay(Q)
+    m = len(Q)
+    assert np.array_equal(points, Q) and len(F) == m - 2
+    edges = edge_set(F)
+    assert all((i, (i + 1) % m) in edges for i in range(m))  # every polygon edge, in the loop's direction
+    A = points[F]
+    cross = (A[:, 1, 0] - A[:, 0, 0]) * (A[:, 2, 1] - A[:, 0, 1]) - (A[:, 2, 0] - A[:, 0, 0]) * (A[:, 1, 1] - A[:, 0, 1])
+    assert np.all(cross > 0)
+    # Constrained Delaunay: every non-polygon edge is locally Delaunay (opposite angles sum <= pi).
+    ang = corner_angles(np.c_[points, np.zeros(m)], F)
+    opposite = {}
+    for f, (a, b, c) in enumerate(F.tolist()):
+        for (u, v), w in (((a, b), 2), ((b, c), 0), ((c, a), 1)):
+            opposite.setdefault(tuple(sorted((u, v))), []).append(ang[f, w])
+    for e, alphas in opposite.items():
+        if len(alphas) == 2:
+            assert alphas[0] + alphas[1] <= np.pi + 1e-9
+
+
+def test_forbidden_chords_are_broken_by_a_steiner_point():
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+    points, F = cu.constrained_delaunay(square, [[0, 2], [1, 3]])
+    edges = {tuple(sorted(e)) for e in edge_set(F)}
+    assert len(points) > 4 and (0, 2) not in edges and (1, 3) not in edges
+
+
+def test_refinement_meets_chews_angle_and_length_bounds():
+    h = 0.1
+    m = 40
+    Q = star_polygon(np.full(m, h / (2 * np.sin(np.pi / m))))  # regular polygon with edges h
+    points, F = cu.refine_planar(Q, h)
+    assert np.array_equal(points[:m], Q)  # boundary untouched: no Steiner point on it
+    assert all((i, (i + 1) % m) in edge_set(F) for i in range(m))
+    X = np.c_[points, np.zeros(len(points))]
+    ang = np.degrees(corner_angles(X, F))
+    assert ang.min() >= 30 - 1e-6 and ang.max() <= 120 + 1e-6
+    E = np.array(sorted(edge_set(F)))
+    assert np.linalg.norm(X[E[:, 0]] - X[E[:, 1]], axis=1).max() <= 2 * h
+
+
+def test_planar_domain_is_scaled_to_the_loops_perimeter():
+    P = np.array([[0, 0, 0], [2, 0, 1], [2, 2, 0], [0, 2, 1]], float)
+    Qs, scale = cu.scale_to_loop(project_to_best_plane(P)[0], P)
+    assert cu.polygon_perimeter(Qs) == pytest.approx(cu.polygon_perimeter(P))
+
+
+@pytest.mark.parametrize("energy, order", [("area", 1), ("fairing", 2)])
+def test_embedding_solves_its_energy(energy, order):
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = mesh_arrays(ms)
+    _, F, _ = cut_disks(V, F, [(0, 0, 1)], 0.6)
+    ctx = hole_context(V, F, boundary_loops(F)[0], rings=2)
+    points, Fp = cu.refine_planar(cu.scale_to_loop(project_to_best_plane(ctx.points)[0], ctx.points)[0],
+                                  float(ctx.edge_scale.mean()))
+    s = len(points) - ctx.size
+    interior = embed_patch(ctx, s, Fp, energy=energy)
+    n_ctx = len(ctx.vertices)
+    joint = np.concatenate([ctx.faces, np.where(Fp < ctx.size, Fp, Fp - ctx.size + n_ctx)])
+    free = np.arange(n_ctx + s) >= n_ctx
+    R = energy_rows(joint, n_ctx + s, free, order)
+    X = np.concatenate([ctx.vertices, interior])
+    energy_value, gradient = embedding_energy(X, R, free)
+    assert np.abs(gradient).max() < 1e-10
+    # The paper's quasi-Newton solve (L-BFGS) reaches the same minimiser.
+    start = X.copy()
+    start[free] = ctx.points.mean(axis=0)
+
+    def f(x):
+        Y = start.copy()
+        Y[free] = x.reshape(-1, 3)
+        e, g = embedding_energy(Y, R, free)
+        return e, g.ravel()
+
+    res = scipy.optimize.minimize(f, start[free].ravel(), jac=True, method="L-BFGS-B",
+                                  options={"maxiter": 20000, "gtol": 1e-12, "ftol": 1e-15})
+    assert res.fun >= energy_value - 1e-12
+    assert np.abs(res.x.reshape(-1, 3) - interior).max() < 1e-3
+
+
+# ----------------------------------------------------------------------------- fill() and the filter
+
+def test_same_seed_same_patch_and_annealing_reaches_the_filter():
+    ctx = tube_hole_context()
+    a = cu.fill(ctx, seed=1, fallback=False)
+    b = cu.fill(ctx, seed=1, fallback=False)
+    c = cu.fill(ctx, seed=2, fallback=False)
+    assert a.info["unfolding"] == "annealing" and a.info["sa_steps"] > 0
+    assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+    assert a.info["sa_steps"] != c.info["sa_steps"]
+    validate_patch(a, ctx.points, ctx.forbidden_edges)
+
+
+def test_wrapped_hole_on_a_tube_is_filled_on_the_tube():
+    ctx = tube_hole_context()
+    patch = cu.fill(ctx)
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    radius = np.hypot(patch.vertices[:, 0], patch.vertices[:, 1])
+    assert np.abs(radius - 1).max() < 0.03
+    q = triangle_quality(patch.all_points(ctx.points), patch.faces)
+    assert q.mean() > 0.85 and q.min() > 0.3
+    assert len(cu.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+
+
+def test_filter_registration_and_paper_defaults():
+    spec = FILTERS["meshing_close_holes_curve_unfolding"]
+    assert spec.display_name == "Close Holes: Curve Unfolding"
+    defaults = {p.name: p.default for p in spec.params}
+    assert defaults["k"] == 0.9 and defaults["temperature"] == 0.5 and defaults["epsilon"] == 1e-5
+    assert defaults["max_restarts"] == 100
+
+
+def test_sphere_holes_are_closed_on_the_sphere():
+    V, F, _ = sphere_with_holes()
+    ms = meshset_from_arrays(V, F)
+    res = ms.meshing_close_holes_curve_unfolding()
+    assert res["closed_holes"] == 2 and res["failed_holes"] == 0
+    V1, F1 = mesh_arrays(ms)
+    assert np.array_equal(V1[:len(V)], V) and np.array_equal(F1[:len(F)], F)
+    assert boundary_loops(F1) == [] and len(nonmanifold_edges(F1)) == 0
+    new = np.arange(len(F), len(F1))
+    assert len(faces_intersecting(V1, F1, new, np.arange(len(F1)))) == 0
+    assert np.abs(np.linalg.norm(V1[len(V):], axis=1) - 1).max() < 0.01  # E_DF follows the sphere
+    q = triangle_quality(V1, F1[len(F):])
+    assert q.mean() >= 0.85 and q.min() >= 0.3
+
+
+@pytest.mark.parametrize("energy", ["area", "fairing"])
+def test_bunny_scan_natural_holes_all_closed(bunny_scan, energy):
+    V0, F0 = mesh_arrays(bunny_scan)
+    res = bunny_scan.meshing_close_holes_curve_unfolding(energy=energy, seed=0)
+    assert res["closed_holes"] == 5 and res["failed_holes"] == 0
+    for hole in res["holes"]:
+        assert {"restarts", "unfolding_seconds", "embedding_seconds"} <= set(hole)
+    V1, F1 = mesh_arrays(bunny_scan)
+    assert np.array_equal(V1[:len(V0)], V0) and np.array_equal(F1[:len(F0)], F0)
+    assert boundary_loops(F1) == [] and len(nonmanifold_edges(F1)) == 0
