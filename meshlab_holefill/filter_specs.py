@@ -15,6 +15,14 @@ from .registry import FilterSpec, register
 ALGORITHMS = [
     ("min_angle_bilateral", "meshing_close_holes_min_angle_bilateral", "Close Holes: Minimum Angle + Bilateral",
      "P. Hu, C. Wang, B. Li, M. Liu, Filling Holes in Triangular Meshes in Engineering, JSW 2012"),
+    ("curve_unfolding", "meshing_close_holes_curve_unfolding", "Close Holes: Curve Unfolding",
+     "A. Brunton, S. Wuhrer, C. Shu, P. Bose, E. D. Demaine, Filling Holes in Triangular Meshes by Curve "
+     "Unfolding, IEEE SMI 2009"),
+    ("differential_evolution", "meshing_close_holes_differential_evolution", "Close Holes: Differential Evolution (HPDE)",
+     "W.-C. Xie, X.-F. Zou, A triangulation-based hole patching method using differential evolution, CAD 45 (2013)"),
+    ("lssvm_poisson", "meshing_close_holes_lssvm_poisson", "Close Holes: LS-SVM Laplacian + Poisson",
+     "B. Xu, Z. Li, Y. Tan, Feature Based Hole Filling Algorithm on Triangular Mesh, CCTA 2013, IFIP AICT 420, "
+     "pp. 90-101"),
 ]
 
 
@@ -25,7 +33,7 @@ def _make_spec(module_name, name, display_name, paper):
 
     def run(ms, **params_in):
         return close_holes(ms, module.fill, params_in, algorithm_params=[p.name for p in own],
-                           rings=module.RINGS)
+                           rings=module.RINGS, prepare=getattr(module, "PREPARE", None))
 
     doc = (module.__doc__ or "").strip().split("\n\n")[0]
     return FilterSpec(name=name, display_name=display_name, description=doc, params=params, run=run,

@@ -14,7 +14,7 @@ import numpy as np
 from .geometry.intersections import faces_intersecting
 from .holes import boundary_loops, edge_summary, hole_context, vertex_face_incidence
 from .meshset_io import (check_manifold_edges, current_mesh_arrays, extend_attributes,
-                         replace_current_mesh)
+                         refine_mesh_arrays, replace_current_mesh)
 from .patch import HoleFillError, merge_patches, validate_patch
 from .registry import ParamSpec
 
@@ -60,7 +60,7 @@ def patch_intersections(ctx_vertices, patch_points, patch_faces, mesh_V, mesh_F,
     return hits
 
 
-def close_holes(ms, fill, params, *, algorithm_params=(), rings=3):
+def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None):
     """Run one hole-filling algorithm on every eligible hole of the current mesh.
 
     Parameters
@@ -73,12 +73,23 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3):
         Names in ``params`` passed on to ``fill``.
     rings : int
         Face rings of surrounding mesh each HoleContext carries.
+    prepare : callable, optional
+        ``prepare(V, F, loops, params) -> refinement or None``, the algorithm module's
+        ``PREPARE``: refines the borders of the holes to be filled before any is filled
+        (the only way a filter may change original faces: the surface must stay the same,
+        original vertices keep positions and order). ``refinement`` has ``V``, ``F``
+        (originals first, split faces' second children after the m original rows),
+        ``loops`` (the refined loops, in the order given), ``edge_vertices``,
+        ``edge_weights``, ``face_parents`` (see :func:`meshset_io.refine_mesh_arrays`) and
+        ``split_counts``. Refined borders stay refined if their hole then fails.
 
     Returns
     -------
     dict
         ``closed_holes``, ``new_faces``, ``new_vertices``, ``skipped_holes``,
-        ``failed_holes``, ``holes`` (per-hole dicts) and ``seconds``.
+        ``failed_holes``, ``holes`` (per-hole dicts) and ``seconds``; with ``prepare`` also
+        ``split_boundary_edges`` (new faces and vertices then count the patches only; the
+        split faces' second children are rows m .. m + split_boundary_edges - 1).
     """
     t_start = time.perf_counter()
     arrays = current_mesh_arrays(ms)
@@ -101,6 +112,13 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3):
         else:
             todo.append(i)
         report.append(entry)
+    refinement = prepare(V, F, [loops[i] for i in todo], params) if prepare is not None and todo else None
+    if refinement is not None:
+        arrays = refine_mesh_arrays(arrays, refinement)
+        V, F = arrays.V, arrays.F
+        for i, loop, count in zip(todo, refinement.loops, refinement.split_counts):
+            loops[i] = loop
+            report[i]["split_boundary_edges"] = int(count)
     incidence = vertex_face_incidence(F, len(V)) if todo else None
     if params["selfintersection"] and todo:
         corners = V[F]
@@ -134,9 +152,12 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3):
     done_loops, patches, closed_ids = _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids)
     V2, F2 = merge_patches(V, F, done_loops, patches)
     n_new_faces = len(F2) - len(F)
-    if n_new_faces:
-        vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops,
-                                                  [len(p.vertices) for p in patches])
+    if n_new_faces or refinement is not None:
+        if n_new_faces:
+            vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops,
+                                                      [len(p.vertices) for p in patches])
+        else:  # borders refined, no hole closed
+            vattrs, fattrs, wedge = arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords
         select = np.arange(len(F), len(F2)) if params["newfaceselected"] else None
         replace_current_mesh(ms, arrays, V2, F2, vattrs, fattrs, wedge, select_faces=select)
     statuses = [h["status"] for h in report]
@@ -149,6 +170,8 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3):
         "holes": report,
         "seconds": time.perf_counter() - t_start,
     }
+    if prepare is not None:
+        result["split_boundary_edges"] = int(len(refinement.edge_weights)) if refinement is not None else 0
     return result
 
 

@@ -149,6 +149,59 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
     return vertex_attrs, face_attrs, wedge
 
 
+def refine_mesh_arrays(arrays, refinement):
+    """The MeshArrays of a border-refined mesh (a ``prepare`` hook's result), attributes carried over.
+
+    Used by filters that split original faces without changing the surface (Xu et al.'s
+    boundary edge pre-treatment): original vertices keep positions, order and attributes; a
+    new vertex on original edge (a, b) at parameter t gets (1 - t) A[a] + t A[b] (the mean
+    of its edge's endpoints for a midpoint); every face takes its parent face's colour,
+    quality and selection, and its wedge texture coordinates are the parent's interpolated
+    at its corners (which lie on the parent's corners or edges).
+
+    Parameters
+    ----------
+    arrays : MeshArrays  the mesh before refinement
+    refinement : object with ``V``, ``F``, ``edge_vertices`` (s, 2), ``edge_weights`` (s,)
+        and ``face_parents`` (m2,), e.g. :class:`meshlab_holefill.geometry.border_split.BorderRefinement`
+
+    Returns
+    -------
+    MeshArrays  (same label, mesh id and textures)
+    """
+    n, m = len(arrays.V), len(arrays.F)
+    E = np.asarray(refinement.edge_vertices, np.int64).reshape(-1, 2)
+    t = np.asarray(refinement.edge_weights, np.float64)[:, None]
+    parents = np.asarray(refinement.face_parents, np.int64)
+    F2 = np.asarray(refinement.F, np.int64)
+    vertex_attrs = {name: np.concatenate([A, (1.0 - t) * A[E[:, 0]] + t * A[E[:, 1]]])
+                    for name, A in arrays.vertex_attrs.items()}
+    face_attrs = {name: A[parents] for name, A in arrays.face_attrs.items()}
+    wedge = None
+    if arrays.wedge_texcoords is not None:
+        W0 = arrays.wedge_texcoords.reshape(m, 3, 2)
+        W2 = np.concatenate([W0, np.zeros((len(F2) - m, 3, 2))])
+        rows = np.flatnonzero((parents != np.arange(len(F2))) | (np.arange(len(F2)) >= m)
+                              | np.r_[np.any(F2[:m] != arrays.F, axis=1), np.zeros(len(F2) - m, bool)])
+        if len(rows):
+            P = arrays.F[parents[rows]]                       # (r, 3) parent corners
+            C = F2[rows]                                      # (r, 3) child corners
+            is_new = C >= n
+            idx = np.where(is_new, C - n, 0)
+            a = np.where(is_new, E[idx, 0], C)                # corner on parent edge (a, b) at t
+            b = np.where(is_new, E[idx, 1], C)
+            tt = np.where(is_new, t[idx, 0], 0.0)
+            ca = np.argmax(P[:, None, :] == a[:, :, None], axis=2)
+            cb = np.argmax(P[:, None, :] == b[:, :, None], axis=2)
+            Wp = W0[parents[rows]]                            # (r, 3, 2)
+            r = np.arange(len(rows))[:, None]
+            W2[rows] = (1.0 - tt)[..., None] * Wp[r, ca] + tt[..., None] * Wp[r, cb]
+        wedge = W2.reshape(-1, 2)
+    return MeshArrays(V=np.ascontiguousarray(refinement.V, np.float64), F=F2, vertex_attrs=vertex_attrs,
+                      face_attrs=face_attrs, wedge_texcoords=wedge, label=arrays.label,
+                      mesh_id=arrays.mesh_id, textures=arrays.textures)
+
+
 def _border_faces_per_loop(F, loops):
     """For each loop, the original faces holding one of its edges."""
     from .holes import boundary_halfedges

@@ -403,8 +403,12 @@ def test_algorithm_workflow_cleans_closes_every_hole_and_selects_the_new_faces(w
     run_filter_script(cleaned, without_last_filters(path, 1))
     V0, F0 = mesh_arrays(cleaned)  # the clean mesh is kept bit-exact, new vertices and faces come after
     np.testing.assert_array_equal(V[:len(V0)], V0)
-    np.testing.assert_array_equal(F[:len(F0)], F0)
-    assert len(F) - len(F0) == closing["new_faces"]
+    # Xu et al.'s boundary pre-treatment (Sec. 3.1) may split border faces: each split rewrites
+    # one original row in place and appends its other half before the patch.
+    split = closing.get("split_boundary_edges", 0)
+    changed = np.flatnonzero(np.any(F[:len(F0)] != F0, axis=1))
+    assert len(changed) <= split
+    assert len(F) - len(F0) == closing["new_faces"] + split
 
 
 def check_scan_repair(text_or_path, base_path):
