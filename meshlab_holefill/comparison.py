@@ -384,13 +384,16 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
         hits = np.zeros(0, np.int64)
     run.update(checks)
     he1, _ = boundary_halfedges(F1)
-    patches = assign_patches(F1[len(F0):], [h.loop for h in case.holes])
+    # Xu et al.'s boundary pre-treatment appends the split halves of border faces before the
+    # patches: they are original surface, not patch.
+    first_patch_face = len(F0) + int(result.get("split_boundary_edges", 0) or 0)
+    patches = assign_patches(F1[first_patch_face:], [h.loop for h in case.holes])
     max_size = resolved_params.get("maxholesize", 30 if filler.filter == BASELINE else 1000)
     closed_count = 0
     for h, row in zip(case.holes, base):
         entry = _hole_entry(result, h.loop_index)
         open_left = bool(np.isin(he1, h.loop).all(axis=1).any())
-        patch_idx = len(F0) + patches[h.index]
+        patch_idx = first_patch_face + patches[h.index]
         closed = (not open_left) and len(patch_idx) > 0
         if entry is not None and entry.get("seconds") is not None:
             row["seconds"] = entry["seconds"]
