@@ -7,22 +7,7 @@ import sys
 
 import numpy as np
 
-
-def _parse_value(text):
-    """Command-line value: bool, int, float, or string (enum names)."""
-    low = text.lower()
-    if low in ("true", "false"):
-        return low == "true"
-    for cast in (int, float):
-        try:
-            return cast(text)
-        except ValueError:
-            pass
-    if text.endswith("%"):
-        import pymeshlab
-
-        return pymeshlab.PercentageValue(float(text[:-1]))
-    return text
+from .registry import parse_text_value
 
 
 def _params_from_unknown(unknown):
@@ -42,7 +27,7 @@ def _params_from_unknown(unknown):
             i += 2
         else:
             raise SystemExit(f"parameter {key} has no value")
-        params[name] = _parse_value(value)
+        params[name] = parse_text_value(value)
     return params
 
 

@@ -236,15 +236,10 @@ class Filler:
 
 
 def _parse_value(text):
-    low = text.lower()
-    if low in ("true", "false"):
-        return low == "true"
-    for cast in (int, float):
-        try:
-            return cast(text)
-        except ValueError:
-            pass
-    return text  # "all" (maxholesize covering every hole), enum names, "5%"
+    from .registry import parse_text_value
+
+    # "all" (maxholesize covering every hole), enum names and "5%" stay text here.
+    return parse_text_value(text, percentages=False)
 
 
 def _resolve_name(name):

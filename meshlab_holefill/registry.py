@@ -150,6 +150,27 @@ def convert_param(spec: ParamSpec, value, filter_name, ms):
     return value
 
 
+def parse_text_value(text, percentages=True):
+    """A parameter value written as text (command line, ``name:param=value``): bool, int, float, string.
+
+    With ``percentages``, ``"5%"`` becomes ``pymeshlab.PercentageValue(5)``; otherwise it stays text.
+    """
+    low = text.lower()
+    if low in ("true", "false"):
+        return low == "true"
+    for cast in (int, float):
+        try:
+            return cast(text)
+        except ValueError:
+            pass
+    if percentages and text.endswith("%"):
+        try:
+            return pymeshlab.PercentageValue(float(text[:-1]))
+        except ValueError:
+            pass
+    return text
+
+
 def resolve_params(spec: FilterSpec, kwargs: dict, ms=None):
     """Validate keyword arguments against a filter spec and fill in defaults.
 
