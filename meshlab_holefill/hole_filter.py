@@ -35,7 +35,7 @@ COMMON_PARAMS = [
 ]
 
 
-def patch_intersections(ctx_vertices, patch_points, patch_faces, mesh_V, mesh_F, face_lo, face_hi, loop):
+def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, face_lo, face_hi, loop):
     """Indices of patch faces that intersect the existing mesh near the hole, or the patch itself.
 
     Candidate mesh faces are those whose bounding box overlaps the patch's (vectorised over
@@ -133,7 +133,7 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
             patch = fill(ctx, **fill_kwargs)
             validate_patch(patch, ctx.points, ctx.forbidden_edges)
             if params["selfintersection"]:
-                hits = patch_intersections(ctx.vertices, patch.all_points(ctx.points), patch.faces,
+                hits = patch_intersections(patch.all_points(ctx.points), patch.faces,
                                            V, F, face_lo, face_hi, ctx.loop)
                 if len(hits):
                     raise HoleFillError(f"patch would intersect the mesh ({len(hits)} faces)")

@@ -123,7 +123,6 @@ def merge_patches(V, F, loops, patches):
     offset = len(V)
     for loop, patch in zip(loops, patches):
         loop = np.asarray(loop, np.int64)
-        k = len(loop)
         local_to_global = np.concatenate([loop, offset + np.arange(len(patch.vertices), dtype=np.int64)])
         Fs.append(local_to_global[np.asarray(patch.faces, np.int64)])
         Vs.append(np.asarray(patch.vertices, np.float64).reshape(-1, 3))

@@ -23,6 +23,7 @@ import time
 import numpy as np
 
 from ..geometry.intersections import faces_intersecting
+from ..geometry.topology import edge_pair_set
 from ..geometry.triangulate import triangulate_polygon
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
@@ -245,7 +246,7 @@ def clip_ears(ctx, Q, keep, ears, bad_vertices):
     """
     keep = list(keep)
     ears = list(ears)
-    forbidden = {tuple(sorted(e)) for e in np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2).tolist()}
+    forbidden = edge_pair_set(ctx.forbidden_edges)
     h = float(np.mean(np.linalg.norm(np.roll(ctx.points, -1, axis=0) - ctx.points, axis=1)))
     order = sorted(set(bad_vertices) & set(keep), key=lambda v: _corner_angle(ctx.points, keep, v))
     clipped, touched = 0, set()

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..geometry.intersections import faces_intersecting
 from ..geometry.quality import face_normals
-from ..geometry.topology import interior_edges
+from ..geometry.topology import edge_pair_set, interior_edges, undirected_keys
 from .hpde_optimisation import adjacency
 
 # Neighbouring patch faces whose normals differ by more than this are a fold-over.
@@ -60,7 +60,7 @@ def loop_triangulation(P, border_normals, forbidden_edges=(), max_size=60, block
     k = len(P)
     if k > max_size:
         return None, np.inf
-    forbidden = {tuple(sorted(e)) for e in np.asarray(forbidden_edges, np.int64).reshape(-1, 2).tolist()}
+    forbidden = edge_pair_set(forbidden_edges)
     normal = {}
 
     def tri_normal(i, m, j):
@@ -189,8 +189,7 @@ def unfold_by_swaps(V, F, forbidden_edges=(), border_normals=None, max_rounds=20
     """
     F = np.array(F, np.int64)
     n = len(V)
-    fb = np.sort(np.asarray(forbidden_edges, np.int64).reshape(-1, 2), axis=1)
-    forbidden = fb[:, 0] * n + fb[:, 1]
+    forbidden = undirected_keys(forbidden_edges, n)
     total = 0
     for _ in range(max_rounds):
         E, f1, c1, f2, c2 = interior_edges(F, n)

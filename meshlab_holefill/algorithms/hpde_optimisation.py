@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry.quality import corner_angles, face_normals, unique_edges
-from ..geometry.topology import interior_edges
+from ..geometry.topology import edge_pair_set, interior_edges, undirected_keys
 
 # Taubin's example filter (ref. [26]): lambda = 0.33, mu = -0.34, pass band k_PB ~ 0.1.
 TAUBIN_LAMBDA = 0.33
@@ -123,7 +123,7 @@ def remove_valence_three(V, F, n_fixed, forbidden_edges=()):
     V = np.asarray(V, np.float64)
     F = np.array(F, np.int64)
     n = len(V)
-    forbidden = {tuple(sorted(e)) for e in np.asarray(forbidden_edges, np.int64).reshape(-1, 2).tolist()}
+    forbidden = edge_pair_set(forbidden_edges)
     valence = np.bincount(F.ravel(), minlength=n)
     alive = np.ones(len(F), bool)
     gone = np.zeros(n, bool)
@@ -268,7 +268,7 @@ def decimate_short_edges(V, F, n_fixed, threshold, forbidden_edges=(), max_round
     V = np.array(V, np.float64)
     F = np.array(F, np.int64)
     n = len(V)
-    forbidden = {tuple(sorted(e)) for e in np.asarray(forbidden_edges, np.int64).reshape(-1, 2).tolist()}
+    forbidden = edge_pair_set(forbidden_edges)
     alive_v = np.ones(n, bool)
     collapses = 0
     for _ in range(max_rounds):
@@ -355,8 +355,7 @@ def swap_edges_min_angle(V, F, forbidden_edges=(), max_rounds=100):
     """
     F = np.array(F, np.int64)
     n = len(V)
-    fb = np.sort(np.asarray(forbidden_edges, np.int64).reshape(-1, 2), axis=1)
-    forbidden = fb[:, 0] * n + fb[:, 1]
+    forbidden = undirected_keys(forbidden_edges, n)
     total = 0
     for _ in range(max_rounds):
         E, f1, c1, f2, c2 = interior_edges(F, n)

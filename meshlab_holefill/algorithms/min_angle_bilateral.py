@@ -14,6 +14,7 @@ import numpy as np
 from ..geometry.bilateral import bilateral_filter
 from ..geometry.fairing import fair_patch_in_context
 from ..geometry.refine import refine_patch
+from ..geometry.topology import edge_pair_set
 from ..holes import inside_hole_sector, patch_crossings, patch_guard
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
@@ -142,7 +143,7 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
     P = np.asarray(P, np.float64)
     sigma = normal_angle_threshold(N)
     cos_sigma = np.cos(sigma)
-    forbidden = {tuple(sorted(e)) for e in np.asarray(forbidden_edges, np.int64).reshape(-1, 2).tolist()}
+    forbidden = edge_pair_set(forbidden_edges)
     prv = [(i - 1) % k for i in range(k)]
     nxt = [(i + 1) % k for i in range(k)]
     active = np.ones(k, bool)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .topology import interior_edges
+from .topology import interior_edges, undirected_keys
 
 
 def circumcenters(V, F):
@@ -64,10 +64,7 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
     """
     F = np.array(F, np.int64)
     n = len(V)
-    fixed = np.zeros(0, np.int64)
-    if fixed_edges is not None and len(fixed_edges):
-        fe = np.sort(np.asarray(fixed_edges, np.int64), axis=1)
-        fixed = fe[:, 0] * n + fe[:, 1]
+    fixed = undirected_keys(() if fixed_edges is None else fixed_edges, n)
     total = 0
     for _ in range(max_rounds):
         E, f1, c1, f2, c2 = interior_edges(F, n)

@@ -18,7 +18,6 @@ def interior_edges(F, n):
         Face holding the twin half-edge b -> a and the corner index of ``b`` in it.
     """
     F = np.asarray(F, np.int64)
-    q = len(F)
     a = F.ravel()
     b = np.roll(F, -1, axis=1).ravel()
     key = a * n + b
@@ -40,3 +39,14 @@ def one_ring_matrix(F, n):
     A = sp.coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)).tocsr()
     A.data[:] = 1.0
     return A
+
+
+def undirected_keys(E, n):
+    """One int64 key per undirected edge: min * n + max, (e,) for E : (e, 2) int with indices < n."""
+    E = np.sort(np.asarray(E, np.int64).reshape(-1, 2), axis=1)
+    return E[:, 0] * n + E[:, 1]
+
+
+def edge_pair_set(E):
+    """Set of sorted (a, b) tuples of an edge list E : (e, 2), for O(1) membership in Python loops."""
+    return {tuple(e) for e in np.sort(np.asarray(E, np.int64).reshape(-1, 2), axis=1).tolist()}
