@@ -35,15 +35,58 @@ COMMON_PARAMS = [
 ]
 
 
-def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, face_lo, face_hi, loop):
+def face_boxes_near(V, F, boxes):
+    """Mesh faces whose bounding box overlaps at least one of ``boxes``, found in one pass.
+
+    The self-intersection check needs, per patch, the mesh faces near it. Scanning every
+    face's box per hole costs O(m) per hole (0.2 s per hole at 3.6M faces); instead the
+    face boxes are built once, axis by axis (no (m, 3, 3) temporary), filtered against the
+    union of all patch boxes, and only those few candidates are tested per patch.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+    boxes : (h, 2, 3) float
+        Lower and upper corners of the query boxes (already padded).
+
+    Returns
+    -------
+    near : (c,) int64
+        Candidate face indices (overlapping the union box).
+    lo, hi : (c, 3) float
+        Their boxes, for the per-patch test.
+    """
+    union_lo, union_hi = boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)
+    near = np.arange(len(F))
+    for axis in range(3):
+        coord = V[:, axis][F[near]]
+        keep = (coord.max(axis=1) >= union_lo[axis]) & (coord.min(axis=1) <= union_hi[axis])
+        near = near[keep]
+    corners = V[F[near]]
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    return near, lo, hi
+
+
+def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, loop):
     """Indices of patch faces that intersect the existing mesh near the hole, or the patch itself.
 
-    Candidate mesh faces are those whose bounding box overlaps the patch's (vectorised over
-    the mesh, cost O(m) per hole with precomputed face boxes).
+    Parameters
+    ----------
+    patch_points : (k + p, 3) float
+        Loop points then new vertices (``Patch.all_points``).
+    patch_faces : (q, 3) int
+        In loop-local numbering.
+    mesh_V, mesh_F : arrays of the mesh.
+    candidates : tuple ``(near, lo, hi)`` from :func:`face_boxes_near`
+        Mesh faces that may be near any patch; those overlapping this patch's box are tested.
+    loop : (k,) int
+        Mesh vertex ids of the loop (shared vertices are not intersections).
     """
+    near_all, face_lo, face_hi = candidates
     lo, hi = patch_points.min(axis=0), patch_points.max(axis=0)
     pad = 1e-9 * float(np.linalg.norm(hi - lo))
-    near = np.flatnonzero(np.all(face_hi >= lo - pad, axis=1) & np.all(face_lo <= hi + pad, axis=1))
+    near = near_all[np.all(face_hi >= lo - pad, axis=1) & np.all(face_lo <= hi + pad, axis=1)]
     used = np.unique(mesh_F[near].ravel()) if len(near) else np.zeros(0, np.int64)
     # Local vertex array: loop vertices keep their loop-local numbers so shared vertices
     # between patch and mesh faces are recognised as shared.
@@ -58,6 +101,12 @@ def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, face_lo, face
     q = len(patch_faces)
     hits = faces_intersecting(X, allF, np.arange(q), np.arange(len(allF)))
     return hits
+
+
+def _patch_box(points):
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    pad = 1e-9 * float(np.linalg.norm(hi - lo))
+    return np.stack([lo - pad, hi + pad])
 
 
 def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None):
@@ -120,11 +169,8 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
             loops[i] = loop
             report[i]["split_boundary_edges"] = int(count)
     incidence = vertex_face_incidence(F, len(V)) if todo else None
-    if params["selfintersection"] and todo:
-        corners = V[F]
-        face_lo, face_hi = corners.min(axis=1), corners.max(axis=1)
     fill_kwargs = {name: params[name] for name in algorithm_params}
-    done_loops, patches, closed_ids = [], [], []
+    filled = []  # (hole id, context, patch, seconds) of patches that passed validation
     for i in todo:
         entry = report[i]
         t0 = time.perf_counter()
@@ -132,19 +178,28 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
             ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
             patch = fill(ctx, **fill_kwargs)
             validate_patch(patch, ctx.points, ctx.forbidden_edges)
-            if params["selfintersection"]:
-                hits = patch_intersections(patch.all_points(ctx.points), patch.faces,
-                                           V, F, face_lo, face_hi, ctx.loop)
-                if len(hits):
-                    raise HoleFillError(f"patch would intersect the mesh ({len(hits)} faces)")
         except HoleFillError as exc:
             entry.update(status="failed", reason=str(exc), seconds=time.perf_counter() - t0)
             continue
         except (np.linalg.LinAlgError, ArithmeticError, ValueError, RuntimeError) as exc:
             entry.update(status="failed", reason=f"{type(exc).__name__}: {exc}", seconds=time.perf_counter() - t0)
             continue
+        filled.append((i, ctx, patch, time.perf_counter() - t0))
+    if params["selfintersection"] and filled:
+        candidates = face_boxes_near(V, F, np.stack([_patch_box(p.all_points(c.points)) for _, c, p, _ in filled]))
+    done_loops, patches, closed_ids = [], [], []
+    for i, ctx, patch, seconds in filled:
+        entry = report[i]
+        if params["selfintersection"]:
+            t0 = time.perf_counter()
+            hits = patch_intersections(patch.all_points(ctx.points), patch.faces, V, F, candidates, ctx.loop)
+            seconds += time.perf_counter() - t0
+            if len(hits):
+                entry.update(status="failed", reason=f"patch would intersect the mesh ({len(hits)} faces)",
+                             seconds=seconds)
+                continue
         entry.update(status="closed", new_vertices=len(patch.vertices), new_faces=len(patch.faces),
-                     seconds=time.perf_counter() - t0, **_json_safe(patch.info))
+                     seconds=seconds, **_json_safe(patch.info))
         done_loops.append(ctx.loop)
         patches.append(patch)
         closed_ids.append(i)
