@@ -14,7 +14,8 @@ import numpy as np
 
 from .compare import (SIZE_CLASSES, assign_patches, compact_mesh, cut_holes, hole_metrics, hole_plan,
                       mesh_checks)
-from .holes import boundary_halfedges, boundary_loops
+from .holes import OUTLINE_RATIO, boundary_halfedges, boundary_loops, outline_ratios
+from .metrics import corner_quality_bound
 from .isolation import IsolatedRunner, _json_safe, execute_task  # noqa: F401  (execute_task: public API)
 
 BASELINE = "meshing_close_holes"
@@ -57,6 +58,7 @@ class Hole:
     loop_index: int  # position among boundary_loops(F0), as in our filters' result['holes']
     border: tuple  # ((k, 2) int64 half-edges, (k,) int64 faces) in F0
     ground_truth: tuple | None = None  # ((n0 + g, 3), (r, 3)) indexed like a filled mesh
+    quality_bound: float = 1.0  # metrics.corner_quality_bound: best reachable minimum quality
 
 
 @dataclass
@@ -76,7 +78,8 @@ class PreparedCase:
         return {"case": self.name, "kind": self.kind, "vertices": int(len(self.V0)), "faces": int(len(self.F0)),
                 "source_faces": self.source_faces, "bbox_diagonal": self.diag, "notes": list(self.notes),
                 "holes": [{"hole": h.index, "size_class": h.size_class, "shape": h.shape,
-                           "boundary_edges": h.boundary_edges, "ground_truth": h.ground_truth is not None}
+                           "boundary_edges": h.boundary_edges, "ground_truth": h.ground_truth is not None,
+                           "quality_bound": h.quality_bound}
                           for h in self.holes]}
 
 
@@ -206,12 +209,13 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
                 notes.append(f"a {size} hole did not leave a simple boundary loop; left out")
                 continue
             out.append(Hole(len(out), size, shape, len(lp), lp.vertices, li, _border(F0, he, hf, lp.vertices),
-                            truth))
+                            truth, corner_quality_bound(V0, F0, lp.vertices)))
     else:
         kind = "natural holes"
         V0, F0 = V, F
         loops = boundary_loops(F0)
         he, hf = boundary_halfedges(F0)
+        outline = outline_ratios(V0, F0, loops) >= OUTLINE_RATIO
         out = []
         for i, lp in enumerate(loops):
             if not lp.closed or lp.pinched or len(lp) < 3 or len(lp) > maxholesize:
@@ -219,8 +223,10 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
                        else f"{len(lp)} edges > maxholesize {maxholesize}" if len(lp) > maxholesize else "degenerate")
                 notes.append(f"boundary loop {i} ({len(lp)} edges) not evaluated: {why}")
                 continue
-            out.append(Hole(len(out), "natural", "natural", len(lp), lp.vertices, i,
-                            _border(F0, he, hf, lp.vertices)))
+            # An island's outline is listed apart: capping it folds over the island (holes.outline_ratios).
+            kind_of = "outline" if outline[i] else "natural"
+            out.append(Hole(len(out), kind_of, kind_of, len(lp), lp.vertices, i,
+                            _border(F0, he, hf, lp.vertices), None, corner_quality_bound(V0, F0, lp.vertices)))
     return PreparedCase(case.name, kind, V0, F0, diag, out, notes, case.analytic, case.surface_area, len(F))
 
 
@@ -360,7 +366,8 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
     pictures = {}
     base = [{"case": case.name, "filler": filler.label, "filter": filler.filter, "hole": h.index,
              "size_class": h.size_class, "shape": h.shape, "boundary_edges": h.boundary_edges,
-             "ground_truth": h.ground_truth is not None, "run_seconds": reply.get("seconds")} for h in case.holes]
+             "ground_truth": h.ground_truth is not None, "quality_bound": h.quality_bound,
+             "run_seconds": reply.get("seconds")} for h in case.holes]
     if reply["status"] != "ok":
         for row in base:
             row.update(closed=False, reason=f"{reply['status']}: {reply.get('error')}")

@@ -385,6 +385,48 @@ def loop_measures(points):
     return {"edges": len(P), "perimeter": perimeter, "diameter": diameter, "planarity": planarity}
 
 
+OUTLINE_RATIO = 0.75
+
+
+def outline_ratios(V, F, loops):
+    """How much of its connected component each loop encloses: |vector area| / component area.
+
+    A loop that outlines a whole fragment (an island of a range scan, a lone triangle) encloses
+    about as much area as the fragment has (ratio ~1, more for a fragment with holes of its
+    own); capping it would fold a second sheet over the fragment, so it is not a hole. Real
+    holes enclose a small share of their component (a hemisphere's rim, the worst case of a
+    fillable hole, gives 0.5). On face000.ply the two groups are 0.78-1.25 and <= 0.46;
+    :data:`OUTLINE_RATIO` = 0.75 separates them.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+    loops : sequence of BoundaryLoop or (k,) int arrays
+
+    Returns
+    -------
+    (len(loops),) float
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    from .geometry.quality import face_areas
+
+    n = len(V)
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]]])
+    graph = sp.coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    component_area = np.bincount(label[F[:, 0]], weights=face_areas(V, F), minlength=label.max() + 1)
+    ratios = np.zeros(len(loops))
+    for i, loop in enumerate(loops):
+        ids = np.asarray(getattr(loop, "vertices", loop), np.int64)
+        P = V[ids]
+        vector_area = 0.5 * np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0))
+        area = component_area[label[ids[0]]]
+        ratios[i] = vector_area / area if area > 0 else np.inf
+    return ratios
+
+
 def sector_angle(apex, normal, reference, directions):
     """Angles of directions about ``normal``, counter-clockwise from (reference - apex), in [0, 2 pi).
 

@@ -16,6 +16,48 @@ from .holes import boundary_loops, nonmanifold_edges
 QUALITY_BINS = np.linspace(0.0, 1.0, 21)
 
 
+def corner_quality_bound(V, F, loop):
+    """Best minimum quality 2r/R any non-folding patch can have at the hole's sharpest convex corner.
+
+    Where two border edges meet at angle theta on a corner the mesh wraps by more than half a
+    turn (face angles around the vertex sum to more than pi), every patch that does not fold
+    has a triangle with an angle of at most theta at that vertex. With one angle theta, 2r/R
+    is largest for the isosceles triangle: 8 sin(theta/2) sin^2((pi - theta)/4) (from
+    r/R = 4 prod sin(A_i/2)); below 0.3 once theta < 9.37 degrees. Jagged scan borders have
+    such corners, so a filter's minimum quality is judged against min(0.3, this bound).
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+    loop : (k,) int  ordered boundary vertices
+
+    Returns
+    -------
+    float in (0, 1]; 1.0 when the loop has no convex corner.
+    """
+    loop = np.asarray(loop, np.int64)
+    at_loop = np.isin(F, loop)
+    rows = np.flatnonzero(at_loop.any(axis=1))
+    angle_sum = np.zeros(len(V))
+    for corner in range(3):
+        f = rows[at_loop[rows, corner]]
+        a, b, c = V[F[f, corner]], V[F[f, (corner + 1) % 3]], V[F[f, (corner + 2) % 3]]
+        np.add.at(angle_sum, F[f, corner], _angle_between(b - a, c - a))
+    P = V[loop]
+    theta = _angle_between(np.roll(P, 1, axis=0) - P, np.roll(P, -1, axis=0) - P)
+    convex = angle_sum[loop] > np.pi
+    if not convex.any():
+        return 1.0
+    t = theta[convex].min()
+    return float(min(1.0, 8.0 * np.sin(t / 2) * np.sin((np.pi - t) / 4) ** 2))
+
+
+def _angle_between(u, w):
+    cos = np.einsum("ij,ij->i", u, w) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1), 1e-300)
+    return np.arccos(np.clip(cos, -1.0, 1.0))
+
+
 def hausdorff_one_way(src_V, src_F, dst_V, dst_F, samples=20000):
     """Distances from surface src to surface dst (MeshLab's Hausdorff sampler).
 

@@ -15,6 +15,8 @@ import time
 
 import numpy as np
 
+from .acceptance import targets_table
+
 # (key, heading, better: "low" | "high" | "one", aggregate: "mean" | "min" | "max" | "sum", format)
 METRICS = [
     ("dist_patch_to_gt_mean_permille", "patch→GT mean ‰", "low", "mean", "{:.3f}"),
@@ -34,7 +36,7 @@ METRICS = [
 CHART_METRICS = ["dist_patch_to_gt_mean_permille", "dist_gt_to_patch_mean_permille", "normal_dev_mean_deg",
                  "quality_mean", "quality_min", "edge_ratio", "border_dihedral_excess_deg", "seconds"]
 HEADINGS = {m[0]: m[1] for m in METRICS} | {"seconds": "seconds per hole"}
-SIZE_ORDER = ["small", "medium", "large", "irregular", "given", "natural"]
+SIZE_ORDER = ["small", "medium", "large", "irregular", "given", "natural", "outline"]
 
 
 def short_label(label):
@@ -158,7 +160,8 @@ def size_table(comparison, key="dist_patch_to_gt_mean_permille", fmt="{:.3f}", b
 def hole_table(comparison):
     """Rows = holes, columns = fillers: patch→GT mean ‰ (or quality mean without ground truth)."""
     labels = [f.label for f in comparison.fillers]
-    header = ["mesh", "hole", "size", "shape", "edges", "measure"] + [f"`{short_label(lab)}`" for lab in labels]
+    header = (["mesh", "hole", "size", "shape", "edges", "corner q bound", "measure"]
+              + [f"`{short_label(lab)}`" for lab in labels])
     table, bold = [], []
     for (case, hole), rows in _by_hole(comparison).items():
         by = {r["filler"]: r for r in rows}
@@ -173,8 +176,8 @@ def hole_table(comparison):
             cells.append(_fmt(v, fmt) if r.get("closed") else "open: " + _short_reason(r.get("reason", "")))
         r0 = rows[0]
         table.append([case, str(hole), r0["size_class"], r0["shape"], str(r0["boundary_edges"]),
-                      "patch→GT ‰" if gt else "quality"] + cells)
-        bold.append({6 + i for i in _best(vals, better)})
+                      f"{r0.get('quality_bound', 1.0):.2f}", "patch→GT ‰" if gt else "quality"] + cells)
+        bold.append({7 + i for i in _best(vals, better)})
     return header, table, bold
 
 
@@ -268,6 +271,14 @@ def summary_blocks(comparison):
                    ("table", *size_table(comparison))]
     blocks += [("p", "Mean triangle quality 2r/R of the new faces per hole size:"),
                ("table", *size_table(comparison, "quality_mean", "{:.3f}", "high"))]
+    baseline = "meshing_close_holes (all holes)"
+    if any(f.label == baseline for f in comparison.fillers):
+        header, rows, bold = targets_table(comparison, baseline)
+        if rows:
+            blocks += [("p", f"The issues' targets (acceptance.py), against `{baseline}`; ✓ met, ✗ not met. A hole's "
+                             "minimum quality is judged against min(0.3, the best a patch can reach at its sharpest "
+                             "convex border corner); 'natural' excludes loops that outline a whole island of the scan:"),
+                       ("table", header, rows, bold)]
     return blocks
 
 

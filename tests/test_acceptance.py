@@ -1,0 +1,117 @@
+"""The report's acceptance helpers: corner quality bound, island outlines, the issues' criteria."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from meshlab_holefill.acceptance import TARGETS, criteria
+from meshlab_holefill.geometry.quality import triangle_quality
+from meshlab_holefill.holes import OUTLINE_RATIO, boundary_loops, outline_ratios
+from meshlab_holefill.metrics import corner_quality_bound
+
+from test_compare import grid, sphere
+
+
+def _iso_quality(theta):
+    return 8 * np.sin(theta / 2) * np.sin((np.pi - theta) / 4) ** 2
+
+
+def test_iso_formula_is_the_quality_of_the_isosceles_triangle():
+    for theta in np.radians([5.0, 9.6, 30.0, 60.0, 90.0, 150.0]):
+        V = np.array([[0.0, 0, 0], [np.cos(-theta / 2), np.sin(-theta / 2), 0], [np.cos(theta / 2), np.sin(theta / 2), 0]])
+        assert triangle_quality(V, np.array([[0, 1, 2]]))[0] == pytest.approx(_iso_quality(theta), abs=1e-12)
+    assert _iso_quality(np.radians(9.3)) < 0.3 < _iso_quality(np.radians(9.4))
+
+
+def test_square_hole_in_a_grid_is_bounded_by_the_right_isosceles_triangle():
+    V, F = grid(10)
+    centre = V[F].mean(axis=1)
+    inside = np.all(np.abs(centre[:, :2] - 5.0) < 2.0, axis=1)  # a 4 x 4 square of cells
+    F = F[~inside]
+    hole = [lp for lp in boundary_loops(F) if len(lp) == 16][0]
+    assert corner_quality_bound(V, F, hole.vertices) == pytest.approx(_iso_quality(np.pi / 2))
+
+
+@settings(max_examples=25, deadline=None)
+@given(face=st.integers(0, 1279), stretch=st.floats(1.0, 12.0))
+def test_removed_face_never_beats_the_bound(face, stretch):
+    """A one-face hole: the removed face itself is a non-folding patch, so its quality <= bound."""
+    V, F = sphere(3)
+    V = V * np.array([stretch, 1.0, 1.0])
+    keep = np.ones(len(F), bool)
+    keep[face] = False
+    bound = corner_quality_bound(V, F[keep], F[face])
+    q = triangle_quality(V, F[[face]])[0]
+    assert q <= bound + 1e-9
+    # the three corners are convex; the bound comes from the face's smallest angle
+    P = V[F[face]]
+    angles = [np.arccos(np.clip(np.dot(P[(i + 1) % 3] - P[i], P[(i + 2) % 3] - P[i])
+                                / np.linalg.norm(P[(i + 1) % 3] - P[i]) / np.linalg.norm(P[(i + 2) % 3] - P[i]),
+                                -1, 1)) for i in range(3)]
+    assert bound == pytest.approx(_iso_quality(min(angles)), rel=1e-9)
+
+
+def test_outline_ratios_separate_islands_from_holes():
+    V, F = grid(12)
+    centre = V[F].mean(axis=1)
+    F = F[~np.all(np.abs(centre[:, :2] - 6.0) < 2.0, axis=1)]  # an interior hole
+    k = len(V)
+    V = np.concatenate([V, [[20, 0, 0], [21, 0, 0], [20, 1, 0]]])
+    F = np.concatenate([F, [[k, k + 1, k + 2]]])  # a lone triangle (its outline is no hole)
+    loops = boundary_loops(F)
+    ratios = outline_ratios(V, F, loops)
+    by_size = {len(lp): r for lp, r in zip(loops, ratios)}
+    assert by_size[16] < 0.2  # the hole: 16 of 144 - 16 cells
+    assert by_size[48] >= OUTLINE_RATIO  # the grid's own border outlines its component
+    assert by_size[3] == pytest.approx(1.0)
+
+
+def test_sphere_cap_hole_is_not_an_outline():
+    V, F = sphere(3)
+    F = F[V[F].mean(axis=1)[:, 2] < 0.7]
+    assert outline_ratios(V, F, boundary_loops(F))[0] < 0.2
+
+
+def _row(**kw):
+    row = {"ground_truth": True, "size_class": "small", "closed": True, "quality_mean": 0.9, "quality_min": 0.4,
+           "quality_bound": 1.0, "dist_patch_to_gt_mean_permille": 0.1, "originals_changed": 0,
+           "intersecting_new_faces": 0, "seconds": 0.01, "boundary_edges": 20}
+    row.update(kw)
+    return row
+
+
+def _as_dict(result):
+    return {name: (text, ok) for name, text, ok in result}
+
+
+def test_criteria_pass_and_fail():
+    target = TARGETS["meshing_close_holes_curve_unfolding"]
+    base = [_row(dist_patch_to_gt_mean_permille=0.2)]
+    good = _as_dict(criteria([_row()], base, target))
+    assert all(ok in (True, None) for _, ok in good.values()), good
+    bad = _as_dict(criteria([_row(dist_patch_to_gt_mean_permille=0.3, quality_min=0.1, seconds=0.9)], base, target))
+    assert bad["patch→GT ‰, small (vs baseline)"][1] is False
+    assert bad["quality min (≥ 0.3)"][1] is False
+    assert bad["holes with min < 0.3 not forced by a sharp border corner"] == ("1 (0 forced)", False)
+    assert bad["median s per hole ≤ 150 edges (< 0.5)"][1] is False
+
+
+def test_forced_minimum_quality_is_not_held_against_a_filter():
+    target = TARGETS["meshing_close_holes_differential_evolution"]
+    rows = [_row(ground_truth=False, size_class="natural", quality_min=0.17, quality_bound=0.17),
+            _row(ground_truth=False, size_class="outline", closed=False)]
+    got = _as_dict(criteria(rows, [], target))
+    assert got["holes with min < 0.3 not forced by a sharp border corner"] == ("0 (1 forced)", True)
+    assert got["natural holes closed (island outlines apart)"] == ("1/1", True)
+    assert got["island outlines capped (not holes)"] == ("0/1", None)
+
+
+def test_open_hole_fails_the_distance_criterion():
+    target = TARGETS["meshing_close_holes_lssvm_poisson"]
+    rows = [_row(), _row(closed=False)]
+    got = _as_dict(criteria(rows, [_row(dist_patch_to_gt_mean_permille=0.5)] * 2, target))
+    assert got["cut holes closed"] == ("1/2", False)
+    assert got["patch→GT ‰, small (vs baseline)"][1] is False
+    assert got["original elements changed"][1] is None  # Xu's border split is allowed
