@@ -66,13 +66,16 @@ def load_case(name):
 # ----------------------------------------------------------------------------- scaling run
 
 SCALING_SIZES = ("small", "medium", "large")
+SPEED_CASE_SIZES = ("medium", "large", "irregular")  # targets 60, 150, 250 boundary edges
 
 
-def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None):
+def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALING_SIZES, first_level=0):
     """The same holes in the bunny at about 50k, 200k, 800k and 3M faces (Loop subdivision).
 
     The holes are grown from the same centres with the same boundary-size targets at every
     level, so each filter faces holes of the same boundary complexity in ever larger meshes.
+    ``sizes`` are compare.SIZE_CLASSES keys (all holes compact); levels before
+    ``first_level`` are subdivided but not run (the speed case runs level 1 only).
 
     Returns
     -------
@@ -84,20 +87,21 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None):
     ms.load_new_mesh(os.path.join(SAMPLES, "bunny.obj"))
     base = ms.current_mesh()
     V, F = np.asarray(base.vertex_matrix(), np.float64), np.asarray(base.face_matrix(), np.int64)
-    _, holes = cut_holes(V, F, sizes=SCALING_SIZES, shapes=["compact"] * len(SCALING_SIZES), seed=seed)
+    _, holes = cut_holes(V, F, sizes=sizes, shapes=["compact"] * len(sizes), seed=seed)
     centers = np.array([h.center for h in holes])
     rows = []
     for level in range(levels):
         if level:
             ms.meshing_surface_subdivision_loop(iterations=1, threshold=pymeshlab.PercentageValue(0))
+        if level < first_level:
+            continue
         m = ms.current_mesh()
         case = MeshCase(f"bunny_{m.face_number() // 1000}k", np.asarray(m.vertex_matrix(), np.float64),
                         np.asarray(m.face_matrix(), np.int64))
         t0 = time.perf_counter()
         from meshlab_holefill.compare import cut_holes as cut
 
-        _, cut_h = cut(case.V, case.F, sizes=SCALING_SIZES, shapes=["compact"] * len(SCALING_SIZES),
-                           centers=centers, seed=seed)
+        _, cut_h = cut(case.V, case.F, sizes=sizes, shapes=["compact"] * len(sizes), centers=centers, seed=seed)
         removed = np.zeros(len(case.F), bool)
         removed[np.concatenate([h.face_indices for h in cut_h])] = True
         prepared = prepare_case(MeshCase(case.name, case.V, case.F, removed=removed))
@@ -313,6 +317,8 @@ def main(argv=None):
     ap.add_argument("--no-suite", action="store_true", help="skip the standard suite (e.g. only --scaling)")
     ap.add_argument("--scaling-levels", type=int, default=4)
     ap.add_argument("--papers", action="store_true", help="also the papers-vs-ours table")
+    ap.add_argument("--speed-case", action="store_true",
+                    help="also issue #2's speed case: holes of ~50/200/250 edges in a ~200k-face mesh")
     ap.add_argument("--update-readme", action="store_true",
                     help="replace the README's Results section with this run's tables")
     args = ap.parse_args(argv)
@@ -341,6 +347,14 @@ def main(argv=None):
         text += ("\n**Scaling** (the same three holes, ~20/60/150 boundary edges, in the bunny subdivided; "
                  "'filling the holes' is the filters' own per-hole time, the rest is the O(n) boundary search, "
                  "mesh transfer and merge):\n\n" + _md_table(*scaling_table(rows)) + f"\n\nPlot: `{args.out}/scaling.png`.\n")
+    if args.speed_case:
+        rows = scaling_run(fillers, args.seed, 2, max(args.timeout, 180.0), None, SPEED_CASE_SIZES, first_level=1)
+        with open(os.path.join(args.out, "speed_case.json"), "w") as fh:
+            json.dump(rows, fh, indent=1)
+        edges = "/".join(str(e) for e in rows[0]["hole_edges"]) if rows else "?"
+        text += (f"\n**Speed case** (issue #2: three holes of about 50, 200 and 250 boundary edges, here {edges}, in the "
+                 "bunny Loop-subdivided once; target for `min_angle_bilateral`: whole run under 1.5 s):\n\n"
+                 + _md_table(*scaling_table(rows)) + "\n")
     if args.papers and result is not None:
         papers = papers_table(result, command, args.seed, max(args.timeout, 180.0))
         with open(os.path.join(args.out, "papers.md"), "w") as fh:

@@ -98,7 +98,10 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE)
         # (i, j) and (j, i) are both generated when both faces are in both sets
         keep = (i != j) & ~((i > j) & in_q[j] & in_a[i])
         i, j = i[keep], j[keep]
-        hit = _narrow(V[F[i]], V[F[j]], canon[F[i]], canon[F[j]], tol, fold_angle)
+        T1, T2 = V[F[i]], V[F[j]]
+        maybe = ~(_beyond_plane(T1, T2, tol) | _beyond_plane(T2, T1, tol))
+        i, j = i[maybe], j[maybe]
+        hit = _narrow(T1[maybe], T2[maybe], canon[F[i]], canon[F[j]], tol, fold_angle)
         out.append(np.stack([i[hit], j[hit]], axis=1))
     pairs = np.concatenate(out)
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
@@ -149,6 +152,18 @@ def _candidates(Tq, Ta, tol):
                 yield i[keep], j[keep]
 
 
+def _beyond_plane(T1, T2, tol):
+    """T2 lies wholly more than `tol` to one side of T1's plane (so the two cannot meet).
+
+    Moeller's early rejection: every contact the narrow test reports lies within `tol` of
+    both faces, so a pair separated by one face's slab is settled without it. Degenerate
+    T1 (no plane) never rejects.
+    """
+    n, deg = _unit_normal(T1, tol)
+    d = np.einsum("kij,kj->ki", T2 - T1[:, :1], n)
+    return ~deg & ((d > tol).all(axis=1) | (d < -tol).all(axis=1))
+
+
 def _narrow(T1, T2, C1, C2, tol, fold_angle):
     """Exact test for (k, 3, 3) triangle pairs with (k, 3) canonical vertex ids."""
     eq = C1[:, :, None] == C2[:, None, :]
@@ -180,7 +195,7 @@ def _folded(T1, T2, sh1, sh2, fold_angle):
     ua -= e * _dot(ua, e)[:, None]
     ub -= e * _dot(ub, e)[:, None]
     # atan2 stays accurate near 0, where arccos of the cosine would not
-    return np.arctan2(np.linalg.norm(np.cross(ua, ub), axis=1), _dot(ua, ub)) < fold_angle
+    return np.arctan2(np.linalg.norm(_cross(ua, ub), axis=1), _dot(ua, ub)) < fold_angle
 
 
 def _edges_meet(Ts, Tt, nt, shs, degs, degt, one, S, tol):
@@ -215,7 +230,7 @@ def _clip(P0, P1, T, nh, slab, grow):
     cons = [(slab - d0, slab - d1), (slab + d0, slab + d1)]
     for k in range(3):
         a, b, c = T[:, k], T[:, (k + 1) % 3], T[:, (k + 2) % 3]
-        m = _unit(np.cross(nh, b - a))  # in-plane inward normal of edge ab
+        m = _unit(_cross(nh, b - a))  # in-plane inward normal of edge ab
         cons.append((_dot(P0 - a, m) + grow, _dot(P1 - a, m) + grow))
         # cap the corner at a; grown edge lines alone reach far out of sharp corners
         u = _unit(_unit(b - a) + _unit(c - a))
@@ -233,11 +248,20 @@ def _clip(P0, P1, T, nh, slab, grow):
 
 def _unit_normal(T, tol):
     """Unit normals (k, 3) and degeneracy flags (k,) of triangles (k, 3, 3)."""
-    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    n = _cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
     ln = np.linalg.norm(n, axis=1)
     longest = np.linalg.norm(T - T[:, [1, 2, 0]], axis=2).max(1)
     deg = ln <= tol * longest  # |n| = longest edge * smallest height
     return n / np.where(deg, 1.0, ln)[:, None], deg
+
+
+def _cross(a, b):
+    """Row-wise cross product of (k, 3) arrays (np.cross's axis handling dominates at this size)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
 
 
 def _unit(x):
