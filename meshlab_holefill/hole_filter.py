@@ -12,7 +12,8 @@ import time
 import numpy as np
 
 from .geometry.intersections import faces_intersecting
-from .holes import boundary_loops, edge_summary, hole_context, vertex_face_incidence
+from .holes import (OUTLINE_RATIO, boundary_loops, edge_summary, hole_context, outline_ratios,
+                    vertex_face_incidence)
 from .meshset_io import (check_manifold_edges, current_mesh_arrays, extend_attributes,
                          refine_mesh_arrays, replace_current_mesh)
 from .patch import HoleFillError, merge_patches, validate_patch
@@ -187,7 +188,7 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
         filled.append((i, ctx, patch, time.perf_counter() - t0))
     if params["selfintersection"] and filled:
         candidates = face_boxes_near(V, F, np.stack([_patch_box(p.all_points(c.points)) for _, c, p, _ in filled]))
-    done_loops, patches, closed_ids = [], [], []
+    done_loops, patches, closed_ids, crossing = [], [], [], []
     for i, ctx, patch, seconds in filled:
         entry = report[i]
         if params["selfintersection"]:
@@ -197,12 +198,15 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
             if len(hits):
                 entry.update(status="failed", reason=f"patch would intersect the mesh ({len(hits)} faces)",
                              seconds=seconds)
+                crossing.append((i, ctx.loop))
                 continue
         entry.update(status="closed", new_vertices=len(patch.vertices), new_faces=len(patch.faces),
                      seconds=seconds, **_json_safe(patch.info))
         done_loops.append(ctx.loop)
         patches.append(patch)
         closed_ids.append(i)
+    if crossing:
+        _explain_outlines(V, F, crossing, report)
     V2, F2 = merge_patches(V, F, done_loops, patches)
     done_loops, patches, closed_ids = _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids)
     V2, F2 = merge_patches(V, F, done_loops, patches)
@@ -257,6 +261,20 @@ def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):
         for key in ("new_vertices", "new_faces"):
             report[closed_ids[j]].pop(key, None)
     return [done_loops[j] for j in keep], [patches[j] for j in keep], [closed_ids[j] for j in keep]
+
+
+def _explain_outlines(V, F, crossing, report):
+    """Say so when a rejected loop is the outline of a whole island rather than a hole.
+
+    Range scans hold small fragments whose only border is their outline; capping it lays a
+    second sheet over the fragment, which the intersection check rightly refuses. The
+    reason then tells the user it is not a hole (holes.outline_ratios).
+    """
+    ratios = outline_ratios(V, F, [loop for _, loop in crossing])
+    for (i, _), ratio in zip(crossing, ratios):
+        if ratio >= OUTLINE_RATIO:
+            report[i]["reason"] += (f"; the loop outlines its whole component (encloses {ratio:.0%} of its area): "
+                                    "an island of the mesh, not a hole")
 
 
 def _json_safe(info):

@@ -67,3 +67,18 @@ def test_selfintersection_off_fills_the_pierced_hole():
     ms = meshset_from_arrays(V, F)
     res = ms.meshing_close_holes_lssvm_poisson(selfintersection=False, split_boundary=False, maxholesize=30)
     assert res["failed_holes"] == 0 and res["closed_holes"] == 2
+
+
+def test_island_outline_is_reported_as_not_a_hole():
+    """A lone triangle's border is a 3-edge loop; capping it would duplicate the triangle."""
+    V, F = grid(8, 8)
+    k = len(V)
+    V = np.concatenate([V, [[3.0, 0, 0], [4.0, 0, 0], [3.0, 1.0, 0]]])
+    F = np.concatenate([F, [[k, k + 1, k + 2]]])
+    ms = meshset_from_arrays(V, F)
+    res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=10)
+    (entry,) = [h for h in res["holes"] if h["boundary_edges"] == 3]
+    assert entry["status"] == "failed"
+    assert "intersect" in entry["reason"] and "island" in entry["reason"]
+    V2, F2 = mesh_arrays(ms)
+    assert len(F2) == len(F)
