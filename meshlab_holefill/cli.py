@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 import numpy as np
@@ -63,12 +64,13 @@ def _hole_status_table(result):
 
 
 def cmd_holes(args, extra):
-    from .holes import boundary_loops, loop_measures
+    from .holes import OUTLINE_RATIO, boundary_loops, loop_measures, outline_ratios
 
     ms = _load(args.input)
     m = ms.current_mesh()
     V, F = m.vertex_matrix(), m.face_matrix()
     loops = boundary_loops(F)
+    outlines = outline_ratios(V, F, loops) >= OUTLINE_RATIO if loops else []
     print(f"{m.label()}: {m.vertex_number()} vertices, {m.face_number()} faces, {len(loops)} boundary loops")
     print(f"{'hole':>4} {'edges':>6} {'perimeter':>11} {'diameter':>10} {'planarity':>9}  notes")
     for i, loop in enumerate(loops):
@@ -78,6 +80,8 @@ def cmd_holes(args, extra):
             notes.append("pinched (non-manifold vertex)")
         if not loop.closed:
             notes.append("open chain")
+        if outlines[i]:
+            notes.append("outline of a whole component (island or outer border, not a hole)")
         print(f"{i:>4} {meas['edges']:>6} {meas['perimeter']:>11.4g} {meas['diameter']:>10.4g} "
               f"{meas['planarity']:>9.4f}  {', '.join(notes)}")
     return 0
@@ -230,6 +234,9 @@ def main(argv=None):
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         return args.func(args, extra)
+    except BrokenPipeError:  # output piped into `head` and the like: not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except (ValueError, OSError) as exc:
         print(f"meshlab-holefill: error: {exc}", file=sys.stderr)
         return 2

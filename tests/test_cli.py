@@ -48,3 +48,13 @@ def test_missing_input_file_is_a_clear_error(tmp_path, capsys):
     code = main(["holes", str(tmp_path / "nope.ply")])
     assert code == 2
     assert capsys.readouterr().err.startswith("meshlab-holefill: error:")
+
+
+def test_holes_table_marks_island_outlines(capsys):
+    """face000.ply: the loose fragments of the scan are outlines, not holes."""
+    assert main(["holes", sample("rangemaps/face000.ply")]) == 0
+    rows = capsys.readouterr().out.splitlines()[2:]
+    outline = {int(r.split()[1]) for r in rows if "outline of a whole component" in r}
+    inner = [int(r.split()[1]) for r in rows if "outline" not in r]
+    assert {256, 64, 53} <= outline
+    assert 227 in inner and 142 in inner
