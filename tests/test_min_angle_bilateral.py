@@ -3,10 +3,13 @@ import numpy as np
 import pymeshlab
 import pytest
 
+import dataclasses
+
 from meshlab_holefill.algorithms.min_angle_bilateral import (boundary_angles, fill, min_angle_triangulation,
-                                                             normal_angle_threshold)
+                                                             normal_angle_threshold, relaxation_guard)
+from meshlab_holefill.geometry.flips import relax_edges
 from meshlab_holefill.geometry.quality import triangle_quality
-from meshlab_holefill.holes import boundary_loops, hole_context, vertex_face_incidence
+from meshlab_holefill.holes import boundary_loops, hole_context, patch_guard, vertex_face_incidence
 from meshlab_holefill.patch import validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
@@ -121,3 +124,44 @@ def test_filter_on_sphere_holes_gives_good_triangles_close_to_the_sphere():
     # A flat-ish cap over a hole of radius 0.3 on the unit sphere stays within its sagitta.
     r = np.linalg.norm(V1[len(V):], axis=1)
     assert np.all(r <= 1 + 1e-9) and np.all(r > 1 - 0.06)
+
+
+def _triangulated_disk_hole():
+    """A round hole in a flat grid, its context, its minimum-angle triangulation and loop edges."""
+    V, F = grid(20, 20)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.3)
+    ctx = _first_hole_context(V, F)
+    k = ctx.size
+    tri = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges)
+    loop = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    return ctx, tri, loop
+
+
+def test_relaxation_guard_lets_relaxation_converge_where_the_sector_test_misjudges():
+    # Normals that disagree with the patch (here: flipped) make the tangent-plane sector test
+    # refuse every swap at the border, as on strongly curved holes filled by a nearly flat patch.
+    ctx, tri, loop = _triangulated_disk_hole()
+    assert relax_edges(ctx.points, tri, loop)[1] > 0  # the triangulation is not Delaunay yet
+    misjudged = dataclasses.replace(ctx, normals=-ctx.normals)
+    _, swaps = relax_edges(ctx.points, tri, loop, allowed=patch_guard(misjudged))
+    assert swaps == 0
+    F, swaps = relax_edges(ctx.points, tri, loop, allowed=relaxation_guard(misjudged))
+    assert swaps > 0
+    # Converged: no interior edge fails the circumsphere test any more (Sec. III.C).
+    assert relax_edges(ctx.points, F, loop)[1] == 0
+    assert triangle_quality(ctx.points, F).mean() > triangle_quality(ctx.points, tri).mean()
+
+
+def test_relaxation_guard_still_refuses_a_swap_through_the_surrounding_mesh():
+    ctx, tri, loop = _triangulated_disk_hole()
+    # A point outside the hole, over the surrounding faces: new triangles (0, d, 1), (2, 1, d)
+    # would lie on top of them; the sector test refuses them and so must the exact check
+    # that overrules it. The same swap inside the hole is allowed.
+    centre = ctx.points.mean(axis=0)
+    guard = relaxation_guard(ctx)
+    for where, expected in ((ctx.points[1] + 0.5 * (ctx.points[1] - centre), False),
+                            (0.5 * (ctx.points[1] + centre), True)):
+        V = np.concatenate([ctx.points, where[None]])
+        d = len(V) - 1
+        A, B = np.array([[0, d, 1]]), np.array([[2, 1, d]])
+        assert guard(V, np.zeros((0, 3), np.int64), A, B, np.zeros((1, 2), np.int64))[0] == expected
