@@ -14,7 +14,8 @@ from meshlab_holefill.algorithms import curve_unfolding as cu
 from meshlab_holefill.algorithms.embedding import embed_patch, embedding_energy, energy_rows
 from meshlab_holefill.algorithms.unfolding import (anneal_loop, boundary_gap_angles, colour_classes, develop_loop,
                                                    linear_motion_is_simple, planarity_energy, planarity_terms,
-                                                   project_to_best_plane, unfold_loop)
+                                                   project_to_best_plane, simple_development, unfold_loop)
+from meshlab_holefill.comparison import MeshCase, prepare_case
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.geometry.segments import min_segment_distance, segment_distances
@@ -362,3 +363,57 @@ def test_bunny_scan_natural_holes_all_closed(bunny_scan, energy):
     V1, F1 = mesh_arrays(bunny_scan)
     assert np.array_equal(V1[:len(V0)], V0) and np.array_equal(F1[:len(F0)], F0)
     assert boundary_loops(F1) == [] and len(nonmanifold_edges(F1)) == 0
+
+
+# ----------------------------------------------------------------------------- the benchmark's wrapped torus hole
+
+@pytest.fixture(scope="module")
+def torus_wrapped_hole():
+    """The benchmark's large torus hole: 211 edges, wrapped 255 degrees around the tube (seed 0)."""
+    ms = pymeshlab.MeshSet()
+    ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=192, vsubdiv=96)
+    V, F = mesh_arrays(ms)
+    case = prepare_case(MeshCase("torus", V, F), holes=4, seed=0)
+    hole = max(case.holes, key=lambda h: h.boundary_edges)
+    return hole_context(case.V0, case.F0, boundary_loops(case.F0)[hole.loop_index], rings=cu.RINGS)
+
+
+def test_relaxed_development_unfolds_the_wrapped_torus_hole(torus_wrapped_hole):
+    ctx = torus_wrapped_hole
+    P, m = ctx.points, ctx.size
+    eps = 1e-5 * mean_edge(P)
+    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m)
+    assert not linear_motion_is_simple(develop_loop(P, gaps), eps)  # the plain development touches itself
+    Q, relax = simple_development(P, gaps, eps)
+    assert relax is not None and 0 < relax <= 0.1
+    assert linear_motion_is_simple(Q, eps)
+    # relax = 1 turns equally everywhere: a convex polygon (E_PE = 0 once lifted to a plane).
+    C = develop_loop(P, gaps, relax=1.0)
+    assert planarity_energy(np.c_[C, np.zeros(m)]) == pytest.approx(0, abs=1e-9)
+    patch = cu.fill(ctx, max_restarts=2)
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    assert patch.info["unfolding"] == "development" and patch.info["development_relax"] == relax
+    assert len(cu.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+    X = patch.all_points(ctx.points)
+    tube = np.hypot(np.hypot(X[:, 0], X[:, 1]) - 1.0, X[:, 2]) - 0.4
+    assert np.abs(tube).mean() < 0.01  # on the torus, not a membrane across the tube
+
+
+def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wrapped_hole):
+    ctx = torus_wrapped_hole
+    plain = cu.fill(ctx, max_restarts=2, swaps=False)
+    swapped = cu.fill(ctx, max_restarts=2)
+    q0 = triangle_quality(plain.all_points(ctx.points), plain.faces)
+    q1 = triangle_quality(swapped.all_points(ctx.points), swapped.faces)
+    assert q0.min() < 0.3 <= q1.min() and q1.mean() >= max(q0.mean(), 0.85)
+    assert swapped.info["edge_swaps"] > 0 and len(swapped.faces) == len(plain.faces)
+    validate_patch(swapped, ctx.points, ctx.forbidden_edges)
+    assert len(cu.crossing_faces(ctx, swapped.vertices, swapped.faces)) == 0
+    # Interior vertices still minimise E_DF on the swapped connectivity.
+    n_ctx, s = len(ctx.vertices), len(swapped.vertices)
+    joint = np.concatenate([ctx.faces, np.where(swapped.faces < ctx.size, swapped.faces,
+                                                swapped.faces - ctx.size + n_ctx)])
+    free = np.arange(n_ctx + s) >= n_ctx
+    _, gradient = embedding_energy(np.concatenate([ctx.vertices, swapped.vertices]),
+                                   energy_rows(joint, n_ctx + s, free, 2), free)
+    assert np.abs(gradient).max() < 1e-10
