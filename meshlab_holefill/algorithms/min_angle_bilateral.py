@@ -13,6 +13,7 @@ import numpy as np
 
 from ..geometry.bilateral import bilateral_filter
 from ..geometry.fairing import fair_patch_in_context
+from ..geometry.flips import relax_edges
 from ..geometry.refine import refine_patch
 from ..geometry.topology import edge_pair_set
 from ..holes import inside_hole_sector, patch_crossings, patch_guard
@@ -255,6 +256,27 @@ def relaxation_guard(ctx):
     return allowed
 
 
+def _refine(ctx, F0, alpha, fixed, max_passes=4):
+    """Refinement of Sec. III.C run until neither a split nor a relaxation swap is left.
+
+    The rounds of :func:`refine_patch` use the fast sector test; the swaps it refuses are then
+    reconsidered with :func:`relaxation_guard` (an exact intersection check, too slow to run
+    in every round), and when any of them is made, refinement resumes from the relaxed patch,
+    since the new triangles may need splitting.
+    """
+    sector, exact = patch_guard(ctx), relaxation_guard(ctx)
+    V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed, allowed=sector)
+    for _ in range(max_passes):
+        F, swaps = relax_edges(V, F, fixed, allowed=exact)
+        info["swaps"] += swaps
+        if swaps == 0:
+            break
+        V, F, scale, more = refine_patch(V, F, scale, alpha=alpha, fixed_edges=fixed, allowed=sector)
+        info["split_rounds"] += more["split_rounds"]
+        info["swaps"] += more["swaps"]
+    return V, F, scale, info
+
+
 def _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations):
     """Optional fairing (beyond the paper) then the bilateral filter of Sec. III.D on the new vertices."""
     V = V.copy()
@@ -294,8 +316,7 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     t1 = time.perf_counter()
     loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
     fixed = np.concatenate([loop_edges, ctx.forbidden_edges.reshape(-1, 2)])
-    V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
-                                     allowed=relaxation_guard(ctx))
+    V, F, scale, info = _refine(ctx, F0, alpha, fixed)
     t2 = time.perf_counter()
     interior = np.arange(len(V)) >= k
     Vb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations)
