@@ -546,9 +546,12 @@ def test_cube_edge_hole_segmented_and_near_the_cube(cube_edge_hole):
     X = patch.vertices
     to_cube = np.minimum(np.abs(X[:, 1]), np.abs(X[:, 2]))  # distance to the faces y = 0, z = 0
     e = hpde.ring_edge_length(ctx)
-    assert to_cube.max() < 0.5 * e
     # The smoothing rounds the characteristic line (Fig. 15(b)); most points stay on the faces.
+    assert to_cube.max() < 0.75 * e
     assert np.median(to_cube) < 0.15 * e
+    # Without smoothing the segmented prediction keeps the line (Fig. 15(a)).
+    raw = hpde.fill(ctx, num_smooth=0).vertices
+    assert np.minimum(np.abs(raw[:, 1]), np.abs(raw[:, 2])).max() < 0.5 * e
     flat = hpde.fill(ctx, critical_dihedral=45.0)  # not segmented
     assert not flat.info["segmented"]
     assert to_cube.mean() <= np.minimum(np.abs(flat.vertices[:, 1]), np.abs(flat.vertices[:, 2])).mean()
@@ -605,3 +608,68 @@ def test_sphere_experiment_eq17():
     assert len(res["holes"]) == 2
     assert 0 < res["APE"] < res["MPE"] < 0.1
     assert res["paper"]["APE"] == 7.35e-3
+    # Eq. 17 is measured on the smoothed prediction points SP_i (Sec. 4.7), before decimation:
+    # more points than the final patch keeps.
+    assert res["K"] > res["final_vertices"]["K"]
+    # On the anisotropic longitude/latitude sphere the scale-dependent second-order smoothing
+    # brings the APE within 25 % of the paper's (Taubin's filter: 1.02e-2).
+    scaled = hpde_experiment.sphere_experiment(seed=0, smoothing="curvature_scaled")
+    assert scaled["APE"] < 1.25 * res["paper"]["APE"]
+
+
+def test_record_returns_the_smoothed_prediction_points(sphere_hole):
+    _, _, _, ctx = sphere_hole
+    record = {}
+    patch = hpde.fill(ctx, seed=0, record=record)
+    S = record["smoothed_points"]
+    assert len(S) == patch.info["kept"] and len(S) >= len(patch.vertices) > 0
+    assert np.abs(np.linalg.norm(S, axis=1) - 1).max() < 0.2 * hpde.ring_edge_length(ctx)
+
+
+def sphere_cap_patch(radius):
+    """A hole in the unit sphere and, as its patch, the removed triangles (vertices exactly on the sphere)."""
+    V, F = sphere_mesh(4)
+    F_cut, removed = cut(V, F, (0, 0, 1.0), radius)
+    ctx = context(V, F_cut)
+    index = {int(g): i for i, g in enumerate(ctx.global_index[:ctx.size])}
+    inner = [int(v) for v in np.unique(removed) if int(v) not in index]
+    for j, v in enumerate(inner):
+        index[v] = ctx.size + j
+    X = np.concatenate([ctx.points, V[inner]])
+    return ctx, X, np.vectorize(index.get)(removed).astype(np.int64)
+
+
+def test_curvature_smoothing_keeps_a_small_sphere_patch_on_the_sphere():
+    # Sec. 4.7 / 5.2.2 reading: the smoothing evens out the turning angles; a patch already on
+    # the sphere (constant turning) must stay there. Taubin's lambda|mu filter with the loop
+    # fixed draws a patch this small towards the flat membrane of the loop (the defect behind
+    # HPDE losing to meshing_close_holes on small holes).
+    ctx, X, F = sphere_cap_patch(0.25)  # 24 loop edges, like the benchmark's small holes
+    k = ctx.size
+    assert len(X) - k >= 10
+    fixed = np.arange(len(X)) < k
+    depth = lambda Y: np.abs(np.linalg.norm(Y[k:], axis=1) - 1.0).mean()  # noqa: E731
+    sag = 1.0 - ctx.points[:, 2].mean()  # depth of the flat cap below the sphere
+    curv = hpde_optimisation.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60)
+    taubin = hpde_optimisation.taubin_smooth(X, F, fixed, passes=60)
+    assert np.array_equal(curv[:k], X[:k])
+    assert depth(taubin) > 0.03 * sag > depth(curv)
+    assert depth(curv) < 0.25 * depth(taubin)
+
+
+def test_curvature_smoothing_removes_noise_and_keeps_a_plane():
+    V, F = grid_plane(30)
+    F_cut, removed = cut(V, F, (0.5, 0.5, 0), 0.2)
+    ctx = context(V, F_cut)
+    index = {int(g): i for i, g in enumerate(ctx.global_index[:ctx.size])}
+    inner = [int(v) for v in np.unique(removed) if int(v) not in index]
+    for j, v in enumerate(inner):
+        index[v] = ctx.size + j
+    X = np.concatenate([ctx.points, V[inner]])
+    Fp = np.vectorize(index.get)(removed).astype(np.int64)
+    noisy = X.copy()
+    noisy[ctx.size:, 2] = np.random.default_rng(0).normal(0, 0.01, len(inner))
+    S = hpde_optimisation.curvature_smooth(noisy, Fp, ctx.size, ctx.vertices, ctx.faces, passes=60)
+    assert np.abs(S[ctx.size:, 2]).max() < 0.2 * np.abs(noisy[ctx.size:, 2]).max()
+    flat = hpde_optimisation.curvature_smooth(X, Fp, ctx.size, ctx.vertices, ctx.faces, passes=60)
+    assert np.abs(flat[:, 2]).max() < 1e-12

@@ -39,9 +39,13 @@ Readings of passages the paper leaves open (each documented at the function that
   swaps and local relaxation repair what they can, prediction points left on folds are
   dropped for up to 4 rounds. A loop-only triangulation with Liepa's weights is the last
   resort. A chord duplicating a mesh edge is split at its midpoint.
-* Sec. 4.7. NumSmooth passes of Taubin's lambda|mu filter (0.33, -0.34), uniform weights,
-  boundary fixed; edges shorter than ``decimation_rate`` (0.6) * EdgeLen collapse to their
-  midpoint, onto the loop vertex when one end is on the loop; min-angle swaps keep each new
+* Sec. 4.7. NumSmooth passes of the second-order umbrella (Kobbelt 1998) on the patch glued
+  to its surrounding rings, loop fixed: its fixed points have uniform turning angles, as
+  Sec. 5.2.2 says the smoothing makes them (Taubin's lambda|mu filter, option
+  ``smoothing='taubin'``, draws patches a few edges across towards the flat membrane of the
+  loop: it made HPDE lose to meshing_close_holes on small holes); edges shorter than
+  ``decimation_rate`` (0.6) * EdgeLen collapse to their midpoint, onto the loop vertex when
+  one end is on the loop; min-angle swaps keep each new
   triangle within 60 degrees of the old pair's normal. ``relax`` (beyond the paper, on by
   default for the quality target): obtuse-edge splits, collapse of slivers on the loop and
   tangential relaxation, undone if it folds.
@@ -76,8 +80,15 @@ PARAMS = [
     ParamSpec("critical_intersection", "float", 12.0,
               "I_c in degrees: base points whose linking line meets the boundary at a smaller angle are "
               "skipped (Sec. 4.3; pi/15 in the paper).", minimum=0.0, maximum=90.0),
-    ParamSpec("num_smooth", "int", 60, "NumSmooth: Taubin smoothing passes of the patch (Sec. 4.7; 60).",
+    ParamSpec("num_smooth", "int", 60, "NumSmooth: smoothing passes of the patch (Sec. 4.7; 60).",
               minimum=0, maximum=10000),
+    ParamSpec("smoothing", "enum", "curvature",
+              "Smoothing operator of Sec. 4.7 (not named there): 'curvature' = second-order umbrella with the "
+              "surrounding rings, whose fixed points have uniform turning angles (Sec. 5.2.2); "
+              "'curvature_scaled' = the same with scale-dependent weights (better on anisotropic meshes, "
+              "less even triangles); 'taubin' = Taubin's lambda|mu filter with the boundary fixed (ref. [26]), "
+              "which draws small patches towards the flat membrane of the loop.",
+              choices=("curvature", "curvature_scaled", "taubin")),
     ParamSpec("decimation_rate", "float", 0.6,
               "Edges shorter than this times EdgeLen are collapsed to their midpoints (Sec. 4.7-4.8; the "
               "paper gives no value).", minimum=0.0, maximum=2.0),
@@ -240,8 +251,12 @@ def triangulate(ctx, base, normals, seg, layout, prediction_result, edge_len, ex
     return V, F, use[kept]
 
 
-def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, decimation_rate, relax=0):
+def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, decimation_rate, relax=0,
+                        smoothing="curvature", record=None):
     """Step 7 (Sec. 4.7) with the fold repairs: smoothing, decimation, min-angle swaps.
+
+    ``record`` (a dict, optional) receives ``smoothed_points``: the smoothed prediction points
+    SP_i of Sec. 4.7, before decimation (the points the errors of Eq. 17 are measured on).
 
     Returns
     -------
@@ -256,7 +271,13 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, deci
     ids = np.concatenate([ids, np.full(len(V) - n_before, -1, np.int64)])  # -1: not a prediction point
     stats["forbidden_splits"] = int(splits)
     V, F, repairs = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-    V = optimisation.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth)
+    if smoothing == "taubin":
+        V = optimisation.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth)
+    else:
+        V = optimisation.curvature_smooth(V, F, k, ctx.vertices, ctx.faces, passes=num_smooth,
+                                          weights="scale" if smoothing == "curvature_scaled" else "uniform")
+    if record is not None:
+        record["smoothed_points"] = V[k:][ids >= 0].copy()
     V, F, collapses, keep = optimisation.decimate_short_edges(V, F, k, decimation_rate * edge_len, ctx.forbidden_edges)
     ids = ids[keep[k:] - k]
     F, swaps = optimisation.swap_edges_min_angle(V, F, ctx.forbidden_edges)
@@ -303,7 +324,8 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, deci
 
 
 def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=100, critical_dihedral=90.0,
-         critical_intersection=12.0, num_smooth=60, decimation_rate=0.6, seed=0, relax=10):
+         critical_intersection=12.0, num_smooth=60, decimation_rate=0.6, seed=0, relax=10, smoothing="curvature",
+         record=None):
     """Fill one hole by HPDE, Algorithm 2 steps 2-7.
 
     Attempts (first clean one wins): the paper's choice (segmented prediction with two
@@ -318,7 +340,10 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
     ----------
     ctx : HoleContext
     population_factor, mutation, crossover, generations, critical_dihedral, critical_intersection,
-    num_smooth, decimation_rate, seed, relax : see PARAMS
+    num_smooth, decimation_rate, seed, relax, smoothing : see PARAMS
+    record : dict, optional
+        Receives ``smoothed_points`` (the SP_i of Sec. 4.7 of the returned patch; empty for the
+        loop-only last resort), for the errors of Eq. 17.
 
     Returns
     -------
@@ -374,8 +399,9 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
                 t3 = time.perf_counter()
                 V, F, ids = triangulate(ctx, base, normals, seg, layout, result, edge_len, excluded)
                 t4 = time.perf_counter()
+                attempt_record = {}
                 V, F, stats, bad_ids = smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth,
-                                                           decimation_rate, relax)
+                                                           decimation_rate, relax, smoothing, attempt_record)
                 t5 = time.perf_counter()
             except HoleFillError as exc:
                 reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: {exc}")
@@ -394,10 +420,12 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
                             triangulation_seconds=t4 - t3, optimisation_seconds=t5 - t4, **stats)
                 patch = Patch(vertices=V[k:], faces=F, info=info)
                 if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
+                    if record is not None:
+                        record.update(attempt_record)
                     return patch
                 # The layout lost many prediction points: keep it, but try the others first.
                 if best is None or kept > best.info["kept_share"]:
-                    best = patch
+                    best, best_record = patch, attempt_record
                 reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
                                f"kept only {kept:.0%} of the prediction points")
                 break
@@ -411,6 +439,8 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
                            f"fold-over after smoothing and mesh optimisation ({OUTLIER_ROUNDS} rounds)")
     if best is not None:
         best.info["attempts_failed"] = "; ".join(reasons)
+        if record is not None:
+            record.update(best_record)
         return best
     # Last resort (beyond the paper): the loop alone, triangulated by Liepa's weights or flat
     # in the PCA plane. Teeth of a crumpled scan border force sharp creases there, so up to

@@ -134,7 +134,7 @@ def sphere_experiment(seed=0, holes=SPHERE_HOLES, **params):
 
     from ..holes import boundary_loops, hole_context, vertex_face_incidence
     from ..patch import validate_patch
-    from .differential_evolution import fill
+    from .differential_evolution import RINGS, fill
 
     V, F = uv_sphere()
     removed = np.zeros(len(F), bool)
@@ -143,20 +143,24 @@ def sphere_experiment(seed=0, holes=SPHERE_HOLES, **params):
     F_cut = F[~removed]
     loops = boundary_loops(F_cut)
     incidence = vertex_face_incidence(F_cut, len(V))
-    new_points, per_hole = [], []
+    new_points, smoothed_points, per_hole = [], [], []
     t_all = time.perf_counter()
     for i, loop in enumerate(loops):
-        ctx = hole_context(V, F_cut, loop, incidence, rings=1, index=i)
+        ctx = hole_context(V, F_cut, loop, incidence, rings=RINGS, index=i)
         t0 = time.perf_counter()
-        patch = fill(ctx, seed=seed, **params)
+        record = {}
+        patch = fill(ctx, seed=seed, record=record, **params)
         seconds = time.perf_counter() - t0
         validate_patch(patch, ctx.points, ctx.forbidden_edges)
         new_points.append(patch.vertices)
+        smoothed_points.append(record.get("smoothed_points", np.zeros((0, 3))))
         per_hole.append({"boundary_edges": ctx.size, "n": patch.info["base_points"], "M": patch.info["M"],
                          "Rate": round(patch.info["rate"], 3), "segmented": patch.info["segmented"],
                          "new_vertices": len(patch.vertices), "seconds": round(seconds, 3)})
-    points = np.concatenate(new_points)
-    errors = prediction_errors(points, V[F[removed]])
+    hole_triangles = V[F[removed]]
+    errors = prediction_errors(np.concatenate(smoothed_points), hole_triangles)
+    final = prediction_errors(np.concatenate(new_points), hole_triangles)
     return {"MPE": errors["MPE"], "APE": errors["APE"], "Mx": errors["Mx"], "K": errors["K"],
+            "final_vertices": {key: final[key] for key in ("MPE", "APE", "K")},
             "NP": int(len(V)), "NOT": int(len(F)), "NHT": int(removed.sum()), "holes": per_hole,
             "seconds": time.perf_counter() - t_all, "paper": PAPER_TABLE1_SPHERE}

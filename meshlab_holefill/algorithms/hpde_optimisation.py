@@ -55,6 +55,82 @@ def taubin_smooth(V, F, fixed, passes=60, lam=TAUBIN_LAMBDA, mu=TAUBIN_MU):
     return V
 
 
+def curvature_smooth(V, F, k, context_vertices, context_faces, passes=60, weights="uniform"):
+    """Second-order umbrella smoothing of the patch glued to its surrounding rings (Sec. 4.7).
+
+    Reading of Sec. 4.7's "smoothed NumSmooth = 60 times" (the operator is not named there; ref.
+    [26] is cited for the noisy input of Sec. 4.1). Sec. 5.2.2 says the smoothing "determines
+    that the intersection angles between the prediction points in the hole are uniform and the
+    patching surface is smooth": uniform turning angles are a constant discrete curvature, the
+    fixed point of the umbrella of the umbrella U(U(x)) = 0 (Kobbelt et al. 1998), not of the
+    umbrella U(x) = 0 (zero turning, a membrane). Each pass is one Jacobi step
+    x_i -= U(U(x))_i / nu_i, nu_i = 1 + sum_j W_ij W_ji (1 + (1 / n_i) sum_j 1 / n_j for the
+    valences n), on the new vertices only, by default with the uniform umbrella U(x)_i = mean of the neighbours - x_i (uniform
+    weights also even out the vertex spacing, which the mesh optimisation needs; scale-dependent
+    weights measured slightly closer to the ground truth but with worse triangles). U at a loop
+    vertex uses its whole ring (mesh side and patch side), which makes the fill join the surface
+    with a matching tangent plane; U is 0 at outer vertices of the context whose ring is
+    incomplete.
+
+    Why not Taubin's lambda|mu filter (option ``smoothing='taubin'``): it is non-shrinking on a
+    closed surface, whose lowest frequencies lie in its pass band; on a patch with a fixed
+    boundary every frequency lies above k_PB ~ 0.1 once the patch is a few edges across, so the
+    filter draws a small patch towards the flat membrane of the loop (measured on the
+    benchmark's small holes: patches of points exactly on the true surface go from 0.07-0.19
+    to 0.34-0.77 per mille of the diagonal after 60 passes).
+
+    Parameters
+    ----------
+    V : (n, 3) float64  patch vertices, loop first (the first k are fixed)
+    F : (m, 3) int64  patch faces
+    k : int  loop size
+    context_vertices : (c, 3) float64  surrounding vertices, loop first (HoleContext.vertices)
+    context_faces : (f, 3) int64  surrounding faces in the same numbering
+    passes : int  NumSmooth
+    weights : {'uniform', 'scale'}
+        'scale': scale-dependent weights W_ij ~ 1 / |x_i - x_j| (recomputed every pass), which
+        follow anisotropic meshes better (the paper's longitude/latitude sphere) at the cost of
+        less even triangles.
+
+    Returns
+    -------
+    (n, 3) float64  (the first k rows unchanged)
+    """
+    V = np.array(V, np.float64)
+    if passes <= 0 or len(V) <= k:
+        return V
+    c = len(context_vertices)
+    F = np.asarray(F, np.int64)
+    faces = np.concatenate([np.asarray(context_faces, np.int64), np.where(F >= k, F - k + c, F)])
+    X = np.concatenate([np.asarray(context_vertices, np.float64), V[k:]])
+    N = len(X)
+    E = unique_edges(faces)
+    rows, cols = np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]]
+    # Vertices on an edge used by one face only: the outer border of the context (incomplete ring).
+    he = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    keys, counts = np.unique(he[:, 0] * N + he[:, 1], return_counts=True)
+    open_v = np.zeros(N, bool)
+    open_v[np.concatenate([keys[counts == 1] // N, keys[counts == 1] % N])] = True
+    free = np.arange(N) >= c
+    def operator():
+        w = np.ones(len(E)) if weights == "uniform" else \
+            1.0 / np.maximum(np.linalg.norm(X[E[:, 0]] - X[E[:, 1]], axis=1), 1e-300)
+        A = sp.csr_matrix((np.r_[w, w], (rows, cols)), shape=(N, N))
+        W = (sp.diags(1.0 / np.asarray(A.sum(axis=1)).ravel()) @ A).tocsr()
+        Wf = W[free]
+        return W, Wf, 1.0 + np.asarray(Wf.multiply(W.T.tocsr()[free]).sum(axis=1)).ravel()
+
+    W, Wf, nu = operator()
+    for i in range(passes):
+        if i and weights != "uniform":
+            W, Wf, nu = operator()
+        L = W @ X - X
+        L[open_v] = 0.0
+        X[free] -= (Wf @ L - L[free]) / nu[:, None]
+    V[k:] = X[c:]
+    return V
+
+
 def split_obtuse_edges(V, F, n_fixed, max_angle=np.radians(120.0)):
     """Split the long edge of every triangle with an angle above ``max_angle`` (new vertex at the quad centroid).
 
