@@ -247,3 +247,23 @@ def test_cli_compare(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "meshing_close_holes" in out and "1/1" in out
     assert "meshlab-holefill compare" in (tmp_path / "report.md").read_text()
+
+
+def test_patch_distance_does_not_depend_on_its_triangulation():
+    """The same flat cap, as 2 triangles or split 4-fold, is the same distance from a curved truth."""
+    from meshlab_holefill.metrics import hausdorff_one_way
+
+    coarse_V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    coarse_F = np.array([[0, 1, 2], [0, 2, 3]])
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(coarse_V, coarse_F))
+    ms.meshing_surface_subdivision_midpoint(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    fine_V, fine_F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    assert len(fine_F) == 32
+    gt_V, gt_F = grid(20)[0] / 20.0, grid(20)[1]
+    gt_V[:, 2] = 0.2 * np.sin(np.pi * gt_V[:, 0]) * np.sin(np.pi * gt_V[:, 1])  # a bump sharing the border
+    coarse = hausdorff_one_way(coarse_V, coarse_F, gt_V, gt_F)["mean"]
+    fine = hausdorff_one_way(fine_V, fine_F, gt_V, gt_F)["mean"]
+    assert coarse == pytest.approx(fine, rel=0.03)
+    # the surface mean of 0.2 sin(pi x) sin(pi y) over the unit square is 0.8 / pi^2 (distance ~ height here)
+    assert 0.6 * 0.8 / np.pi ** 2 < coarse < 1.05 * 0.8 / np.pi ** 2
