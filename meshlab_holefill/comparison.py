@@ -348,6 +348,17 @@ def _hole_entry(result, loop_index):
     return None
 
 
+_ENTRY_KEYS = {"hole", "boundary_edges", "pinched", "status", "reason", "seconds", "new_vertices", "new_faces"}
+
+
+def _patch_info(entry):
+    """The algorithm's own per-hole figures (Patch.info: restarts, step times, ...) as ``info_*`` columns."""
+    if not isinstance(entry, dict):
+        return {}
+    return {f"info_{key}": value for key, value in entry.items()
+            if key not in _ENTRY_KEYS and isinstance(value, (bool, int, float, str))}
+
+
 def _context_faces(V0, F0, loop):
     """Faces of the mesh around a hole, for pictures: within 1.7 hole radii of its centre."""
     P = V0[loop]
@@ -399,6 +410,7 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
         closed = (not open_left) and len(patch_idx) > 0
         if entry is not None and entry.get("seconds") is not None:
             row["seconds"] = entry["seconds"]
+        row.update(_patch_info(entry))
         if not closed:
             if entry is not None and entry.get("status") != "closed":
                 reason = f"{entry.get('status')}: {entry.get('reason', '')}"

@@ -267,3 +267,12 @@ def test_patch_distance_does_not_depend_on_its_triangulation():
     assert coarse == pytest.approx(fine, rel=0.03)
     # the surface mean of 0.2 sin(pi x) sin(pi y) over the unit square is 0.8 / pi^2 (distance ~ height here)
     assert 0.6 * 0.8 / np.pi ** 2 < coarse < 1.05 * 0.8 / np.pi ** 2
+
+
+def test_patch_info_becomes_info_columns():
+    from meshlab_holefill.comparison import _patch_info
+
+    entry = {"hole": 3, "status": "closed", "seconds": 0.1, "new_faces": 9, "restarts": 2,
+             "unfolding_seconds": 0.01, "method": "annealed", "history": [1, 2]}
+    assert _patch_info(entry) == {"info_restarts": 2, "info_unfolding_seconds": 0.01, "info_method": "annealed"}
+    assert _patch_info(None) == {}
