@@ -138,3 +138,13 @@ def test_short_edge_beside_a_long_one_at_a_sharp_corner_lowers_the_bound():
     bound = corner_quality_bound(V, F, hole.vertices)
     assert bound == pytest.approx(0.146, abs=0.002)
     assert bound < _iso_quality(np.radians(29.8))
+
+
+def test_versus_variant_compares_on_the_named_cases_only():
+    from meshlab_holefill.acceptance import versus_variant
+
+    ours = [_row(case="sphere", dist_patch_to_gt_mean_permille=0.1), _row(case="cow.obj", dist_patch_to_gt_mean_permille=9.0)]
+    zero = [_row(case="sphere", dist_patch_to_gt_mean_permille=0.2), _row(case="cow.obj", dist_patch_to_gt_mean_permille=0.1)]
+    name, text, ok = versus_variant(ours, zero, ("sphere", "torus"))
+    assert ok is True and text == "0.100 vs 0.200"
+    assert versus_variant(zero, ours, ("sphere",))[2] is False
