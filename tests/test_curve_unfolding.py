@@ -11,7 +11,8 @@ from hypothesis import strategies as st
 
 from meshlab_holefill import FILTERS, HoleFillError
 from meshlab_holefill.algorithms import curve_unfolding as cu
-from meshlab_holefill.algorithms.embedding import embed_patch, embedding_energy, energy_rows
+from meshlab_holefill.algorithms.embedding import (embed_patch, embedding_energy, energy_rows, tangential_relaxation,
+                                                   umbrella_operator, vertex_normals)
 from meshlab_holefill.algorithms.unfolding import (anneal_loop, boundary_gap_angles, colour_classes, develop_loop,
                                                    linear_motion_is_simple, planarity_energy, planarity_terms,
                                                    project_to_best_plane, simple_development, unfold_loop)
@@ -19,7 +20,8 @@ from meshlab_holefill.comparison import MeshCase, prepare_case
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.geometry.segments import min_segment_distance, segment_distances
-from meshlab_holefill.holes import boundary_loops, hole_context, nonmanifold_edges
+from meshlab_holefill.holes import boundary_loops, hole_context, nonmanifold_edges, outline_ratios
+from meshlab_holefill.metrics import corner_quality_bound
 from meshlab_holefill.patch import validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
@@ -401,8 +403,9 @@ def test_relaxed_development_unfolds_the_wrapped_torus_hole(torus_wrapped_hole):
 
 def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wrapped_hole):
     ctx = torus_wrapped_hole
-    plain = cu.fill(ctx, max_restarts=2, swaps=False)
-    swapped = cu.fill(ctx, max_restarts=2)
+    # tangential=False: the swaps alone, and the energy must then be solved exactly.
+    plain = cu.fill(ctx, max_restarts=2, swaps=False, tangential=False)
+    swapped = cu.fill(ctx, max_restarts=2, tangential=False)
     q0 = triangle_quality(plain.all_points(ctx.points), plain.faces)
     q1 = triangle_quality(swapped.all_points(ctx.points), swapped.faces)
     assert q0.min() < 0.3 <= q1.min() and q1.mean() >= max(q0.mean(), 0.85)
@@ -417,3 +420,80 @@ def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wra
     _, gradient = embedding_energy(np.concatenate([ctx.vertices, swapped.vertices]),
                                    energy_rows(joint, n_ctx + s, free, 2), free)
     assert np.abs(gradient).max() < 1e-10
+
+
+# ----------------------------------------------------------------------------- tangential relaxation
+
+def sphere_cap_embedding(energy="fairing"):
+    """A refined planar domain of a sphere hole embedded by E_DF: joint positions, faces, free vertices."""
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = mesh_arrays(ms)
+    _, F, _ = cut_disks(V, F, [(0, 0, 1)], 0.6)
+    ctx = hole_context(V, F, boundary_loops(F)[0], rings=2)
+    points, Fp = cu.refine_planar(cu.scale_to_loop(project_to_best_plane(ctx.points)[0], ctx.points)[0],
+                                  float(ctx.edge_scale.mean()))
+    s = len(points) - ctx.size
+    n_ctx = len(ctx.vertices)
+    joint = np.concatenate([ctx.faces, np.where(Fp < ctx.size, Fp, Fp - ctx.size + n_ctx)])
+    X = np.concatenate([ctx.vertices, embed_patch(ctx, s, Fp, energy=energy)])
+    return ctx, X, joint, n_ctx + np.arange(s), Fp
+
+
+def test_tangential_relaxation_cancels_the_tangential_umbrella_within_tangent_planes():
+    ctx, X, joint, free, _ = sphere_cap_embedding()
+    N = vertex_normals(X, joint)[free]
+    W = umbrella_operator(joint, len(X))
+    U0 = (W @ X)[free]
+    tangential_part = lambda U: U - np.einsum("ij,ij->i", U, N)[:, None] * N
+    assert np.abs(tangential_part(U0)).max() > 1e-3  # E_DF leaves a tangential umbrella
+    Y = tangential_relaxation(X, joint, free)
+    assert np.array_equal(Y[:free[0]], X[:free[0]])  # fixed vertices stay
+    step = (Y - X)[free]
+    assert np.abs(np.einsum("ij,ij->i", step, N)).max() < 1e-12  # moves only within the tangent planes
+    assert np.abs(tangential_part((W @ Y)[free])).max() < 1e-10  # B_p^T U(p) = 0
+    # E_DF's shape is kept: the patch is no farther from the unit sphere than E_DF put it.
+    d0, d1 = (np.abs(np.linalg.norm(Z[free], axis=1) - 1) for Z in (X, Y))
+    assert np.linalg.norm(step, axis=1).max() > 0.05 * float(ctx.edge_scale.mean())
+    assert d1.max() <= d0.max() + 1e-3 and d1.mean() <= d0.mean() + 1e-3
+
+
+def test_tangential_relaxation_never_flips_a_face():
+    ctx, X, joint, free, _ = sphere_cap_embedding()
+    rng = np.random.default_rng(3)
+    # A wild start (interior vertices scattered over the cap) whose full step would fold faces.
+    Xw = X.copy()
+    Xw[free] += 0.3 * rng.standard_normal((len(free), 3)) * float(ctx.edge_scale.mean())
+    star = joint[np.isin(joint, free).any(axis=1)]
+    normal = lambda Z: np.cross(Z[star[:, 1]] - Z[star[:, 0]], Z[star[:, 2]] - Z[star[:, 0]])
+    Y = tangential_relaxation(Xw, joint, free)
+    assert np.all(np.einsum("ij,ij->i", normal(Xw), normal(Y)) > 0)
+
+
+@pytest.fixture(scope="module")
+def face_scan():
+    """face000.ply (range scan, jagged borders with long edges) and its boundary loops."""
+    import os
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(os.path.join(os.path.dirname(sample("bunny.obj")), "rangemaps", "face000.ply"))
+    V, F = mesh_arrays(ms)
+    return V, F, boundary_loops(F)
+
+
+@pytest.mark.parametrize("edges", [31, 36, 76, 86])
+def test_tangential_relaxation_lifts_the_triangles_fairing_squeezes_on_scan_holes(face_scan, edges):
+    V, F, loops = face_scan
+    i = [j for j, lp in enumerate(loops) if len(lp) == edges][0]
+    assert outline_ratios(V, F, [loops[i]])[0] < 0.9  # a hole, not an island's outline
+    ctx = hole_context(V, F, loops[i], rings=cu.RINGS)
+    bound = corner_quality_bound(V, F, loops[i].vertices)
+    faired = cu.fill(ctx, tangential=False)
+    relaxed = cu.fill(ctx)
+    q0 = triangle_quality(faired.all_points(ctx.points), faired.faces)
+    q1 = triangle_quality(relaxed.all_points(ctx.points), relaxed.faces)
+    # E_DF alone squeezes a triangle below 0.3 although no border corner forces it.
+    assert q0.min() < 0.3 < bound
+    assert q1.min() >= 0.3 and q1.mean() >= 0.85
+    validate_patch(relaxed, ctx.points, ctx.forbidden_edges)
+    assert len(cu.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) == 0

@@ -15,7 +15,8 @@ flat ear-clipping fill on curved surfaces: on the benchmark's cut holes E_AREA's
 patch-to-ground-truth distance is 0.653 / 6.50 / 21.4 per mille for small / medium / large
 holes against MeshLab's 0.240 / 4.69 / 15.1, E_DF's 0.181 / 1.76 / 4.62); ``fallback`` unfolds loops that annealing does not
 (loops wrapped around a tube or a knob) by developing them with the surface's own angles;
-``repair`` clips the ears of boundary vertices whose patch faces cross the surrounding mesh
+``tangential`` moves the embedded interior vertices within their tangent planes to E_AREA's
+spacing on E_DF's shape (:func:`.embedding.tangential_relaxation`); ``repair`` clips the ears of boundary vertices whose patch faces cross the surrounding mesh
 (scan borders with folded sliver faces) and fills the rest of the loop again; ``swaps``
 improves the connectivity of the embedded patch by quality-improving edge swaps, the energy
 solved again after each round (:func:`improve_by_swaps`).
@@ -83,6 +84,10 @@ PARAMS = [
               "the two triangles and solve the energy again on the new connectivity (up to 4 rounds, the best "
               "round kept); the uniform Laplacian of Sec. 3.3 squeezes triangles at border vertices where the "
               "surface leaves a wide opening."),
+    ParamSpec("tangential", "bool", True,
+              "Beyond the paper: after each energy solve, move the interior vertices within their tangent planes "
+              "until the uniform umbrella U has no tangential part (E_DF's shape, E_AREA's spacing); E_DF alone "
+              "squeezes triangles next to long border edges and wide openings."),
     ParamSpec("seed", "int", 0, "Seed of the simulated annealing (same seed, same patch).",
               minimum=0, maximum=2**31 - 1),
 ]
@@ -189,7 +194,7 @@ def _sub_loop_chords(forbidden_edges, keep, k):
     return fe[(fe >= 0).all(axis=1)]
 
 
-def triangulate_and_embed(ctx, Q, keep, ears, energy, refinement):
+def triangulate_and_embed(ctx, Q, keep, ears, energy, refinement, tangential=False):
     """Sec. 3.2-3.3 for the sub-loop ``keep`` of the hole (the whole loop when nothing is clipped).
 
     Scale the planar polygon to the loop's perimeter, triangulate it (CDT, Sec. 3.2) or
@@ -203,6 +208,7 @@ def triangulate_and_embed(ctx, Q, keep, ears, energy, refinement):
     ears : list of (3,) int  faces already clipped off (loop indices)
     energy : {'area', 'fairing'}
     refinement : bool
+    tangential : bool  follow the solve by :func:`.embedding.tangential_relaxation`
 
     Returns
     -------
@@ -218,7 +224,7 @@ def triangulate_and_embed(ctx, Q, keep, ears, energy, refinement):
         points, F = constrained_delaunay(Qs, chords)
     s = len(points) - len(keep)
     ear_faces = np.asarray(ears, np.int64).reshape(-1, 3)
-    X = embed_patch(ctx, s, F, energy=energy, boundary=keep, extra_faces=ear_faces)
+    X = embed_patch(ctx, s, F, energy=energy, boundary=keep, extra_faces=ear_faces, tangential=tangential)
     to_patch = np.concatenate([keep, k + np.arange(s)])
     return X, np.concatenate([ear_faces, to_patch[F]])
 
@@ -292,7 +298,7 @@ def _quality_improving(V, F, A, B, replaced):
     return new > old + 1e-9
 
 
-def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, crossings=None):
+def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, crossings=None, tangential=False):
     """Quality-improving edge swaps followed by a new energy solve (beyond the paper, option ``swaps``).
 
     Sec. 3.3 places the interior vertices by a uniform-Laplacian energy on the connectivity
@@ -302,8 +308,9 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
     spatial 0.14). Each round swaps the interior patch edges that fail the circumsphere test
     and whose swap raises the lower quality of their two triangles (no fold, no duplicate
     edge, never an edge the mesh already has, :func:`relax_edges`), then solves the energy
-    again on the new connectivity, so the result still minimises E_AREA / E_DF exactly. The
-    round with the best minimum quality (then mean) that crosses nothing new is kept.
+    again on the new connectivity, so the result still minimises E_AREA / E_DF exactly (then
+    relaxes tangentially if ``tangential``, as the first embedding did). The round with the
+    best minimum quality (then mean) that crosses nothing new is kept.
 
     Parameters
     ----------
@@ -313,6 +320,7 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
     energy : {'area', 'fairing'}
     rounds : int
     crossings : int, optional  faces of the given patch crossing the mesh (computed when needed)
+    tangential : bool  see :func:`.embedding.embed_patch`
 
     Returns
     -------
@@ -335,7 +343,7 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
         if swapped == 0:
             break
         total += swapped
-        interior = embed_patch(ctx, s, F, energy=energy)
+        interior = embed_patch(ctx, s, F, energy=energy, tangential=tangential)
         X = np.concatenate([ctx.points, interior])
         sc = score(X, F)
         if sc <= best[0]:
@@ -354,14 +362,14 @@ def _corner_angle(P, keep, v):
 
 
 def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000, step_bound="global",
-         energy="fairing", refinement=True, fallback=True, repair=True, swaps=True, seed=0):
+         energy="fairing", refinement=True, fallback=True, repair=True, swaps=True, tangential=True, seed=0):
     """Fill one hole by unfolding, triangulation and embedding (Sec. 3.1-3.3).
 
     Parameters
     ----------
     ctx : HoleContext
     k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,
-    repair, swaps, seed : see PARAMS
+    repair, swaps, tangential, seed : see PARAMS
 
     Returns
     -------
@@ -390,7 +398,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
                                  max_restarts=max_restarts, sa_steps=sa_steps, step_bound=step_bound,
                                  fallback=development)
     t1 = time.perf_counter()
-    vertices, faces = triangulate_and_embed(ctx, Q, np.arange(m), [], energy, refinement)
+    vertices, faces = triangulate_and_embed(ctx, Q, np.arange(m), [], energy, refinement, tangential)
     t2 = time.perf_counter()
     method, n_bad, clipped = unfold_info["method"], 0, 0
     if repair:
@@ -402,7 +410,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         for domain, name, vertices, faces in candidates:
             keep, ears, n_clipped = np.arange(m), [], 0
             if vertices is None:
-                vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement)
+                vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement, tangential)
             bad = crossing_faces(ctx, vertices, faces)
             for _ in range(MAX_REPAIR_ROUNDS):
                 if len(bad) == 0:
@@ -412,7 +420,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
                 if clipped_now == 0:
                     break
                 n_clipped += clipped_now
-                vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement)
+                vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement, tangential)
                 bad = crossing_faces(ctx, vertices, faces)
             if best is None or len(bad) < best[0]:
                 best = (len(bad), vertices, faces, n_clipped, name)
@@ -423,7 +431,8 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     t3 = time.perf_counter()
     if swaps:
         vertices, faces, n_swaps = improve_by_swaps(ctx, vertices, faces, energy,
-                                                    crossings=int(n_bad) if repair else None)
+                                                    crossings=int(n_bad) if repair else None,
+                                                    tangential=tangential)
     t4 = time.perf_counter()
     info = {
         "unfolding": method,
