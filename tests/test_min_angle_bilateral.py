@@ -165,3 +165,61 @@ def test_relaxation_guard_still_refuses_a_swap_through_the_surrounding_mesh():
         d = len(V) - 1
         A, B = np.array([[0, d, 1]]), np.array([[2, 1, d]])
         assert guard(V, np.zeros((0, 3), np.int64), A, B, np.zeros((1, 2), np.int64))[0] == expected
+
+
+# ----------------------------------------------------------------------------- speed-ups kept exact
+
+def test_scalar_sector_test_agrees_with_the_vectorised_one():
+    from meshlab_holefill.algorithms.min_angle_bilateral import _in_sector
+    from meshlab_holefill.holes import inside_hole_sector
+
+    rng = np.random.default_rng(3)
+    agree = 0
+    for _ in range(300):
+        apex, normal, prev, nxt, target = rng.normal(size=(5, 3))
+        expected = bool(inside_hole_sector(apex, normal, prev, nxt, target[None])[0])
+        assert _in_sector(*(x.tolist() for x in (apex, normal, prev, nxt, target))) == expected
+        agree += expected
+    assert 0 < agree < 300  # both outcomes occurred
+
+
+def _disk_patch(n=6):
+    """A flat triangulated disk: loop of 4 n points on a square's border first, grid inside."""
+    V, F = grid(n, n)
+    loops = boundary_loops(F)
+    loop = loops[0].vertices[::-1]  # as the boundary of the grid's own (counter-clockwise) faces
+    order = np.concatenate([loop, np.setdiff1d(np.arange(len(V)), loop)])
+    inv = np.empty(len(V), np.int64)
+    inv[order] = np.arange(len(V))
+    return V[order].astype(float), inv[F], len(loop)
+
+
+def test_embeds_in_projection_accepts_a_flat_disk_and_rejects_a_folded_one():
+    from meshlab_holefill.algorithms.min_angle_bilateral import embeds_in_projection
+    from meshlab_holefill.geometry.intersections import intersecting_pairs
+
+    V, F, k = _disk_patch()
+    # Orientation of the loop as the patch's boundary: faces are counter-clockwise from +z.
+    assert embeds_in_projection(V, F, k)
+    bumped = V.copy()
+    bumped[k:, 2] = 0.3 * np.sin(7 * bumped[k:, 0])  # a height field still embeds
+    assert embeds_in_projection(bumped, F, k)
+    # Drag one interior vertex far across its neighbours: the patch folds over itself.
+    folded = V.copy()
+    centre = k + np.argmin(np.linalg.norm(V[k:, :2] - 0.5, axis=1))
+    folded[centre, :2] += [0.45, 0.0]
+    assert len(intersecting_pairs(folded, F, np.arange(len(F)), np.arange(len(F)))) > 0
+    assert not embeds_in_projection(folded, F, k)
+
+
+def test_embeds_in_projection_rejects_a_doubly_wound_fan():
+    # A fan around a centre that winds twice (a helicoid step): every face keeps its
+    # orientation over the plane, yet the surface overlaps itself in projection.
+    from meshlab_holefill.algorithms.min_angle_bilateral import embeds_in_projection
+
+    m = 12
+    t = np.linspace(0, 4 * np.pi, m, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t), 0.05 * t], axis=1)
+    V = np.concatenate([ring, [[0.0, 0.0, 0.3]]])
+    F = np.array([[i, (i + 1) % m, m] for i in range(m)])
+    assert not embeds_in_projection(V, F, m)

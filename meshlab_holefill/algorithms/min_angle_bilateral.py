@@ -7,6 +7,7 @@ and its interior vertices are moved along their normals by the bilateral filter 
 """
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -16,7 +17,7 @@ from ..geometry.fairing import fair_patch_in_context
 from ..geometry.flips import relax_edges
 from ..geometry.refine import refine_patch
 from ..geometry.topology import edge_pair_set
-from ..holes import inside_hole_sector, patch_crossings, patch_guard
+from ..holes import patch_crossings, patch_guard
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
 
@@ -81,12 +82,46 @@ def normal_angle_threshold(normals):
 
 
 def _vertex_angle(p_prev, p, p_next, normal):
-    """Eq. 2 angle of one boundary vertex given its current neighbours."""
-    u, w = p_prev - p, p_next - p
-    cross = np.array([u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]])
-    theta = np.arctan2(np.sqrt(cross @ cross), u @ w)
-    # n_t = (p - p_prev) x (p_next - p_prev) = w x u ... = -(u x w) + 0; sign test against the normal
-    return theta if -(cross @ normal) >= 0 else 2 * np.pi - theta, np.sqrt(cross @ cross)
+    """Eq. 2 angle of one boundary vertex given its current neighbours (plain-float 3-sequences).
+
+    Returns the angle and |u x w| (twice the ear's area).
+    """
+    u = (p_prev[0] - p[0], p_prev[1] - p[1], p_prev[2] - p[2])
+    w = (p_next[0] - p[0], p_next[1] - p[1], p_next[2] - p[2])
+    cross = _cross3(u, w)
+    area2 = math.sqrt(cross[0] ** 2 + cross[1] ** 2 + cross[2] ** 2)
+    theta = math.atan2(area2, u[0] * w[0] + u[1] * w[1] + u[2] * w[2])
+    # n_t = (p - p_prev) x (p_next - p_prev) = w x u = -(u x w): convex when it agrees with the normal.
+    convex = -(cross[0] * normal[0] + cross[1] * normal[1] + cross[2] * normal[2]) >= 0
+    return (theta if convex else 2 * math.pi - theta), area2
+
+
+def _cross3(a, b):
+    """Cross product of two 3-vectors as a tuple (np.cross's overhead dominates at this size)."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _in_sector(apex, normal, prev_point, next_point, target, margin=1e-9):
+    """Scalar :func:`holes.inside_hole_sector` for one target (plain floats: called once per ear).
+
+    True when the segment apex -> target starts into the hole sector, swept counter-clockwise
+    about the normal from the next boundary vertex to the previous one.
+    """
+    nl = max(math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2), 1e-300)
+    n = (normal[0] / nl, normal[1] / nl, normal[2] / nl)
+    u = (next_point[0] - apex[0], next_point[1] - apex[1], next_point[2] - apex[2])
+    un = u[0] * n[0] + u[1] * n[1] + u[2] * n[2]
+    u = (u[0] - un * n[0], u[1] - un * n[1], u[2] - un * n[2])
+    ul = max(math.sqrt(u[0] ** 2 + u[1] ** 2 + u[2] ** 2), 1e-300)
+    u = (u[0] / ul, u[1] / ul, u[2] / ul)
+    w = _cross3(n, u)
+
+    def angle(p):
+        d = (p[0] - apex[0], p[1] - apex[1], p[2] - apex[2])
+        return math.atan2(d[0] * w[0] + d[1] * w[1] + d[2] * w[2], d[0] * u[0] + d[1] * u[1] + d[2] * u[2]) % (2 * math.pi)
+
+    phi = angle(target)
+    return margin < phi < angle(prev_point) - margin
 
 
 def _ear_holds_a_vertex(P, p, v, n, others):
@@ -96,21 +131,25 @@ def _ear_holds_a_vertex(P, p, v, n, others):
     that plane: the classic ear condition, which the paper's angle rule takes for granted.
     """
     A, B, C = P[p], P[v], P[n]
-    nt = np.cross(B - A, C - A)
-    area2 = np.linalg.norm(nt)
+    nt = np.array(_cross3(B - A, C - A))
+    area2 = math.sqrt(nt @ nt)
     if area2 == 0 or len(others) == 0:
         return False
     nt = nt / area2
+    reach = 0.5 * math.sqrt(max((B - A) @ (B - A), (C - B) @ (C - B), (A - C) @ (A - C)))
     Q = P[others]
     height = (Q - A) @ nt
-    reach = 0.5 * max(np.linalg.norm(B - A), np.linalg.norm(C - B), np.linalg.norm(A - C))
-    Q = Q - np.outer(height, nt)
+    near = np.abs(height) <= reach
+    if not near.any():
+        return False
+    Q = Q[near] - np.outer(height[near], nt)
     # Barycentric signs: inside or on the boundary of the triangle (tolerance relative to its size).
+    # (x - X) . ((Y - X) x nt) is the signed area of (X, Y, x) about nt, for each side X -> Y.
     tol = -1e-9
-    w_a = np.cross(C - B, Q - B) @ nt / area2
-    w_b = np.cross(A - C, Q - C) @ nt / area2
-    w_c = np.cross(B - A, Q - A) @ nt / area2
-    inside = (w_a >= tol) & (w_b >= tol) & (w_c >= tol) & (np.abs(height) <= reach)
+    inside = np.ones(len(Q), bool)
+    for X, Y in ((B, C), (C, A), (A, B)):
+        m = np.array(_cross3(nt, Y - X))  # points into the triangle, |m| = |Y - X|
+        inside &= (Q - X) @ m / area2 >= tol
     return bool(inside.any())
 
 
@@ -148,6 +187,7 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
     sigma = normal_angle_threshold(N)
     cos_sigma = np.cos(sigma)
     forbidden = edge_pair_set(forbidden_edges)
+    Pl, Nl = P.tolist(), N.tolist()  # plain floats for the scalar per-ear tests
     prv = [(i - 1) % k for i in range(k)]
     nxt = [(i + 1) % k for i in range(k)]
     active = np.ones(k, bool)
@@ -159,7 +199,7 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
 
     def evaluate(v):
         p, n = prv[v], nxt[v]
-        angle[v], area2 = _vertex_angle(P[p], P[v], P[n], N[v])
+        angle[v], area2 = _vertex_angle(Pl[p], Pl[v], Pl[n], Nl[v])
         cuttable[v] = area2 > area_tol and tuple(sorted((p, n))) not in forbidden
         normals_agree[v] = N[p] @ N[n] >= cos_sigma
         verdict.pop(v, None)
@@ -168,8 +208,8 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
         # Removing other vertices can only unblock an ear, so a cached False stays safe.
         if v not in verdict:
             p, n = prv[v], nxt[v]
-            ok = (inside_hole_sector(P[p], N[p], P[prv[p]], P[v], P[n][None])[0]
-                  and inside_hole_sector(P[n], N[n], P[v], P[nxt[n]], P[p][None])[0])
+            ok = (_in_sector(Pl[p], Nl[p], Pl[prv[p]], Pl[v], Pl[n])
+                  and _in_sector(Pl[n], Nl[n], Pl[v], Pl[nxt[n]], Pl[p]))
             if ok:
                 others = np.flatnonzero(active)
                 others = others[(others != p) & (others != v) & (others != n)]
@@ -289,12 +329,103 @@ def _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations)
     return V
 
 
+def _segments_cross_2d(P):
+    """Do two non-adjacent edges of the closed 2D polygon P (k, 2) touch or cross?
+
+    Orientation tests on all pairs of edges at once (k is a hole boundary: a few hundred);
+    touching, and overlap of collinear edges, count as crossing.
+    """
+    k = len(P)
+    A, B = P, np.roll(P, -1, axis=0)
+    i, j = np.triu_indices(k, 2)
+    keep = (j - i) != k - 1  # edges 0 and k-1 share vertex 0
+    i, j = i[keep], j[keep]
+
+    def orient(p, q, r):
+        return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
+
+    def on_segment(p, q, r):
+        # r, collinear with p-q, lies within the segment's box
+        return np.all((np.minimum(p, q) <= r) & (r <= np.maximum(p, q)), axis=1)
+
+    a, b, c, d = A[i], B[i], A[j], B[j]
+    d1, d2, d3, d4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+    proper = (d1 * d2 < 0) & (d3 * d4 < 0)
+    touch = (((d1 == 0) & on_segment(a, b, c)) | ((d2 == 0) & on_segment(a, b, d))
+             | ((d3 == 0) & on_segment(c, d, a)) | ((d4 == 0) & on_segment(c, d, b)))
+    return bool(np.any(proper | touch))
+
+
+def embeds_in_projection(V, F, k, min_sine=1e-6):
+    """True when projecting the patch onto its mean plane is one-to-one (so it cannot self-intersect).
+
+    A sufficient test, linear in the patch size, that spares the quadratic-ish exact
+    self-intersection query on the usual patch. The patch is a triangulated disk bounded
+    by the loop V[:k]. Its projection along the unit area-weighted normal is injective
+    when (i) every face keeps its orientation, clearly (sine of the angle between face
+    normal and projection direction above ``min_sine``), (ii) the projected loop is a
+    simple polygon, and (iii) around every vertex the projected angles add up to the full
+    turn (2 pi inside, the polygon's own angle on the loop): a map of a disk that is a
+    local homeomorphism and one-to-one on the boundary is one-to-one. Two faces whose
+    projections meet only in shared vertices or edges cannot meet elsewhere in space.
+
+    Parameters
+    ----------
+    V : (n, 3) float64  loop points first
+    F : (m, 3) int
+    k : int  loop size
+
+    Returns
+    -------
+    bool  (False means "not shown", not "intersects")
+    """
+    V = np.asarray(V, np.float64)
+    F = np.asarray(F, np.int64)
+    e1, e2 = V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]
+    C = np.stack([e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1], e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2],
+                  e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]], axis=1)
+    n = C.sum(axis=0)
+    length = np.linalg.norm(n)
+    if not length > 0:
+        return False
+    n /= length
+    if np.any(C @ n <= min_sine * np.linalg.norm(C, axis=1)):
+        return False
+    u = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    Q = V @ np.stack([u, np.cross(n, u)], axis=1)
+    if _segments_cross_2d(Q[:k]):
+        return False
+    # Projected corner angles summed per vertex (every face is counter-clockwise now).
+    total = np.zeros(len(V))
+    for c in range(3):
+        a = Q[F[:, (c + 1) % 3]] - Q[F[:, c]]
+        b = Q[F[:, (c + 2) % 3]] - Q[F[:, c]]
+        ang = np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], np.einsum("ij,ij->i", a, b))
+        total += np.bincount(F[:, c], weights=ang, minlength=len(V))
+    prev, nxt = np.roll(Q[:k], 1, axis=0) - Q[:k], np.roll(Q[:k], -1, axis=0) - Q[:k]
+    # Interior angle of the counter-clockwise loop at each vertex, swept from next to prev.
+    loop_angle = np.mod(np.arctan2(nxt[:, 0] * prev[:, 1] - nxt[:, 1] * prev[:, 0],
+                                   np.einsum("ij,ij->i", nxt, prev)), 2 * np.pi)
+    expected = np.concatenate([loop_angle, np.full(len(V) - k, 2 * np.pi)])
+    used = np.zeros(len(V), bool)
+    used[F.ravel()] = True
+    return bool(used.all() and np.all(np.abs(total - expected) < 1e-6))
+
+
 def _crosses(ctx, V, F):
-    """Does the patch (V loop-first, F) intersect itself or the surrounding faces?"""
+    """Does the patch (V loop-first, F) intersect itself or the surrounding faces?
+
+    The self-intersection query is skipped when :func:`embeds_in_projection` shows the
+    patch is one-to-one over its mean plane (most patches; the query is the costly part).
+    """
     from ..geometry.intersections import intersecting_pairs
 
-    return bool(len(patch_crossings(ctx, V, F))
-                or len(intersecting_pairs(V, F, np.arange(len(F)), np.arange(len(F)))))
+    if len(patch_crossings(ctx, V, F)):
+        return True
+    if embeds_in_projection(V, F, ctx.size):
+        return False
+    return bool(len(intersecting_pairs(V, F, np.arange(len(F)), np.arange(len(F)))))
 
 
 def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairing="none"):

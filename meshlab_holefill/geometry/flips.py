@@ -72,30 +72,38 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
             break
         c = F[f1, (c1 + 2) % 3]
         d = F[f2, (c2 + 2) % 3]
-        cc1, r1 = circumcenters(V, F[f1])
-        cc2, r2 = circumcenters(V, F[f2])
+        # Circumspheres once per face (row-wise, so the same values as per edge), and the
+        # remaining tests only on the edges that fail the first one: most edges pass it.
+        cc, r = circumcenters(V, F)
+        cc1, r1, cc2, r2 = cc[f1], r[f1], cc[f2], r[f2]
         # Strictly inside (relative margin) so that cocircular quads do not flip forever.
         inside = (np.linalg.norm(V[d] - cc1, axis=1) < r1 * (1 - 1e-9)) | \
                  (np.linalg.norm(V[c] - cc2, axis=1) < r2 * (1 - 1e-9))
         a, b = E[:, 0], E[:, 1]
+        ok = np.zeros(len(E), bool)
+        s = np.flatnonzero(inside)
+        if len(s) == 0:
+            break
+        a_, b_, c_, d_ = a[s], b[s], c[s], d[s]
         # On a non-planar quad both diagonals can fail the test; swapping only when the new
         # edge passes it rules out swapping back and forth.
-        cc3, r3 = circumcenters(V, np.stack([a, d, c], axis=1))
-        cc4, r4 = circumcenters(V, np.stack([b, c, d], axis=1))
-        inside &= (np.linalg.norm(V[b] - cc3, axis=1) >= r3 * (1 - 1e-9)) & \
-                  (np.linalg.norm(V[a] - cc4, axis=1) >= r4 * (1 - 1e-9))
-        old = _triangle_normals(V[a], V[b], V[c]) + _triangle_normals(V[b], V[a], V[d])
-        n1 = _triangle_normals(V[a], V[d], V[c])
-        n2 = _triangle_normals(V[b], V[c], V[d])
+        cc3, r3 = circumcenters(V, np.stack([a_, d_, c_], axis=1))
+        cc4, r4 = circumcenters(V, np.stack([b_, c_, d_], axis=1))
+        passes = (np.linalg.norm(V[b_] - cc3, axis=1) >= r3 * (1 - 1e-9)) & \
+                 (np.linalg.norm(V[a_] - cc4, axis=1) >= r4 * (1 - 1e-9))
+        old = _triangle_normals(V[a_], V[b_], V[c_]) + _triangle_normals(V[b_], V[a_], V[d_])
+        n1 = _triangle_normals(V[a_], V[d_], V[c_])
+        n2 = _triangle_normals(V[b_], V[c_], V[d_])
         keeps_orientation = (np.einsum("ij,ij->i", n1, old) > 0) & (np.einsum("ij,ij->i", n2, old) > 0)
         lo, hi = np.minimum(c, d), np.maximum(c, d)
         new_key = lo * n + hi
         cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
         existing = np.unique(cur[:, 0] * n + cur[:, 1])
-        old_key = np.minimum(a, b) * n + np.maximum(a, b)
-        ok = inside & keeps_orientation & (c != d) & ~np.isin(new_key, existing)
+        ok_s = passes & keeps_orientation & (c_ != d_) & ~np.isin(new_key[s], existing)
         if len(fixed):
-            ok &= ~np.isin(old_key, fixed) & ~np.isin(new_key, fixed)
+            old_key = np.minimum(a_, b_) * n + np.maximum(a_, b_)
+            ok_s &= ~np.isin(old_key, fixed) & ~np.isin(new_key[s], fixed)
+        ok[s] = ok_s
         cand = np.flatnonzero(ok)
         if allowed is not None and len(cand):
             cand = cand[allowed(V, F, np.stack([a[cand], d[cand], c[cand]], axis=1),
