@@ -30,7 +30,13 @@ Readings of passages the paper leaves open (each documented at the function that
   the Eq. 16 vector plus copies perturbed by up to 1/4 of the bound width; NumIter
   (``generations``) = 100; Algorithm 1 is followed literally (selection on the raw trial,
   then reflection, then the objective renewed).
-* Sec. 4.6. Prediction points outside the projected boundary polygon or within 0.25 EdgeLen
+* Sec. 4.5 arcs: the start angle is that of TV = BP - AP, the paper's words (option
+  ``arc_tangent='circle'``: the tangent of the circle through AP, BP and the other base
+  point, exact on a sphere; sphere experiment MPE 2.85e-2 -> 2.10e-2, but worse on the
+  scanned benchmark meshes, whose short AP segments make it noisy).
+* Sec. 4.6. The fitting plane's normal is the principal axis nearest the mean surface normal
+  when the smallest-spread axis is more than 60 degrees from it (narrow bent holes).
+  Prediction points outside the projected boundary polygon or within 0.25 EdgeLen
   of it are left out. Layouts are tried until one gives a patch without fold-over and not
   crossing the surrounding rings: the paper's choice, the other plane layout, a disc layout
   (beyond the paper), then the same with the other prediction (segmented / not). Fold-overs:
@@ -41,14 +47,18 @@ Readings of passages the paper leaves open (each documented at the function that
   resort. A chord duplicating a mesh edge is split at its midpoint.
 * Sec. 4.7. NumSmooth passes of the second-order umbrella (Kobbelt 1998) on the patch glued
   to its surrounding rings, loop fixed: its fixed points have uniform turning angles, as
-  Sec. 5.2.2 says the smoothing makes them (Taubin's lambda|mu filter, option
+  Sec. 5.2.2 says the smoothing makes them, anchored to the predicted positions with weight
+  ``smoothing_anchor`` = 0.15 (a low-pass filter of the prediction: free passes converge on
+  narrow holes to the thin-plate fill of the loop and wiped out good predictions, bone.ply's
+  medium hole 1.4 -> 2.9 per mille) (Taubin's lambda|mu filter, option
   ``smoothing='taubin'``, draws patches a few edges across towards the flat membrane of the
   loop: it made HPDE lose to meshing_close_holes on small holes); edges shorter than
   ``decimation_rate`` (0.6) * EdgeLen collapse to their midpoint, onto the loop vertex when
   one end is on the loop; min-angle swaps keep each new
   triangle within 60 degrees of the old pair's normal. ``relax`` (beyond the paper, on by
   default for the quality target): obtuse-edge splits, collapse of slivers on the loop and
-  tangential relaxation, undone if it folds.
+  tangential relaxation, then moves of the free vertices of triangles below quality 0.5
+  (improve_worst_vertices), undone if it folds.
 """
 from __future__ import annotations
 
@@ -89,6 +99,17 @@ PARAMS = [
               "less even triangles); 'taubin' = Taubin's lambda|mu filter with the boundary fixed (ref. [26]), "
               "which draws small patches towards the flat membrane of the loop.",
               choices=("curvature", "curvature_scaled", "taubin")),
+    ParamSpec("smoothing_anchor", "float", 0.15,
+              "Weight w of the predicted positions in the smoothing of Sec. 4.7 (reading: the smoothing filters "
+              "the prediction, it does not replace it): each pass solves towards (U^2 + w) x = w x_pred, which "
+              "removes wavelengths below ~2 pi / (2 w^(1/4)) ~ 5 edges (the section-plane jitter) and keeps the "
+              "DE shape; 0 = free smoothing, which converges to the thin-plate fill of the loop on narrow holes.",
+              minimum=0.0, maximum=100.0),
+    ParamSpec("arc_tangent", "enum", "secant",
+              "Start angle of the arcs of Sec. 4.5: 'secant' = the direction TV = BP - AP as the tangent at BP "
+              "(the paper's words); 'circle' = the tangent at BP of the circle through AP, BP and the other base "
+              "point (exact on a sphere; the secant overshoots by half the angle the ring edge subtends).",
+              choices=("secant", "circle")),
     ParamSpec("decimation_rate", "float", 0.6,
               "Edges shorter than this times EdgeLen are collapsed to their midpoints (Sec. 4.7-4.8; the "
               "paper gives no value).", minimum=0.0, maximum=2.0),
@@ -106,7 +127,9 @@ LAST_RESORT_ANGLE = np.radians(175.0)  # largest crease the loop-only last resor
 RELAX_ROUNDS = 3  # rounds of sliver collapse + obtuse-edge splits + tangential relaxation + swaps (relax)
 SLIVER_ANGLE = np.radians(140.0)  # a free vertex this flat against a loop edge is collapsed onto it
 MIN_COVERAGE = 0.5  # a pairing keeping fewer base points than this share yields to the other choice
-GOOD_KEPT_SHARE = 0.5  # a layout keeping fewer prediction points is used only if no other keeps more
+GOOD_KEPT_SHARE = 0.5
+STANDING_PLANE_COS = 0.5  # a PCA plane whose normal is further than 60 deg from the surface's stands across it
+QUALITY_TARGET = 0.5  # relax: free vertices of triangles with 2r/R below this are moved (improve_worst_vertices)  # a layout keeping fewer prediction points is used only if no other keeps more
 
 
 def ring_edge_length(ctx):
@@ -156,7 +179,7 @@ def segment_boundary(base, normals, critical_dihedral):
             "planes": planes}
 
 
-def predict_points(ctx, base, normals, split, I_c, edge_len, de_options):
+def predict_points(ctx, base, normals, split, I_c, edge_len, de_options, arc_tangent="secant"):
     """Steps 3-5: correspondences, section planes and DE prediction (Sec. 4.3-4.5).
 
     Returns
@@ -186,7 +209,10 @@ def predict_points(ctx, base, normals, split, I_c, edge_len, de_options):
         return empty
     pairs, P1, P2, TV1, TV2, Nv = pairs[ok], P1[ok], P2[ok], TV1[ok], TV2[ok], Nv[ok]
     m, M = prediction.prediction_counts(np.linalg.norm(P2 - P1, axis=1), edge_len)
-    problem, frames = prediction.section_problems(P1, P2, TV1, TV2, Nv, m)
+    if arc_tangent == "circle":
+        # The circle through AP, BP and the other base point needs the lengths |BP - AP|.
+        TV1, TV2 = P1 - AP_a[ok], AP_b[ok] - P2
+    problem, frames = prediction.section_problems(P1, P2, TV1, TV2, Nv, m, tangent=arc_tangent)
     Y, f, g = prediction.predict_y(problem, **de_options)
     points, plane, fraction = prediction.predicted_points(P1, frames, problem, Y)
     info.update(M=M, predicted=int(len(points)), de_generations=int(g), de_objective_mean=float(np.mean(f)))
@@ -206,12 +232,41 @@ def plane_map_for(base, normals, seg, segmented):
         (c1, n1), (c2, n2) = seg["planes"]
         if np.linalg.norm(np.cross(n1, n2)) > 1e-6:
             return mesh_steps.PlaneMap(c1, n1, (c2, n2))
+    return mesh_steps.PlaneMap(*fitting_plane(base.points, normals))
+
+
+def fitting_plane(points, normals):
+    """The PCA fitting plane of Sec. 4.6 whose normal faces the surface: (centroid, unit normal).
+
+    Reading: the paper takes the plane of the two largest principal directions. A narrow hole
+    bent along its length (a strip around a sphere) has its smallest spread across the strip,
+    so that plane stands across the surface and the projected loop folds onto itself. Of the
+    three principal axes the one nearest to the mean surface normal is used as the normal
+    when the paper's normal is more than 60 degrees (``STANDING_PLANE_COS``) from it; for a
+    hole that is not bent more than its width the paper's plane is kept.
+
+    Parameters
+    ----------
+    points : (n, 3) float64  base points
+    normals : (n, 3) float64  surface normals at the base points
+
+    Returns
+    -------
+    centroid : (3,) float64
+    normal : (3,) float64  unit, on the side of the surface normals
+    """
     from ..geometry.pca import fit_plane
 
-    c, n, _, _ = fit_plane(base.points)
+    c, n, _, axes = fit_plane(points)
+    mean = normals.sum(axis=0)
+    if np.linalg.norm(mean) > 0:
+        mean = mean / np.linalg.norm(mean)
+        dots = axes @ mean
+        if abs(n @ mean) < STANDING_PLANE_COS and np.abs(dots).max() > abs(n @ mean):
+            n = axes[int(np.argmax(np.abs(dots)))]
     if n @ normals.sum(axis=0) < 0:
         n = -n
-    return mesh_steps.PlaneMap(c, n)
+    return c, n
 
 
 def triangulate(ctx, base, normals, seg, layout, prediction_result, edge_len, excluded):
@@ -252,7 +307,7 @@ def triangulate(ctx, base, normals, seg, layout, prediction_result, edge_len, ex
 
 
 def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, decimation_rate, relax=0,
-                        smoothing="curvature", record=None):
+                        smoothing="curvature", record=None, anchor=0.0):
     """Step 7 (Sec. 4.7) with the fold repairs: smoothing, decimation, min-angle swaps.
 
     ``record`` (a dict, optional) receives ``smoothed_points``: the smoothed prediction points
@@ -275,7 +330,7 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, deci
         V = optimisation.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth)
     else:
         V = optimisation.curvature_smooth(V, F, k, ctx.vertices, ctx.faces, passes=num_smooth,
-                                          weights="scale" if smoothing == "curvature_scaled" else "uniform")
+                                          weights="scale" if smoothing == "curvature_scaled" else "uniform", anchor=anchor)
     if record is not None:
         record["smoothed_points"] = V[k:][ids >= 0].copy()
     V, F, collapses, keep = optimisation.decimate_short_edges(V, F, k, decimation_rate * edge_len, ctx.forbidden_edges)
@@ -304,6 +359,17 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, deci
         if s == 0 and c == 0:
             break
     stats["obtuse_splits"] = int(splits)
+    if relax > 0:
+        # The swaps cannot lift a triangle whose long edge is on the loop: move its apex.
+        moved = 0
+        for _ in range(2):
+            V, m_ = optimisation.improve_worst_vertices(V, F, k, target=QUALITY_TARGET)
+            F, more_swaps = optimisation.swap_edges_min_angle(V, F, ctx.forbidden_edges)
+            moved += m_
+            swaps += more_swaps
+            if m_ == 0 and more_swaps == 0:
+                break
+        stats["quality_moves"] = int(moved)
     if relax > 0 and folds.local_folds(V, F, mesh_normals).any():
         V, F, again = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
         more += again
@@ -325,7 +391,7 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, deci
 
 def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=100, critical_dihedral=90.0,
          critical_intersection=12.0, num_smooth=60, decimation_rate=0.6, seed=0, relax=10, smoothing="curvature",
-         record=None):
+         record=None, smoothing_anchor=0.15, arc_tangent="secant"):
     """Fill one hole by HPDE, Algorithm 2 steps 2-7.
 
     Attempts (first clean one wins): the paper's choice (segmented prediction with two
@@ -390,7 +456,8 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
         t2 = time.perf_counter()
         if segmented not in predictions:
             predictions[segmented] = predict_points(ctx, base, normals, seg["split"] if segmented else None,
-                                                    np.radians(critical_intersection), edge_len, de_options)
+                                                    np.radians(critical_intersection), edge_len, de_options,
+                                                    arc_tangent)
         result = predictions[segmented]
         prediction_seconds += time.perf_counter() - t2
         excluded = np.zeros(len(result[0]), bool)
@@ -401,7 +468,8 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
                 t4 = time.perf_counter()
                 attempt_record = {}
                 V, F, stats, bad_ids = smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth,
-                                                           decimation_rate, relax, smoothing, attempt_record)
+                                                           decimation_rate, relax, smoothing, attempt_record,
+                                                           smoothing_anchor)
                 t5 = time.perf_counter()
             except HoleFillError as exc:
                 reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: {exc}")
@@ -420,6 +488,8 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
                             triangulation_seconds=t4 - t3, optimisation_seconds=t5 - t4, **stats)
                 patch = Patch(vertices=V[k:], faces=F, info=info)
                 if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
+                    if reasons:
+                        info["attempts_failed"] = "; ".join(reasons)
                     if record is not None:
                         record.update(attempt_record)
                     return patch

@@ -54,6 +54,26 @@ def arc_height(theta, length, x):
     return np.where(small, L * th * 2.0 * xs * (1.0 - xs), y)
 
 
+def circle_start_angle(ap, length):
+    """Start angle at P_1 = (0, 0) of the circle through AP = ``ap``, P_1 and P_2 = (length, 0).
+
+    The circle's centre is (length / 2, c) with c = (|AP|^2 - AP_x length) / (2 AP_y); the arc
+    from P_1 to P_2 leaves P_1 at angle theta with tan(theta) = -length / (2 c).
+
+    Parameters
+    ----------
+    ap : (p, 2) float64  AP in the plane frame (behind P_1: AP_x < 0 for a forward tangent)
+    length : (p,) float64
+
+    Returns
+    -------
+    (p,) float64 in (-pi, pi]; 0 when AP, P_1, P_2 are collinear.
+    """
+    ap = np.asarray(ap, np.float64)
+    D = np.einsum("ij,ij->i", ap, ap) - ap[:, 0] * length
+    return np.arctan2(-length * ap[:, 1], D)
+
+
 def forward_tangents(P1, P2, TV1, TV2):
     """Pairs whose end tangents both point along P_1 -> P_2, (p,) bool.
 
@@ -110,7 +130,7 @@ class SectionProblem:
     y_init: np.ndarray
 
 
-def section_problems(P1, P2, TV1, TV2, Nv, m, max_tangent_angle=np.pi / 2):
+def section_problems(P1, P2, TV1, TV2, Nv, m, max_tangent_angle=np.pi / 2, tangent="secant"):
     """Rotate each section plane to the xy-plane and set up Eq. 12-16 (Sec. 4.5).
 
     Frame: origin P_1, x along P_2 - P_1, y = Nv x x. TV_1 = P_1 - AP_i (into the hole at
@@ -136,11 +156,18 @@ def section_problems(P1, P2, TV1, TV2, Nv, m, max_tangent_angle=np.pi / 2):
     ey /= np.maximum(np.linalg.norm(ey, axis=1, keepdims=True), 1e-300)
     tv1 = np.stack([np.einsum("ij,ij->i", TV1, ex), np.einsum("ij,ij->i", TV1, ey)], axis=1)
     tv2 = np.stack([np.einsum("ij,ij->i", TV2, ex), np.einsum("ij,ij->i", TV2, ey)], axis=1)
+    if tangent == "circle":
+        th_l = circle_start_angle(-tv1, length)
+        # Mirror x -> length - x: AP_{n-i+1} = P_2 + TV_2 lies behind P_2 seen from P_1's side.
+        th_u = circle_start_angle(np.stack([-tv2[:, 0], tv2[:, 1]], axis=1), length)
     tv1 /= np.maximum(np.linalg.norm(tv1, axis=1, keepdims=True), 1e-300)
     tv2 /= np.maximum(np.linalg.norm(tv2, axis=1, keepdims=True), 1e-300)
-    th_l = np.clip(np.arctan2(tv1[:, 1], tv1[:, 0]), -max_tangent_angle, max_tangent_angle)
-    # The arc tangent to TV_2 at P_2 leaves P_1 at minus the angle of TV_2 (symmetry).
-    th_u = np.clip(-np.arctan2(tv2[:, 1], tv2[:, 0]), -max_tangent_angle, max_tangent_angle)
+    if tangent != "circle":
+        th_l = np.arctan2(tv1[:, 1], tv1[:, 0])
+        # The arc tangent to TV_2 at P_2 leaves P_1 at minus the angle of TV_2 (symmetry).
+        th_u = -np.arctan2(tv2[:, 1], tv2[:, 0])
+    th_l = np.clip(th_l, -max_tangent_angle, max_tangent_angle)
+    th_u = np.clip(th_u, -max_tangent_angle, max_tangent_angle)
     m = np.asarray(m, np.int64)
     m_max = int(m.max()) if len(m) else 0
     i = np.arange(1, m_max + 1)[None, :]
