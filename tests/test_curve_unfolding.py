@@ -497,3 +497,28 @@ def test_tangential_relaxation_lifts_the_triangles_fairing_squeezes_on_scan_hole
     assert q1.min() >= 0.3 and q1.mean() >= 0.85
     validate_patch(relaxed, ctx.points, ctx.forbidden_edges)
     assert len(cu.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) == 0
+
+
+# ----------------------------------------------------------------------------- repair
+
+def test_repair_prefers_a_domain_whose_patch_clears_a_folded_border_to_a_sliver_ear(bunny_loops):
+    """bunny10k_textured's loop 1 (22 edges): a border face folds back over the hole at loop vertex 1,
+    so the annealed domain's patch crosses it; clipping the ear there leaves a 0.116 sliver (the
+    corner is 152 degrees wide), while the 0.2-relaxed development's patch crosses nothing."""
+    V, F, loops = bunny_loops
+    ctx = hole_context(V, F, loops[1], rings=cu.RINGS)
+    assert len(loops[1]) == 22 and corner_quality_bound(V, F, loops[1].vertices) > 0.3
+    first, _ = unfold_loop(ctx.points, np.random.default_rng(0))
+    X, Fp = cu.triangulate_and_embed(ctx, first, np.arange(ctx.size), [], "fairing", True, True)
+    assert len(cu.crossing_faces(ctx, X, Fp)) > 0  # the paper's patch crosses the fold
+    # Ear clipping alone (the first domain only) ends with a sliver ear.
+    n_bad, Xe, Fe, clipped, _, _ = cu.repair_crossings(ctx, [(first, "annealing", None)], X, Fp, "fairing", True, True)
+    assert n_bad == 0 and clipped > 0
+    assert triangle_quality(np.concatenate([ctx.points, Xe]), Fe).min() < 0.3
+    patch = cu.fill(ctx)
+    q = triangle_quality(patch.all_points(ctx.points), patch.faces)
+    assert patch.info["ears_clipped"] == 0 and patch.info["crossing_faces"] == 0
+    assert patch.info["unfolding"] == "development" and patch.info["development_relax"] > 0
+    assert q.min() >= 0.3
+    assert len(cu.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)

@@ -413,6 +413,28 @@ def simple_development(P, gap_angles, eps, ladder=RELAX_LADDER):
     return None, None
 
 
+def simple_developments(P, gap_angles, eps, ladder=RELAX_LADDER):
+    """Every development of the ladder that is a simple polygon, least relaxed first.
+
+    The repair step (:func:`.curve_unfolding.repair_crossings`) tries them as alternative
+    planar domains when the first patch crosses the surrounding mesh.
+
+    Parameters
+    ----------
+    P, gap_angles, eps, ladder : see :func:`simple_development`
+
+    Returns
+    -------
+    list of ((m, 2) float64, float)  polygon and its blend ``relax``
+    """
+    out = []
+    for r in ladder:
+        Q = develop_loop(P, gap_angles, relax=r)
+        if np.all(np.isfinite(Q)) and linear_motion_is_simple(Q, eps):
+            out.append((Q, r))
+    return out
+
+
 def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000,
                 step_bound="global", fallback=None):
     """Unfold a boundary loop into a simple planar polygon (Sec. 3.1).
