@@ -11,7 +11,8 @@ Criteria (the same for the four paper filters unless ``TARGETS`` says otherwise)
 - 0 original elements changed (Xu et al.'s split border faces are allowed and counted apart);
 - 0 new faces intersecting the mesh;
 - new-triangle quality mean >= 0.85 (per hole, averaged) and min >= 0.3, where the min is
-  judged against ``min(0.3, corner bound)`` per hole (:func:`metrics.corner_quality_bound`);
+  judged against ``min(0.3, corner bound)`` per hole (:func:`metrics.corner_quality_bound`),
+  over cut and natural holes (a capped island outline is no hole: its quality is not judged);
 - mean patch-to-ground-truth distance better than the baseline on every size class;
 - median seconds per hole, holes up to ``speed_edges`` boundary edges, under ``speed_seconds``;
 - where ``versus`` names a variant of the same filter and some cases: mean distance on those
@@ -79,11 +80,10 @@ def criteria(rows, baseline_rows, target):
         q = _mean([r.get("quality_mean") for r in group if r.get("closed")])
         out.append((f"quality mean, {label} holes (≥ {QUALITY_MEAN})",
                     "–" if q is None else f"{q:.3f}", None if q is None else q >= QUALITY_MEAN))
-    q_min = min((r["quality_min"] for r in closed if r.get("quality_min") is not None), default=None)
-    below = [r for r in closed if r.get("quality_min") is not None
-             and r["quality_min"] < min(QUALITY_MIN, r.get("quality_bound", 1.0)) - 1e-9]
-    forced = sum(1 for r in closed if r.get("quality_min") is not None and r["quality_min"] < QUALITY_MIN
-                 and r.get("quality_bound", 1.0) < QUALITY_MIN)
+    holes = [r for r in closed if r["size_class"] != "outline" and r.get("quality_min") is not None]
+    q_min = min((r["quality_min"] for r in holes), default=None)
+    below = [r for r in holes if r["quality_min"] < min(QUALITY_MIN, r.get("quality_bound", 1.0)) - 1e-9]
+    forced = sum(1 for r in holes if r["quality_min"] < QUALITY_MIN and r.get("quality_bound", 1.0) < QUALITY_MIN)
     out.append((f"quality min (≥ {QUALITY_MIN})", "–" if q_min is None else f"{q_min:.3f}",
                 None if q_min is None else q_min >= QUALITY_MIN))
     out.append((f"holes with min < {QUALITY_MIN} not forced by a sharp border corner",

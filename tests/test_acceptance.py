@@ -148,3 +148,11 @@ def test_versus_variant_compares_on_the_named_cases_only():
     name, text, ok = versus_variant(ours, zero, ("sphere", "torus"))
     assert ok is True and text == "0.100 vs 0.200"
     assert versus_variant(zero, ours, ("sphere",))[2] is False
+
+
+def test_capped_island_outline_quality_is_not_judged():
+    target = TARGETS["meshing_close_holes_curve_unfolding"]
+    rows = [_row(), _row(ground_truth=False, size_class="outline", quality_min=0.01)]
+    got = _as_dict(criteria(rows, [_row(dist_patch_to_gt_mean_permille=0.2)], target))
+    assert got["quality min (≥ 0.3)"] == ("0.400", True)
+    assert got["holes with min < 0.3 not forced by a sharp border corner"] == ("0 (0 forced)", True)
