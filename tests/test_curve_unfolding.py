@@ -13,9 +13,10 @@ from meshlab_holefill import FILTERS, HoleFillError
 from meshlab_holefill.algorithms import curve_unfolding as cu
 from meshlab_holefill.algorithms.embedding import (embed_patch, embedding_energy, energy_rows, tangential_relaxation,
                                                    umbrella_operator, vertex_normals)
-from meshlab_holefill.algorithms.unfolding import (anneal_loop, boundary_gap_angles, colour_classes, develop_loop,
-                                                   linear_motion_is_simple, planarity_energy, planarity_terms,
-                                                   project_to_best_plane, simple_development, unfold_loop)
+from meshlab_holefill.algorithms.unfolding import (anneal_loop, colour_classes, linear_motion_is_simple,
+                                                   planarity_energy, planarity_terms, project_to_best_plane,
+                                                   unfold_loop)
+from meshlab_holefill.geometry.development import boundary_gap_angles, develop_loop, simple_development
 from meshlab_holefill.comparison import MeshCase, prepare_case
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality

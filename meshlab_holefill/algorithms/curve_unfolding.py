@@ -37,8 +37,8 @@ from ..geometry.triangulate import triangulate_polygon
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
 from .embedding import embed_patch
-from .unfolding import (boundary_gap_angles, develop_loop, linear_motion_is_simple, simple_development,
-                        simple_developments, unfold_loop)
+from ..geometry.development import boundary_gap_angles, develop_loop, simple_development, simple_developments
+from .unfolding import linear_motion_is_simple, unfold_loop
 
 RINGS = 2
 
@@ -299,7 +299,7 @@ def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangenti
     """Repair (beyond the paper, option ``repair``): a patch that crosses nothing, best quality first.
 
     ``domains`` are planar polygons of the loop, the unfolding used first (its patch given as
-    ``vertices``, ``faces``), then the loop's simple developments (:func:`.unfolding.simple_developments`).
+    ``vertices``, ``faces``), then the loop's simple developments (:func:`..geometry.development.simple_developments`).
     When the first patch crosses the surrounding mesh, the patches of the other domains are
     tried as they are, least relaxed first, and the one of best minimum quality that crosses
     nothing is taken (the first reaching GOOD_QUALITY = 0.3 ends the search):

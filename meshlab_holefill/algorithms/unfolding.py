@@ -36,9 +36,9 @@ Readings of what Sec. 3.1 leaves open:
 * **Units.** epsilon is relative to the loop's mean edge length (the paper's 1e-5 is in model
   units), which makes the method scale invariant.
 
-Beyond the paper, :func:`develop_loop` gives a fallback polygon for loops the annealing does not
+Beyond the paper, :func:`geometry.development.develop_loop` gives a fallback polygon for loops the annealing does not
 unfold (loops wrapped around a tube or a knob project onto themselves from every side), and
-:func:`simple_development` relaxes it towards the convex polygon until it is simple.
+:func:`geometry.development.simple_development` relaxes it towards the convex polygon until it is simple.
 
 Why the annealing does not unfold a long wrapped loop (measured on the benchmark's torus hole,
 m = 211, wrapped 255 degrees around the tube; its best-plane projection has 5 crossing
@@ -58,8 +58,10 @@ import math
 
 import numpy as np
 
+# lssvm_poisson_patch still imports these two from here; they live in geometry/development.py
+from ..geometry.development import boundary_gap_angles, develop_loop  # noqa: F401
 from ..geometry.pca import fit_plane, plane_frame
-from ..geometry.segments import (min_segment_distance, nonadjacent_mask, segment_distance_matrix,
+from ..geometry.segments import (is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix,
                                  segment_distance_rows)
 from ..patch import HoleFillError
 
@@ -308,131 +310,7 @@ def linear_motion_is_simple(Q, eps, near=None):
     -------
     bool
     """
-    Q = np.asarray(Q, np.float64)
-    if len(Q) == 3:
-        a, b, c = Q
-        return abs(float((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))) > eps * eps
-    return min_segment_distance(Q, near) > eps
-
-
-def boundary_gap_angles(vertices, faces, k):
-    """Angle the hole leaves open at each loop vertex: 2 pi minus the mesh's corner angles there.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float64  local vertices, loop first
-    faces : (f, 3) int  faces containing at least every face incident to the loop
-    k : int  loop size
-
-    Returns
-    -------
-    gap : (k,) float64 radians, in (0, 2 pi) for a manifold border vertex
-    """
-    from ..geometry.quality import corner_angles
-
-    faces = np.asarray(faces, np.int64)
-    A = corner_angles(vertices, faces)
-    total = np.bincount(faces.ravel(), weights=A.ravel(), minlength=len(vertices))[:k]
-    return 2.0 * np.pi - total
-
-
-def develop_loop(P, gap_angles, relax=0.0):
-    """Planar polygon with the loop's edge lengths and the surface's angles at its vertices.
-
-    Not in the paper: the fallback unfolding used when annealing finds no simple projection
-    (loops wrapped around a tube or a knob). The polygon turns by pi - gap_angle at each
-    vertex, the opening the surrounding surface leaves, shifted equally so the turns sum to
-    2 pi (the Gaussian curvature of the missing surface spread along the loop), walks the
-    3D edge lengths, and is closed by the smallest relative change of the edge lengths
-    (least squares, one 2 x 2 solve). Like the surface's own development it keeps the
-    loop's concavities; it is counter-clockwise when the loop is in patch orientation.
-
-    ``relax`` = r in [0, 1] blends the turns towards the regular polygon's, turn_i =
-    (1 - r) (pi - alpha_i) + r 2 pi / m. r = 1 gives the convex polygon with the loop's edge
-    lengths, a planar loop of E_PE = 0 (the global minimiser of Sec. 3.1's energy); small r
-    only damps the zig-zag of a scan or grid border, which is what makes the development of
-    a long loop wrapped around a tube touch itself at a narrow waist (see
-    :func:`simple_development`).
-
-    Parameters
-    ----------
-    P : (m, 3) float64  loop in patch orientation
-    gap_angles : (m,) float64  from :func:`boundary_gap_angles`
-    relax : float  blend r towards uniform turning (0: the plain development)
-
-    Returns
-    -------
-    Q : (m, 2) float64  (check simplicity with :func:`linear_motion_is_simple`)
-    """
-    P = np.asarray(P, np.float64)
-    m = len(P)
-    alpha = np.clip(np.asarray(gap_angles, np.float64), 0.05, 2.0 * np.pi - 0.05)
-    alpha = alpha + ((m - 2) * np.pi - alpha.sum()) / m
-    turn = (1.0 - relax) * (np.pi - alpha) + relax * (2.0 * np.pi / m)
-    theta = np.concatenate([[0.0], np.cumsum(turn[1:])])  # direction of edge i = (p_i, p_{i+1})
-    lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
-    directions = np.stack([np.cos(theta), np.sin(theta)], axis=1)
-    # min sum (dl_i / l_i)^2  subject to  sum_i (l_i + dl_i) d_i = 0
-    weights = lengths ** 2
-    gap = lengths @ directions
-    lam = np.linalg.solve((directions.T * weights) @ directions, gap)
-    new_lengths = lengths - weights * (directions @ lam)
-    edges = new_lengths[:, None] * directions
-    return np.concatenate([[[0.0, 0.0]], np.cumsum(edges, axis=0)[:-1]])
-
-
-RELAX_LADDER = (0.0, 0.05, 0.1, 0.2, 0.3, 0.5)  # blends tried by simple_development, least first
-
-
-def simple_development(P, gap_angles, eps, ladder=RELAX_LADDER):
-    """The least relaxed development of the loop that is a simple polygon (fallback, not in the paper).
-
-    Tries :func:`develop_loop` with ``relax`` = 0, 0.05, 0.1, 0.2, 0.3, 0.5 and returns the
-    first polygon with clearance d_MD > eps. The ladder stops at 0.5: more relaxed polygons
-    are nearly convex and lose the concavities Sec. 3.1 wants preserved (embedded patches
-    then fold over the surrounding mesh). Measured on the benchmark's torus hole of 211
-    edges wrapped 255 degrees around the tube: the plain development touches itself at its
-    waist, 0.05 is simple and its patch crosses nothing.
-
-    Parameters
-    ----------
-    P : (m, 3) float64  loop in patch orientation
-    gap_angles : (m,) float64
-    eps : float  absolute clearance
-    ladder : sequence of float
-
-    Returns
-    -------
-    Q : (m, 2) float64 or None  None when no blend of the ladder is simple
-    relax : float or None
-    """
-    for r in ladder:
-        Q = develop_loop(P, gap_angles, relax=r)
-        if np.all(np.isfinite(Q)) and linear_motion_is_simple(Q, eps):
-            return Q, r
-    return None, None
-
-
-def simple_developments(P, gap_angles, eps, ladder=RELAX_LADDER):
-    """Every development of the ladder that is a simple polygon, least relaxed first.
-
-    The repair step (:func:`.curve_unfolding.repair_crossings`) tries them as alternative
-    planar domains when the first patch crosses the surrounding mesh.
-
-    Parameters
-    ----------
-    P, gap_angles, eps, ladder : see :func:`simple_development`
-
-    Returns
-    -------
-    list of ((m, 2) float64, float)  polygon and its blend ``relax``
-    """
-    out = []
-    for r in ladder:
-        Q = develop_loop(P, gap_angles, relax=r)
-        if np.all(np.isfinite(Q)) and linear_motion_is_simple(Q, eps):
-            out.append((Q, r))
-    return out
+    return is_simple_polygon(Q, eps, near)
 
 
 def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000,

@@ -133,3 +133,26 @@ def min_segment_distance(P, near=None):
     if len(P) <= 3:
         return math.inf
     return float(segment_distance_matrix(P, near).min())
+
+
+def is_simple_polygon(Q, eps, near=None):
+    """Whether a closed polygon keeps clearance d_MD > eps between non-adjacent edges (so is simple).
+
+    Parameters
+    ----------
+    Q : (m, d) float64
+        Polygon vertices in order.
+    eps : float
+        Absolute clearance.
+    near : float, optional
+        Distances beyond ``near`` (> eps) are only bounded from below (faster, same answer).
+
+    Returns
+    -------
+    bool  (a triangle has no non-adjacent edges: it must merely not be degenerate)
+    """
+    Q = np.asarray(Q, np.float64)
+    if len(Q) == 3:
+        a, b, c = Q[:, :2]
+        return abs(float((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))) > eps * eps
+    return min_segment_distance(Q, near) > eps

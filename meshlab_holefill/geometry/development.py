@@ -1,0 +1,130 @@
+"""Developing a hole's border loop into the plane (fallback unfolding, not in any of the papers).
+
+A loop the curve-unfolding annealing (Brunton et al. 2009, Sec. 3.1) cannot flatten -- one
+wrapped around a tube or a knob projects onto itself from every side -- is laid out instead
+with its 3D edge lengths and, at each vertex, the angle the surrounding surface leaves open.
+Used by the curve-unfolding filter and by the LS-SVM filter's fallback initial patch.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .segments import is_simple_polygon
+
+
+def boundary_gap_angles(vertices, faces, k):
+    """Angle the hole leaves open at each loop vertex: 2 pi minus the mesh's corner angles there.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64  local vertices, loop first
+    faces : (f, 3) int  faces containing at least every face incident to the loop
+    k : int  loop size
+
+    Returns
+    -------
+    gap : (k,) float64 radians, in (0, 2 pi) for a manifold border vertex
+    """
+    from .quality import corner_angles
+
+    faces = np.asarray(faces, np.int64)
+    A = corner_angles(vertices, faces)
+    total = np.bincount(faces.ravel(), weights=A.ravel(), minlength=len(vertices))[:k]
+    return 2.0 * np.pi - total
+
+
+def develop_loop(P, gap_angles, relax=0.0):
+    """Planar polygon with the loop's edge lengths and the surface's angles at its vertices.
+
+    Not in the paper: the fallback unfolding used when annealing finds no simple projection
+    (loops wrapped around a tube or a knob). The polygon turns by pi - gap_angle at each
+    vertex, the opening the surrounding surface leaves, shifted equally so the turns sum to
+    2 pi (the Gaussian curvature of the missing surface spread along the loop), walks the
+    3D edge lengths, and is closed by the smallest relative change of the edge lengths
+    (least squares, one 2 x 2 solve). Like the surface's own development it keeps the
+    loop's concavities; it is counter-clockwise when the loop is in patch orientation.
+
+    ``relax`` = r in [0, 1] blends the turns towards the regular polygon's, turn_i =
+    (1 - r) (pi - alpha_i) + r 2 pi / m. r = 1 gives the convex polygon with the loop's edge
+    lengths, a planar loop of E_PE = 0 (the global minimiser of Sec. 3.1's energy); small r
+    only damps the zig-zag of a scan or grid border, which is what makes the development of
+    a long loop wrapped around a tube touch itself at a narrow waist (see
+    :func:`simple_development`).
+
+    Parameters
+    ----------
+    P : (m, 3) float64  loop in patch orientation
+    gap_angles : (m,) float64  from :func:`boundary_gap_angles`
+    relax : float  blend r towards uniform turning (0: the plain development)
+
+    Returns
+    -------
+    Q : (m, 2) float64  (check simplicity with :func:`.segments.is_simple_polygon`)
+    """
+    P = np.asarray(P, np.float64)
+    m = len(P)
+    alpha = np.clip(np.asarray(gap_angles, np.float64), 0.05, 2.0 * np.pi - 0.05)
+    alpha = alpha + ((m - 2) * np.pi - alpha.sum()) / m
+    turn = (1.0 - relax) * (np.pi - alpha) + relax * (2.0 * np.pi / m)
+    theta = np.concatenate([[0.0], np.cumsum(turn[1:])])  # direction of edge i = (p_i, p_{i+1})
+    lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    directions = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    # min sum (dl_i / l_i)^2  subject to  sum_i (l_i + dl_i) d_i = 0
+    weights = lengths ** 2
+    gap = lengths @ directions
+    lam = np.linalg.solve((directions.T * weights) @ directions, gap)
+    new_lengths = lengths - weights * (directions @ lam)
+    edges = new_lengths[:, None] * directions
+    return np.concatenate([[[0.0, 0.0]], np.cumsum(edges, axis=0)[:-1]])
+
+
+RELAX_LADDER = (0.0, 0.05, 0.1, 0.2, 0.3, 0.5)  # blends tried by simple_development, least first
+
+
+def simple_development(P, gap_angles, eps, ladder=RELAX_LADDER):
+    """The least relaxed development of the loop that is a simple polygon (fallback, not in the paper).
+
+    Tries :func:`develop_loop` with ``relax`` = 0, 0.05, 0.1, 0.2, 0.3, 0.5 and returns the
+    first polygon with clearance d_MD > eps. The ladder stops at 0.5: more relaxed polygons
+    are nearly convex and lose the concavities Sec. 3.1 wants preserved (embedded patches
+    then fold over the surrounding mesh). Measured on the benchmark's torus hole of 211
+    edges wrapped 255 degrees around the tube: the plain development touches itself at its
+    waist, 0.05 is simple and its patch crosses nothing.
+
+    Parameters
+    ----------
+    P : (m, 3) float64  loop in patch orientation
+    gap_angles : (m,) float64
+    eps : float  absolute clearance
+    ladder : sequence of float
+
+    Returns
+    -------
+    Q : (m, 2) float64 or None  None when no blend of the ladder is simple
+    relax : float or None
+    """
+    return next(_simple_developments(P, gap_angles, eps, ladder), (None, None))
+
+
+def simple_developments(P, gap_angles, eps, ladder=RELAX_LADDER):
+    """Every development of the ladder that is a simple polygon, least relaxed first.
+
+    The repair step (:func:`meshlab_holefill.algorithms.curve_unfolding.repair_crossings`) tries them as alternative
+    planar domains when the first patch crosses the surrounding mesh.
+
+    Parameters
+    ----------
+    P, gap_angles, eps, ladder : see :func:`simple_development`
+
+    Returns
+    -------
+    list of ((m, 2) float64, float)  polygon and its blend ``relax``
+    """
+    return list(_simple_developments(P, gap_angles, eps, ladder))
+
+
+def _simple_developments(P, gap_angles, eps, ladder):
+    for r in ladder:
+        Q = develop_loop(P, gap_angles, relax=r)
+        if np.all(np.isfinite(Q)) and is_simple_polygon(Q, eps):
+            yield Q, r
