@@ -223,3 +223,122 @@ def test_embeds_in_projection_rejects_a_doubly_wound_fan():
     V = np.concatenate([ring, [[0.0, 0.0, 0.3]]])
     F = np.array([[i, (i + 1) % m, m] for i in range(m)])
     assert not embeds_in_projection(V, F, m)
+
+
+# ----------------------------------------------------------------------------- quality and the filter's neighbourhood
+
+def _noisy_grid(noise, seed=1):
+    V, F = grid(9, 9)
+    V = V.astype(float)
+    V[:, 2] = np.random.default_rng(seed).normal(scale=noise, size=len(V))
+    movable = np.ones(len(V), bool)
+    movable[boundary_loops(F)[0].vertices] = False
+    return V, F, movable
+
+
+def test_bilateral_guard_keeps_every_face_above_its_floor():
+    from meshlab_holefill.geometry.bilateral import bilateral_filter
+
+    V, F, movable = _noisy_grid(0.1)
+    h = 0.125  # grid spacing: sigma_c = 0.1 and sigma_s = 0.5 of it, as the filter's defaults
+    q0 = triangle_quality(V, F)
+    floor = np.minimum(q0, 0.3)
+    plain = bilateral_filter(V, F, movable, 0.1 * h, 0.5 * h, 1)
+    assert np.any(triangle_quality(plain, F) < floor - 1e-12)  # the unguarded step makes slivers here
+    guarded = bilateral_filter(V, F, movable, 0.1 * h, 0.5 * h, 3, min_quality=0.3)
+    # (three iterations: each one's floor is the quality before it, so the first one's bound holds throughout)
+    assert np.all(triangle_quality(guarded, F) >= floor - 1e-12)
+    assert np.abs(guarded - V).max() > 0.01  # the guard undoes offending moves only
+    n0 = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    n1 = np.cross(guarded[F[:, 1]] - guarded[F[:, 0]], guarded[F[:, 2]] - guarded[F[:, 0]])
+    assert np.all(np.einsum("ij,ij->i", n0, n1) > 0)
+
+
+def test_bilateral_default_is_unchanged_by_the_new_keywords():
+    from meshlab_holefill.geometry.bilateral import bilateral_filter
+
+    V, F, movable = _noisy_grid(0.05)
+    a = bilateral_filter(V, F, movable, 0.06, 0.1, 3)
+    b = bilateral_filter(V, F, movable, 0.06, 0.1, 3, neighbourhood="ring", fixed_points=V[:4], min_quality=None)
+    assert np.array_equal(a, b)
+
+
+def test_radius_neighbourhood_reaches_the_fixed_surrounding_points():
+    # A flat patch with fixed points lifted beside it: only Eq. 4's spatial neighbourhood sees them.
+    from meshlab_holefill.geometry.bilateral import bilateral_filter
+
+    V, F = grid(5, 5)
+    V = V.astype(float)
+    movable = np.zeros(len(V), bool)
+    movable[12] = True  # the centre (0.5, 0.5)
+    lifted = np.array([[0.5, 0.5 + 0.3, 0.05], [0.5, 0.5 - 0.3, 0.05]])
+    ring = bilateral_filter(V, F, movable, 0.2, 1.0, 1, fixed_points=lifted)
+    assert np.array_equal(ring, V)  # 1-ring neighbours are all at z = 0
+    spatial = bilateral_filter(V, F, movable, 0.2, 1.0, 1, neighbourhood="radius", fixed_points=lifted)
+    assert spatial[12, 2] > 0.005 and np.array_equal(np.delete(spatial, 12, 0), np.delete(V, 12, 0))
+    # rho = 2 sigma_c below the grid spacing: no neighbour at all, nothing moves (the literal sigma_c = 0.1 reading).
+    tiny = bilateral_filter(V, F, movable, 0.1, 1.0, 1, neighbourhood="radius", fixed_points=lifted)
+    assert np.array_equal(tiny, V)
+
+
+def test_unfolded_relaxation_equals_the_circumcircle_test_in_the_plane_and_converges_on_a_bumpy_patch():
+    from meshlab_holefill.geometry.quality import corner_angles
+    from meshlab_holefill.geometry.topology import interior_edges
+
+    ctx, tri, loop = _triangulated_disk_hole()
+    flat_sphere, _ = relax_edges(ctx.points, tri, loop, criterion="sphere")
+    flat_angles, _ = relax_edges(ctx.points, tri, loop, criterion="angles")
+    assert np.array_equal(flat_sphere, flat_angles)
+    # Lift the loop onto a saddle: the unfolded test leaves no interior edge whose opposite angles exceed pi.
+    P = ctx.points.copy()
+    P[:, 2] = 3 * (P[:, 0] - 0.5) * (P[:, 1] - 0.5)
+    F, swaps = relax_edges(P, tri, loop, criterion="angles")
+    assert swaps > 0
+    E, f1, c1, f2, c2 = interior_edges(F, len(P))
+    A = corner_angles(P, F)
+    opposite = A[f1, (c1 + 2) % 3] + A[f2, (c2 + 2) % 3]
+    assert np.all(opposite <= np.pi * (1 + 1e-9))
+
+
+@pytest.fixture(scope="module")
+def cow_cut_holes():
+    """The benchmark suite's cut holes in pymeshlab's cow.obj (seed 0): contexts and loops."""
+    from meshlab_holefill.compare import cut_holes, hole_plan
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("cow.obj"))
+    V, F = mesh_arrays(ms)
+    plan = hole_plan(4, ("small", "medium", "large"))
+    _, cut = cut_holes(V, F, sizes=[s for s, _ in plan], shapes=[sh for _, sh in plan], seed=0, strict=False)
+    keep = np.ones(len(F), bool)
+    keep[np.concatenate([h.face_indices for h in cut])] = False
+    F0 = F[keep]
+    loops = sorted(boundary_loops(F0), key=lambda lp: -len(lp))
+    return V, F0, loops
+
+
+def test_spiky_cow_hole_gets_no_sliver(cow_cut_holes):
+    # The suite's cow hole 0 (22 edges) alternates spikes of 27-40 degrees with concave vertices;
+    # with the circumsphere relaxation a triangle joining three concave vertices kept quality 0.276.
+    V, F, loops = cow_cut_holes
+    loop = next(lp for lp in loops if len(lp) == 22)
+    ctx = hole_context(V, F, loop, vertex_face_incidence(F, len(V)), rings=2)
+    patch = fill(ctx)
+    q = triangle_quality(patch.all_points(ctx.points), patch.faces)
+    assert q.min() >= 0.3 and q.mean() > 0.7
+    before = fill(ctx, relaxation="sphere")
+    assert triangle_quality(before.all_points(ctx.points), before.faces).min() < 0.3
+
+
+def test_faired_patch_is_relaxed_again():
+    # Fairing (option) lifts the refined patch onto the sphere; Sec. III.C's relaxation is then
+    # run again, so no interior edge of the result fails the (unfolded) test any more.
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.6)
+    ctx = _first_hole_context(V, F)
+    k = ctx.size
+    patch = fill(ctx, fairing="thinplate", iterations=0)
+    X = patch.all_points(ctx.points)
+    loop = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    assert relax_edges(X, patch.faces, loop, allowed=relaxation_guard(ctx), criterion="angles")[1] == 0
+    assert triangle_quality(X, patch.faces).min() > 0.5
+    assert np.abs(np.linalg.norm(patch.vertices, axis=1) - 1).mean() < 0.02

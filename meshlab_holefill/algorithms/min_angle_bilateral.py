@@ -4,6 +4,25 @@ Hu, Wang, Li and Liu, "Filling Holes in Triangular Meshes in Engineering" (Sec. 
 hole is triangulated by repeatedly cutting the boundary vertex of smallest angle whose
 neighbours' normals agree (III.B), refined to the density of the surrounding mesh (III.C),
 and its interior vertices are moved along their normals by the bilateral filter (III.D).
+
+Readings where the paper leaves room (each a parameter, measured on the benchmark's cut holes):
+
+* Relaxation (III.C, Fig. 4) is the circumcircle test of Pfeifle and Seidel, who relax in a
+  plane. In space the two circumsphere tests can both pass for the worse diagonal of a
+  folded quad (the triangle joining three concave vertices between spikes of a jagged
+  border keeps quality 0.28); the default tests the two triangles unfolded about their
+  common edge, which is the same test on a planar quad (``relaxation``).
+* The filter's neighbourhood (III.D): Eq. 4 after Fleishman et al. takes every point within
+  rho = 2 sigma_c, the pseudo-code "the 1-ring neighborhood of v"; nothing restricts it to
+  the patch, so the ``radius`` reading includes the surrounding mesh's fixed vertices. With
+  sigma_c = 0.1 of the vertex density (Sec. IV, "density" read as the mean incident edge
+  length) rho holds no neighbour; on the 1-ring the Gaussian is then so narrow that the
+  nearest neighbour takes all the weight. Wider kernels (sigma_c 0.5-1 edge length, the
+  reading under which rho covers the 1-ring) make the filter a plain smoother, which moves a
+  piecewise-flat patch further from a curved removed surface, the more so with the
+  surrounding vertices included; the default stays the paper's 1-ring with sigma_c = 0.1.
+* The filter step is guarded (``filter_guard``): a move that would make a sliver or flip a
+  triangle is undone.
 """
 from __future__ import annotations
 
@@ -37,10 +56,11 @@ PARAMS = [
     ParamSpec("fairing", "enum", "none",
               "Extra step beyond the paper, off by default: solve a membrane ('membrane') or thin-plate "
               "('thinplate') energy for the new vertices, with the surrounding rings fixed, after refinement "
-              "and before the bilateral filter. The filter is a smoother: after fairing it flattens the faired "
-              "patch again, so combine fairing with iterations=0 (measured: distance to the removed surface "
-              "per mille of the bbox diagonal, small/medium/large holes, 0.22/2.1/5.1 with iterations=0 "
-              "against 0.38/3.1/5.4 with 3).",
+              "(edges relaxed again afterwards) and before the bilateral filter. The filter is a smoother: after "
+              "fairing it flattens the faired patch again, so combine fairing with iterations=0 (measured on the "
+              "benchmark's cut holes, mean patch-to-removed-surface distance per mille of the bbox diagonal, "
+              "small/medium/large: thinplate 0.28/2.5/5.7 with iterations=0, 0.45/3.6/5.9 with 3; no fairing "
+              "0.49/6.1/16.8; MeshLab's close holes 0.30/5.9/21.2).",
               choices=("none", "membrane", "thinplate")),
 ]
 
@@ -296,7 +316,7 @@ def relaxation_guard(ctx):
     return allowed
 
 
-def _refine(ctx, F0, alpha, fixed, max_passes=4):
+def _refine(ctx, F0, alpha, fixed, max_passes=4, criterion="sphere"):
     """Refinement of Sec. III.C run until neither a split nor a relaxation swap is left.
 
     The rounds of :func:`refine_patch` use the fast sector test; the swaps it refuses are then
@@ -305,28 +325,49 @@ def _refine(ctx, F0, alpha, fixed, max_passes=4):
     since the new triangles may need splitting.
     """
     sector, exact = patch_guard(ctx), relaxation_guard(ctx)
-    V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed, allowed=sector)
+    V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed, allowed=sector,
+                                     criterion=criterion)
     for _ in range(max_passes):
-        F, swaps = relax_edges(V, F, fixed, allowed=exact)
+        F, swaps = relax_edges(V, F, fixed, allowed=exact, criterion=criterion)
         info["swaps"] += swaps
         if swaps == 0:
             break
-        V, F, scale, more = refine_patch(V, F, scale, alpha=alpha, fixed_edges=fixed, allowed=sector)
+        V, F, scale, more = refine_patch(V, F, scale, alpha=alpha, fixed_edges=fixed, allowed=sector,
+                                         criterion=criterion)
         info["split_rounds"] += more["split_rounds"]
         info["swaps"] += more["swaps"]
     return V, F, scale, info
 
 
-def _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations):
-    """Optional fairing (beyond the paper) then the bilateral filter of Sec. III.D on the new vertices."""
+def _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations, neighbourhood="ring",
+              min_quality=None, fixed=None, criterion="angles"):
+    """Optional fairing (beyond the paper) then the bilateral filter of Sec. III.D on the new vertices.
+
+    Fairing moves the new vertices a long way off the refined, nearly flat patch; the edges
+    are then relaxed again (Sec. III.C's test, ``criterion``, with ``fixed`` edges kept), as
+    the paper's refinement leaves a patch whose every interior edge passes it, unless the
+    relaxed patch intersects itself or the surrounding faces and the faired one does not.
+    With ``neighbourhood="radius"`` the surrounding rings of the hole (``ctx.vertices[k:]``)
+    are the filter's neighbours too, fixed (Eq. 4's N(u) is every point within rho = 2 sigma_c).
+
+    Returns
+    -------
+    V : (n, 3) float64, F : (m, 3) int64
+    """
     V = V.copy()
     k = ctx.size
     if fairing != "none" and interior.any():
         V[k:] = fair_patch_in_context(ctx.vertices, ctx.faces, k, V[k:], F,
                                       order=1 if fairing == "membrane" else 2)
+        relaxed, swaps = relax_edges(V, F, fixed, allowed=relaxation_guard(ctx), criterion=criterion)
+        # The guard checks intersections only where the sector test refuses: a faired patch
+        # close to the surrounding surface can be pushed through it by an allowed swap.
+        if swaps and not (_crosses(ctx, V, relaxed) and not _crosses(ctx, V, F)):
+            F = relaxed
     if iterations > 0 and interior.any():
-        V = bilateral_filter(V, F, interior, sigma_c * scale, sigma_s * scale, iterations)
-    return V
+        V = bilateral_filter(V, F, interior, sigma_c * scale, sigma_s * scale, iterations,
+                             neighbourhood=neighbourhood, fixed_points=ctx.vertices[k:], min_quality=min_quality)
+    return V, F
 
 
 def _segments_cross_2d(P):
@@ -428,13 +469,29 @@ def _crosses(ctx, V, F):
     return bool(len(intersecting_pairs(V, F, np.arange(len(F)), np.arange(len(F)))))
 
 
-def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairing="none"):
+def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairing="none", relaxation="angles",
+         neighbourhood="ring", filter_guard=0.3):
     """Fill one hole by Hu et al.'s three steps (Sec. III.B-III.D).
 
     Parameters
     ----------
     ctx : HoleContext
     alpha, sigma_c, sigma_s, iterations, fairing : see PARAMS
+    relaxation : {"angles", "sphere"}
+        Edge relaxation test of the refinement (Sec. III.C, Fig. 4): "angles" tests the two
+        triangles unfolded into one plane about their common edge (opposite angles adding up
+        to more than pi: swap), the paper's circumcircle test on a planar quad, which picks one
+        diagonal of a folded one; "sphere" tests the circumspheres in space, which on a folded
+        quad can keep a sliver.
+    neighbourhood : {"ring", "radius"}
+        Bilateral filter neighbourhood (Sec. III.D): "ring" is the pseudo-code's 1-ring;
+        "radius" takes every point within rho = 2 sigma_c (Eq. 4, after Fleishman et al.), the
+        surrounding mesh's fixed vertices (``ctx.vertices[k:]``) included. With sigma_c = 0.1
+        no point is that close: use sigma_c >= 0.5 with it.
+    filter_guard : float
+        Guard on the bilateral step: a move that would leave a new triangle with quality 2r/R
+        below min(filter_guard, its quality before), or flip it, is undone; 0 turns it off.
+        (These three are not filter parameters yet: the .mlx round-trip test lists them.)
 
     Returns
     -------
@@ -447,12 +504,14 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     t1 = time.perf_counter()
     loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
     fixed = np.concatenate([loop_edges, ctx.forbidden_edges.reshape(-1, 2)])
-    V, F, scale, info = _refine(ctx, F0, alpha, fixed)
+    V, F, scale, info = _refine(ctx, F0, alpha, fixed, criterion=relaxation)
     t2 = time.perf_counter()
     interior = np.arange(len(V)) >= k
-    Vb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations)
+    opt = dict(neighbourhood=neighbourhood, min_quality=filter_guard if filter_guard > 0 else None, fixed=fixed,
+               criterion=relaxation)
+    Vb, Fb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations, **opt)
     info["refinement"], info["bilateral_iterations"] = "plain", iterations
-    if _crosses(ctx, Vb, F):
+    if _crosses(ctx, Vb, Fb):
         # Swaps can fold a patch through a strongly curved border or onto itself: redo the
         # refinement with every swap checked for intersections, and as a last resort without
         # swaps (centroid splits alone never create an intersection).
@@ -461,17 +520,17 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
             if not _crosses(ctx, V, F) or _crosses(ctx, ctx.points, F0):
                 break
             V, F, scale, info2 = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
-                                              allowed=guard)
+                                              allowed=guard, criterion=relaxation)
             info.update(info2, refinement=mode)
         interior = np.arange(len(V)) >= k
         # The filter moves vertices along their normals; on a large, nearly flat patch that
         # can fold it. Use as many iterations as keep it free of intersections.
         for n_iter in range(iterations, -1, -1):
-            Vb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, n_iter)
-            if n_iter == 0 or not _crosses(ctx, Vb, F):
+            Vb, Fb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, n_iter, **opt)
+            if n_iter == 0 or not _crosses(ctx, Vb, Fb):
                 break
         info["bilateral_iterations"] = n_iter
-    V = Vb
+    V, F = Vb, Fb
     t3 = time.perf_counter()
     info.update(initial_faces=len(F0), triangulation_seconds=t1 - t0, refinement_seconds=t2 - t1,
                 filter_seconds=t3 - t2)

@@ -33,7 +33,13 @@ def _triangle_normals(P, Q, R):
     return np.cross(Q - P, R - P)
 
 
-def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
+def _angle_at(P, Q, R):
+    """Angle at P of the triangles (P, Q, R), row-wise."""
+    u, w = Q - P, R - P
+    return np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+
+
+def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion="sphere"):
     """Swap interior edges until every one passes the circumsphere test (Hu et al. Sec. III.C, Fig. 4).
 
     For an interior edge (a, b) with triangles (a, b, c) and (b, a, d) the test passes when
@@ -42,6 +48,13 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
     both diagonals may fail it). A swap is refused when it would fold the surface (a new
     triangle facing against the old pair), create a duplicate edge, or touch a fixed edge.
     Swaps are applied in rounds of non-adjacent edges (vectorised).
+
+    With ``criterion="angles"`` the test is made on the two triangles unfolded into one
+    plane around their common edge (the intrinsic Delaunay test): the edge fails it when the
+    angles opposite it at c and d add up to more than pi. On a planar quad this is the
+    circumcircle test; on a strongly folded one the two circumsphere tests can both pass
+    for the worse diagonal (a sliver between spikes of a jagged border keeps its edge).
+    As with the sphere test, a swap is made only when the new edge passes the test.
 
     Parameters
     ----------
@@ -55,6 +68,8 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
         triangles are A[i] = (a, d, c) and B[i] = (b, c, d), replacing faces replaced[i] of the
         current faces F; lets the caller refuse swaps that would leave the hole (e.g. through
         the surrounding mesh).
+    criterion : {"sphere", "angles"}
+        The circumsphere test in space (default) or the unfolded (opposite-angle) test.
 
     Returns
     -------
@@ -72,14 +87,17 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
             break
         c = F[f1, (c1 + 2) % 3]
         d = F[f2, (c2 + 2) % 3]
-        # Circumspheres once per face (row-wise, so the same values as per edge), and the
-        # remaining tests only on the edges that fail the first one: most edges pass it.
-        cc, r = circumcenters(V, F)
-        cc1, r1, cc2, r2 = cc[f1], r[f1], cc[f2], r[f2]
-        # Strictly inside (relative margin) so that cocircular quads do not flip forever.
-        inside = (np.linalg.norm(V[d] - cc1, axis=1) < r1 * (1 - 1e-9)) | \
-                 (np.linalg.norm(V[c] - cc2, axis=1) < r2 * (1 - 1e-9))
         a, b = E[:, 0], E[:, 1]
+        # The remaining tests run only on the edges that fail this one: most edges pass it.
+        if criterion == "angles":
+            inside = _angle_at(V[c], V[a], V[b]) + _angle_at(V[d], V[a], V[b]) > np.pi * (1 + 1e-9)
+        else:
+            # Circumspheres once per face (row-wise, so the same values as per edge).
+            cc, r = circumcenters(V, F)
+            cc1, r1, cc2, r2 = cc[f1], r[f1], cc[f2], r[f2]
+            # Strictly inside (relative margin) so that cocircular quads do not flip forever.
+            inside = (np.linalg.norm(V[d] - cc1, axis=1) < r1 * (1 - 1e-9)) | \
+                     (np.linalg.norm(V[c] - cc2, axis=1) < r2 * (1 - 1e-9))
         ok = np.zeros(len(E), bool)
         s = np.flatnonzero(inside)
         if len(s) == 0:
@@ -87,10 +105,13 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None):
         a_, b_, c_, d_ = a[s], b[s], c[s], d[s]
         # On a non-planar quad both diagonals can fail the test; swapping only when the new
         # edge passes it rules out swapping back and forth.
-        cc3, r3 = circumcenters(V, np.stack([a_, d_, c_], axis=1))
-        cc4, r4 = circumcenters(V, np.stack([b_, c_, d_], axis=1))
-        passes = (np.linalg.norm(V[b_] - cc3, axis=1) >= r3 * (1 - 1e-9)) & \
-                 (np.linalg.norm(V[a_] - cc4, axis=1) >= r4 * (1 - 1e-9))
+        if criterion == "angles":
+            passes = _angle_at(V[a_], V[d_], V[c_]) + _angle_at(V[b_], V[c_], V[d_]) <= np.pi * (1 + 1e-9)
+        else:
+            cc3, r3 = circumcenters(V, np.stack([a_, d_, c_], axis=1))
+            cc4, r4 = circumcenters(V, np.stack([b_, c_, d_], axis=1))
+            passes = (np.linalg.norm(V[b_] - cc3, axis=1) >= r3 * (1 - 1e-9)) & \
+                     (np.linalg.norm(V[a_] - cc4, axis=1) >= r4 * (1 - 1e-9))
         old = _triangle_normals(V[a_], V[b_], V[c_]) + _triangle_normals(V[b_], V[a_], V[d_])
         n1 = _triangle_normals(V[a_], V[d_], V[c_])
         n2 = _triangle_normals(V[b_], V[c_], V[d_])

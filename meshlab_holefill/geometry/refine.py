@@ -28,7 +28,8 @@ def split_condition(V, F, scale, alpha):
     return mask, C, sc
 
 
-def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iterations=200, allowed=None):
+def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iterations=200, allowed=None,
+                 criterion="sphere"):
     """Refine a patch until its density matches the scale of its boundary (Hu et al. Sec. III.C).
 
     Step 1 (the scales of the boundary vertices) is the caller's ``scale``. Steps 2-5:
@@ -54,6 +55,8 @@ def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iteratio
         Bound on split rounds (convergence normally takes far fewer).
     allowed : callable, optional
         Passed to :func:`relax_edges` to veto swaps.
+    criterion : {"sphere", "angles"}
+        Relaxation test, passed to :func:`relax_edges`.
 
     Returns
     -------
@@ -67,7 +70,7 @@ def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iteratio
     scale = np.asarray(scale, np.float64)
     swaps = 0
     rounds = 0
-    F, s = relax_edges(V, F, fixed_edges, allowed=allowed)
+    F, s = relax_edges(V, F, fixed_edges, allowed=allowed, criterion=criterion)
     swaps += s
     for rounds in range(1, max_iterations + 1):
         mask, C, sc = split_condition(V, F, scale, alpha)
@@ -81,6 +84,6 @@ def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iteratio
         scale = np.concatenate([scale, sc[idx]])
         F[idx] = np.stack([new_ids, j, k], axis=1)
         F = np.concatenate([F, np.stack([i, new_ids, k], axis=1), np.stack([i, j, new_ids], axis=1)])
-        F, s = relax_edges(V, F, fixed_edges, allowed=allowed)
+        F, s = relax_edges(V, F, fixed_edges, allowed=allowed, criterion=criterion)
         swaps += s
     return V, F, scale, {"split_rounds": rounds, "swaps": swaps}
