@@ -485,6 +485,32 @@ def test_edge_swaps_raise_the_minimum_angle():
     assert corner_angles(V, F2).min() > corner_angles(V, F).min()
 
 
+def test_edge_swaps_keep_the_shape_of_a_bent_quad():
+    # Bent by 108 degrees along (0, 1): the swap would raise the smallest angle (0.337 -> 0.449)
+    # but turn the new triangle (1, 2, 3) by about 73 degrees, more than the 60 allowed.
+    th = np.radians(108.0)
+    V = np.array([[0, 0, 0], [2, 0, 0], [0.8, 1.0, 0], [2.0, -0.7 * np.cos(th), 0.7 * np.sin(th)]])
+    F = np.array([[0, 1, 2], [1, 0, 3]])
+    assert corner_angles(V, np.array([[0, 3, 2], [1, 2, 3]])).min() > corner_angles(V, F).min()
+    F2, swaps = hpde_optimisation.swap_edges_min_angle(V, F)
+    assert swaps == 0 and np.array_equal(F2, F)
+
+
+def test_fold_swaps_repair_folds_only():
+    # Triangle (1, 0, 3) lies inside (0, 1, 2) facing the other way: swapping (0, 1) to (2, 3)
+    # turns the pair into two triangles facing +z.
+    V = np.array([[0, 0, 0], [2, 0, 0], [1, 1, 0], [1, 0.3, 0.0]])
+    F = np.array([[0, 1, 2], [1, 0, 3]])
+    assert hpde_folds.local_folds(V, F).all()
+    F2, swaps = hpde_folds.unfold_by_swaps(V, F)
+    assert swaps == 1 and not hpde_folds.local_folds(V, F2).any()
+    assert np.all(np.cross(V[F2[:, 1]] - V[F2[:, 0]], V[F2[:, 2]] - V[F2[:, 0]])[:, 2] > 0)
+    # A thin pair without a fold is left to the min-angle swaps.
+    W = np.array([[0, 0, 0], [2, 0, 0], [1, 0.15, 0], [1, -0.15, 0.0]])
+    assert hpde_folds.unfold_by_swaps(W, F)[1] == 0
+    assert hpde_optimisation.swap_edges_min_angle(W, F)[1] == 1
+
+
 def test_forbidden_edges_are_split():
     V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]])
     F = np.array([[0, 1, 2], [0, 2, 3]])

@@ -4,7 +4,7 @@ from hypothesis import given, settings, strategies as st
 
 from meshlab_holefill.geometry.bilateral import bilateral_filter
 from meshlab_holefill.geometry.fairing import fair_positions
-from meshlab_holefill.geometry.flips import circumcenters, relax_edges
+from meshlab_holefill.geometry.flips import circumcenters, min_angle_scores, relax_edges
 from meshlab_holefill.geometry.laplacian import cotangent_laplacian, uniform_laplacian
 from meshlab_holefill.geometry.pca import fit_plane, project_to_plane
 from meshlab_holefill.geometry.quality import corner_angles, face_areas, triangle_quality, vertex_normals
@@ -80,6 +80,63 @@ def test_pca_plane_of_tilted_points():
     assert abs(abs(normal @ n) - 1) < 1e-12 and w[0] < 1e-14
     Q = project_to_plane(P + 5, c, normal)
     assert Q.shape == (50, 2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(-1.0, 3.0), st.floats(0.05, 1.5), st.floats(-1.0, 3.0), st.floats(0.05, 1.5), st.floats(-0.3, 0.3))
+def test_min_angle_criterion_swaps_exactly_when_the_minimum_angle_rises(cx, cy, dx, dy, dz):
+    """Xie and Zou Sec. 4.7: edge (a, b) becomes (c, d) iff that raises the pair's smallest angle."""
+    V = np.array([[0, 0, 0], [2, 0, 0], [cx, cy, 0], [dx, -dy, dz]])
+    F = np.array([[0, 1, 2], [1, 0, 3]])
+    new = np.array([[0, 3, 2], [1, 2, 3]])
+    before = corner_angles(V, F).min()
+    after = corner_angles(V, new).min()
+    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]).sum(axis=0)
+    M = np.cross(V[new[:, 1]] - V[new[:, 0]], V[new[:, 2]] - V[new[:, 0]])
+    folds = np.any(M @ N <= 0)  # the quad is not convex: the other diagonal folds the pair
+    F2, swaps = relax_edges(V, F, criterion="min_angle")
+    if folds:
+        assert swaps == 0
+    else:
+        assert swaps == (1 if after > before + 1e-9 else 0)
+        assert corner_angles(V, F2).min() == pytest.approx(max(before, after) if swaps else before)
+    o, n = min_angle_scores(V, F[:1], F[1:], new[:1], new[1:])
+    assert o[0] == pytest.approx(before) and n[0] == pytest.approx(after)
+
+
+def test_min_angle_criterion_never_lowers_the_smallest_angle_and_converges():
+    rng = np.random.default_rng(5)
+    P = rng.uniform(-1, 1, (80, 2))
+    P[:, 0] *= 4  # stretched: the Delaunay triangulation of the stretched points is poor here
+    from scipy.spatial import Delaunay
+    F = Delaunay(P * [0.25, 1]).simplices
+    V = np.c_[P, 0.05 * np.sin(P[:, 0])]
+    up = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])[:, 2] < 0
+    F[up] = F[up][:, [0, 2, 1]]
+    F2, swaps = relax_edges(V, F, criterion="min_angle")
+    assert swaps > 0
+    assert corner_angles(V, F2).min() >= corner_angles(V, F).min() - 1e-12
+    assert np.sort(corner_angles(V, F2).min(axis=1))[:10].sum() > np.sort(corner_angles(V, F).min(axis=1))[:10].sum()
+    assert relax_edges(V, F2, criterion="min_angle")[1] == 0  # no swap left that raises an angle
+    # A callable scorer with the same scores gives the same faces; one that rules all out none.
+    F3, swaps3 = relax_edges(V, F, criterion=min_angle_scores)
+    assert np.array_equal(F3, F2) and swaps3 == swaps
+    veto = lambda V, o1, o2, n1, n2: (np.zeros(len(o1)), np.full(len(o1), -np.inf))  # noqa: E731
+    assert relax_edges(V, F, criterion=veto)[1] == 0
+
+
+def test_normal_cos_refuses_swaps_that_turn_a_triangle_too_far():
+    # A pair bent by 108 degrees along (a, b), d above b: the swap to (c, d) raises the smallest
+    # angle (0.337 -> 0.449 rad) but the new triangle (b, c, d) turns by about 73 degrees from
+    # the mean normal of the old pair (cosine 0.298).
+    th = np.radians(108.0)
+    V = np.array([[0, 0, 0], [2, 0, 0], [0.8, 1.0, 0], [2.0, -0.7 * np.cos(th), 0.7 * np.sin(th)]])
+    F = np.array([[0, 1, 2], [1, 0, 3]])
+    o, n = min_angle_scores(V, F[:1], F[1:], np.array([[0, 3, 2]]), np.array([[1, 2, 3]]))
+    assert n[0] > o[0] + 0.1
+    assert relax_edges(V, F, criterion="min_angle", normal_cos=0.0)[1] == 1
+    assert relax_edges(V, F, criterion="min_angle", normal_cos=0.5)[1] == 0
+    assert relax_edges(V, F, criterion="min_angle", normal_cos=None)[1] == 1
 
 
 def test_relax_edges_makes_a_planar_triangulation_delaunay():

@@ -10,9 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geometry.flips import relax_edges
 from ..geometry.intersections import faces_intersecting
 from ..geometry.quality import face_normals
-from ..geometry.topology import edge_pair_set, interior_edges, undirected_keys
+from ..geometry.topology import edge_pair_set, interior_edges
 from .hpde_optimisation import adjacency
 
 # Neighbouring patch faces whose normals differ by more than this are a fold-over.
@@ -172,65 +173,48 @@ def _border_agreement(F, N, border_normals):
     return out
 
 
+def _pair_agreement(V, A, B, border_normals):
+    """Fold agreement of the face pairs A[i], B[i] and whether both faces are non-degenerate.
+
+    The agreement is the smallest dot product among the pair's unit normals and, for a face on
+    a loop edge, the mesh normal across it (:func:`_border_agreement`).
+
+    Returns
+    -------
+    agreement : (s,) float64
+    proper : (s,) bool
+    """
+    NA, NB = face_normals(V, A), face_normals(V, B)
+    agreement = np.minimum(np.einsum("ij,ij->i", NA, NB),
+                           np.minimum(_border_agreement(A, NA, border_normals),
+                                      _border_agreement(B, NB, border_normals)))
+    return agreement, np.any(NA != 0, axis=1) & np.any(NB != 0, axis=1)
+
+
 def unfold_by_swaps(V, F, forbidden_edges=(), border_normals=None, max_rounds=20):
     """Repair folds by edge swaps (reading of Sec. 4.6's "handle fold-overs").
 
     The agreement of an interior edge is the smallest dot product among its two triangles'
     unit normals and, for a triangle on a loop edge, the normal of the mesh triangle across
     it. An edge with negative agreement (a fold of more than 90 degrees) is swapped when the
-    swap raises it. Typical case: a zigzag tooth of the loop that is concave on the surface
-    but convex in the projection, where the triangulation puts an ear (i-1, i, i+1) facing
-    against the surface.
+    swap raises it and leaves no degenerate triangle. Typical case: a zigzag tooth of the loop
+    that is concave on the surface but convex in the projection, where the triangulation puts
+    an ear (i-1, i, i+1) facing against the surface. The swap loop is
+    :func:`geometry.flips.relax_edges` with this agreement as its scored criterion (worst fold
+    first) and without its orientation test, which a folded pair cannot pass.
 
     Returns
     -------
     F : (m, 3) int64
     swaps : int
     """
-    F = np.array(F, np.int64)
-    n = len(V)
-    forbidden = undirected_keys(forbidden_edges, n)
-    total = 0
-    for _ in range(max_rounds):
-        E, f1, c1, f2, c2 = interior_edges(F, n)
-        if len(E) == 0:
-            break
-        N = face_normals(V, F)
-        border = _border_agreement(F, N, border_normals)
-        old = np.minimum(np.einsum("ij,ij->i", N[f1], N[f2]), np.minimum(border[f1], border[f2]))
-        cand = np.flatnonzero(old < 0.0)
-        if len(cand) == 0:
-            break
-        a, b = E[cand, 0], E[cand, 1]
-        c = F[f1[cand], (c1[cand] + 2) % 3]
-        d = F[f2[cand], (c2[cand] + 2) % 3]
-        new1, new2 = np.stack([a, d, c], axis=1), np.stack([b, c, d], axis=1)
-        m1, m2 = face_normals(V, new1), face_normals(V, new2)
-        new = np.minimum(np.einsum("ij,ij->i", m1, m2),
-                         np.minimum(_border_agreement(new1, m1, border_normals),
-                                    _border_agreement(new2, m2, border_normals)))
-        ok = (new > old[cand] + 1e-9) & (c != d)
-        ok &= np.any(m1 != 0, axis=1) & np.any(m2 != 0, axis=1)
-        cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        new_key = np.minimum(c, d) * n + np.maximum(c, d)
-        ok &= ~np.isin(new_key, cur[:, 0] * n + cur[:, 1])
-        if len(forbidden):
-            ok &= ~np.isin(new_key, forbidden)
-        sel = np.flatnonzero(ok)
-        if len(sel) == 0:
-            break
-        sel = sel[np.argsort(old[cand[sel]], kind="stable")]  # worst fold first
-        claim = np.full(len(F), len(sel))
-        rank = np.arange(len(sel))
-        np.minimum.at(claim, f1[cand[sel]], rank)
-        np.minimum.at(claim, f2[cand[sel]], rank)
-        chosen = sel[(claim[f1[cand[sel]]] == rank) & (claim[f2[cand[sel]]] == rank)]
-        _, first = np.unique(new_key[chosen], return_index=True)
-        chosen = chosen[first]
-        F[f1[cand[chosen]]] = new1[chosen]
-        F[f2[cand[chosen]]] = new2[chosen]
-        total += len(chosen)
-    return F, total
+    def agreement_gain(V, old1, old2, new1, new2):
+        old, _ = _pair_agreement(V, old1, old2, border_normals)
+        new, proper = _pair_agreement(V, new1, new2, border_normals)
+        # Only folds (negative agreement) are swapped, the worst first.
+        return old, np.where((old < 0.0) & proper, new, -np.inf), -old
+
+    return relax_edges(V, F, forbidden_edges, max_rounds=max_rounds, criterion=agreement_gain, normal_cos=None)
 
 
 def repair_folds(V, F, n_fixed, forbidden_edges=(), border_normals=None, rounds=5, relax_steps=10):

@@ -11,8 +11,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..geometry.flips import relax_edges
 from ..geometry.quality import corner_angles, face_normals, unique_edges
-from ..geometry.topology import edge_pair_set, interior_edges, undirected_keys
+from ..geometry.topology import edge_pair_set, interior_edges
 
 # Taubin's example filter (ref. [26]): lambda = 0.33, mu = -0.34, pass band k_PB ~ 0.1.
 TAUBIN_LAMBDA = 0.33
@@ -431,60 +432,19 @@ def swap_edges_min_angle(V, F, forbidden_edges=(), max_rounds=100):
     """Swap interior edges while that raises the minimum angle of the two triangles (Sec. 4.7, Fig. 5(c)-(d)).
 
     Edge P_1 P_2 with opposite vertices Q_1, Q_2 becomes Q_1 Q_2 when the smallest angle of
-    triangles P_1 Q_1 Q_2, P_2 Q_1 Q_2 exceeds that of P_1 P_2 Q_1, P_1 P_2 Q_2. Readings: a
-    swap is refused when the new edge exists, is forbidden, or a new triangle would turn more
-    than 60 degrees from the mean normal of the old pair (no fold, and the shape of a bent
-    quad is kept); swaps run in rounds of face-disjoint edges until none applies.
+    triangles P_1 Q_1 Q_2, P_2 Q_1 Q_2 exceeds that of P_1 P_2 Q_1, P_1 P_2 Q_2
+    (:func:`geometry.flips.relax_edges` with ``criterion="min_angle"``). Readings: a swap is
+    refused when the new edge exists, is forbidden, or a new triangle would turn 60 degrees or
+    more from the mean normal of the old pair (no fold, and the shape of a bent quad is kept);
+    swaps run in rounds of face-disjoint edges, largest gain first, until none applies.
 
     Returns
     -------
     F : (m, 3) int64
     swaps : int
     """
-    F = np.array(F, np.int64)
-    n = len(V)
-    forbidden = undirected_keys(forbidden_edges, n)
-    total = 0
-    for _ in range(max_rounds):
-        E, f1, c1, f2, c2 = interior_edges(F, n)
-        if len(E) == 0:
-            break
-        a, b = E[:, 0], E[:, 1]
-        c = F[f1, (c1 + 2) % 3]
-        d = F[f2, (c2 + 2) % 3]
-        old = np.minimum(corner_angles(V, F[f1]).min(axis=1), corner_angles(V, F[f2]).min(axis=1))
-        new1 = np.stack([a, d, c], axis=1)
-        new2 = np.stack([b, c, d], axis=1)
-        new = np.minimum(corner_angles(V, new1).min(axis=1), corner_angles(V, new2).min(axis=1))
-        n_old = face_normals(V, F[f1], normalize=False) + face_normals(V, F[f2], normalize=False)
-        m1 = face_normals(V, new1)
-        m2 = face_normals(V, new2)
-        ok = (new > old + 1e-9) & (c != d)
-        n_old /= np.maximum(np.linalg.norm(n_old, axis=1, keepdims=True), 1e-300)
-        ok &= np.einsum("ij,ij->i", m1, n_old) > COLLAPSE_MIN_COS
-        ok &= np.einsum("ij,ij->i", m2, n_old) > COLLAPSE_MIN_COS
-        cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        existing = np.unique(cur[:, 0] * n + cur[:, 1])
-        new_key = np.minimum(c, d) * n + np.maximum(c, d)
-        ok &= ~np.isin(new_key, existing)
-        if len(forbidden):
-            ok &= ~np.isin(new_key, forbidden)
-        cand = np.flatnonzero(ok)
-        if len(cand) == 0:
-            break
-        # Best improvement first; each face takes part in at most one swap per round.
-        cand = cand[np.argsort(-(new[cand] - old[cand]), kind="stable")]
-        claim = np.full(len(F), len(cand))
-        rank = np.arange(len(cand))
-        np.minimum.at(claim, f1[cand], rank)
-        np.minimum.at(claim, f2[cand], rank)
-        chosen = cand[(claim[f1[cand]] == rank) & (claim[f2[cand]] == rank)]
-        _, first = np.unique(new_key[chosen], return_index=True)
-        chosen = chosen[first]
-        F[f1[chosen]] = new1[chosen]
-        F[f2[chosen]] = new2[chosen]
-        total += len(chosen)
-    return F, total
+    return relax_edges(V, F, forbidden_edges, max_rounds=max_rounds, criterion="min_angle",
+                       normal_cos=COLLAPSE_MIN_COS)
 
 
 def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5, 0.25)):

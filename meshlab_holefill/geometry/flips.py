@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .quality import corner_angles, face_normals
 from .topology import interior_edges, undirected_keys
 
 
@@ -39,8 +40,31 @@ def _angle_at(P, Q, R):
     return np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
 
 
-def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion="sphere"):
-    """Swap interior edges until every one passes the circumsphere test (Hu et al. Sec. III.C, Fig. 4).
+def min_angle_scores(V, old1, old2, new1, new2):
+    """Smallest corner angle of a pair of triangles before and after the swap of their edge.
+
+    The swap test of Xie and Zou (2013) Sec. 4.7, Fig. 5(c)-(d): an edge P_1 P_2 with opposite
+    vertices Q_1, Q_2 becomes Q_1 Q_2 when the smallest angle of P_1 Q_1 Q_2, P_2 Q_1 Q_2
+    exceeds that of P_1 P_2 Q_1, P_1 P_2 Q_2. Scorer of ``criterion="min_angle"`` in
+    :func:`relax_edges`.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    old1, old2 : (s, 3) int  the current pair of faces of each edge
+    new1, new2 : (s, 3) int  the pair after the swap
+
+    Returns
+    -------
+    old, new : (s,) float64  smallest angle (radians) of each pair
+    """
+    old = np.minimum(corner_angles(V, old1).min(axis=1), corner_angles(V, old2).min(axis=1))
+    new = np.minimum(corner_angles(V, new1).min(axis=1), corner_angles(V, new2).min(axis=1))
+    return old, new
+
+
+def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion="sphere", normal_cos=0.0):
+    """Swap interior edges until every one passes the swap test (default: circumsphere, Hu et al. Sec. III.C).
 
     For an interior edge (a, b) with triangles (a, b, c) and (b, a, d) the test passes when
     d lies outside the circumsphere of (a, b, c) and c outside that of (b, a, d); otherwise
@@ -56,6 +80,18 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
     for the worse diagonal (a sliver between spikes of a jagged border keeps its edge).
     As with the sphere test, a swap is made only when the new edge passes the test.
 
+    With ``criterion="min_angle"`` an edge is swapped when that raises the smallest angle of
+    its two triangles (Xie and Zou 2013, Sec. 4.7; :func:`min_angle_scores`). A callable
+    criterion generalises this: ``criterion(V, old1, old2, new1, new2) -> (old, new)`` scores
+    (higher is better) each edge's current pair of faces old1[i], old2[i] and the swapped pair
+    new1[i] = (a, d, c), new2[i] = (b, c, d); the edge is swapped when ``new > old + 1e-9``.
+    The strict gain is the anti-cycling rule of these scored tests (no swap can be undone); a
+    scorer rules an edge out by returning ``new = -inf``. Scored swaps are greedy: when swaps
+    compete for a face (or would create the same edge) the one of highest priority is made and
+    the others wait for the next round, where they are scored again on the new faces. The
+    priority is the gain ``new - old`` unless the scorer returns it as a third array
+    ``(old, new, priority)`` (higher first).
+
     Parameters
     ----------
     V : (n, 3) float64
@@ -68,8 +104,14 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         triangles are A[i] = (a, d, c) and B[i] = (b, c, d), replacing faces replaced[i] of the
         current faces F; lets the caller refuse swaps that would leave the hole (e.g. through
         the surrounding mesh).
-    criterion : {"sphere", "angles"}
-        The circumsphere test in space (default) or the unfolded (opposite-angle) test.
+    criterion : {"sphere", "angles", "min_angle"} or callable
+        The circumsphere test in space (default), the unfolded (opposite-angle) test, the
+        minimum-angle gain, or a scorer as described above.
+    normal_cos : float or None
+        A swap is refused when a new triangle's normal makes a cosine of at most this with the
+        mean normal of the replaced pair (0: no fold; 0.5: neither new triangle turns by 60
+        degrees or more, which keeps the shape of a bent quad). None skips the test, for a
+        scorer that judges folds itself.
 
     Returns
     -------
@@ -80,6 +122,7 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
     F = np.array(F, np.int64)
     n = len(V)
     fixed = undirected_keys(() if fixed_edges is None else fixed_edges, n)
+    scorer = min_angle_scores if criterion == "min_angle" else criterion if callable(criterion) else None
     total = 0
     for _ in range(max_rounds):
         E, f1, c1, f2, c2 = interior_edges(F, n)
@@ -88,8 +131,18 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         c = F[f1, (c1 + 2) % 3]
         d = F[f2, (c2 + 2) % 3]
         a, b = E[:, 0], E[:, 1]
+        # Of the swaps competing for a face the one of highest priority is made: by default
+        # the highest edge index, for scored criteria the largest gain (or scorer's priority).
+        priority = np.arange(len(E))
         # The remaining tests run only on the edges that fail this one: most edges pass it.
-        if criterion == "angles":
+        if scorer is not None:
+            scores = scorer(V, F[f1], F[f2], np.stack([a, d, c], axis=1), np.stack([b, c, d], axis=1))
+            old_s, new_s = scores[:2]
+            inside = new_s > old_s + 1e-9
+            order = np.argsort(-(scores[2] if len(scores) > 2 else new_s - old_s), kind="stable")
+            priority = np.empty(len(E), np.int64)
+            priority[order] = np.arange(len(E), 0, -1)
+        elif criterion == "angles":
             inside = _angle_at(V[c], V[a], V[b]) + _angle_at(V[d], V[a], V[b]) > np.pi * (1 + 1e-9)
         else:
             # Circumspheres once per face (row-wise, so the same values as per edge).
@@ -105,7 +158,9 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         a_, b_, c_, d_ = a[s], b[s], c[s], d[s]
         # On a non-planar quad both diagonals can fail the test; swapping only when the new
         # edge passes it rules out swapping back and forth.
-        if criterion == "angles":
+        if scorer is not None:
+            passes = np.ones(len(s), bool)  # the strict gain already rules out swapping back
+        elif criterion == "angles":
             passes = _angle_at(V[a_], V[d_], V[c_]) + _angle_at(V[b_], V[c_], V[d_]) <= np.pi * (1 + 1e-9)
         else:
             cc3, r3 = circumcenters(V, np.stack([a_, d_, c_], axis=1))
@@ -115,7 +170,16 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         old = _triangle_normals(V[a_], V[b_], V[c_]) + _triangle_normals(V[b_], V[a_], V[d_])
         n1 = _triangle_normals(V[a_], V[d_], V[c_])
         n2 = _triangle_normals(V[b_], V[c_], V[d_])
-        keeps_orientation = (np.einsum("ij,ij->i", n1, old) > 0) & (np.einsum("ij,ij->i", n2, old) > 0)
+        if normal_cos is None:
+            keeps_orientation = np.ones(len(s), bool)
+        elif normal_cos == 0.0:
+            keeps_orientation = (np.einsum("ij,ij->i", n1, old) > 0) & (np.einsum("ij,ij->i", n2, old) > 0)
+        else:
+            old /= np.maximum(np.linalg.norm(old, axis=1, keepdims=True), 1e-300)
+            m1 = face_normals(V, np.stack([a_, d_, c_], axis=1))
+            m2 = face_normals(V, np.stack([b_, c_, d_], axis=1))
+            keeps_orientation = (np.einsum("ij,ij->i", m1, old) > normal_cos) & \
+                                (np.einsum("ij,ij->i", m2, old) > normal_cos)
         lo, hi = np.minimum(c, d), np.maximum(c, d)
         new_key = lo * n + hi
         cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
@@ -133,20 +197,25 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         if len(cand) == 0:
             break
         # Independent set: a face takes part in at most one swap per round; a few claiming
-        # passes make the set nearly maximal, so rounds stay few.
+        # passes make the set nearly maximal, so rounds stay few. Scored swaps take one pass:
+        # the losers of a face are re-scored next round, strictly greedy by priority.
         taken = np.zeros(len(F), bool)
         picked = []
-        for _ in range(4):
+        for _ in range(1 if scorer is not None else 4):
             cand = cand[~taken[f1[cand]] & ~taken[f2[cand]]]
             if len(cand) == 0:
                 break
             claim = np.full(len(F), -1)
-            np.maximum.at(claim, f1[cand], cand)
-            np.maximum.at(claim, f2[cand], cand)
-            won = cand[(claim[f1[cand]] == cand) & (claim[f2[cand]] == cand)]
+            pc = priority[cand]
+            np.maximum.at(claim, f1[cand], pc)
+            np.maximum.at(claim, f2[cand], pc)
+            won = cand[(claim[f1[cand]] == pc) & (claim[f2[cand]] == pc)]
             taken[f1[won]] = taken[f2[won]] = True
             picked.append(won)
         chosen = np.concatenate(picked)
+        if scorer is not None:
+            # Of two swaps that would create the same edge, the larger gain is made.
+            chosen = chosen[np.argsort(-priority[chosen], kind="stable")]
         _, first = np.unique(new_key[chosen], return_index=True)
         chosen = chosen[first]
         F[f1[chosen]] = np.stack([a[chosen], d[chosen], c[chosen]], axis=1)
