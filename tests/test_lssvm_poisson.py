@@ -221,6 +221,42 @@ def test_rule_two_merges_with_the_opposite_corner_of_a_square():
     assert len(F) == 2 and len(nv) == 0 and stats["merges"] == 1
 
 
+def test_merge_may_not_close_a_wide_neighbour_angle_by_an_ear():
+    # Rule 2 at v (100 degrees) puts its vertex on u, the vertex beyond p: the triangle (p, v, u)
+    # would keep p's whole 122-degree front angle (quality < 0.5). The merge is refused (Step 4),
+    # so v falls back to the next rule; without the limit the merge goes through.
+    import math
+
+    from meshlab_holefill.geometry.advancing_front import MERGE_EAR_MAX, _AdvancingFront
+
+    p = 0.1 * np.array([math.cos(math.radians(100)), math.sin(math.radians(100)), 0.0])
+    u = 0.65 * np.array([math.cos(math.radians(50)), math.sin(math.radians(50)), 0.0])
+    P = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], u, p])
+    front = _AdvancingFront(P, UP, (), 0.75, 1000)
+    assert front.node_theta[3] > MERGE_EAR_MAX and front.node_theta[0] < math.radians(135)
+    assert front._build(0, 2) is None
+    free = _AdvancingFront(P, UP, (), 0.75, 1000, None, 4 * math.pi)
+    faces, new_pos, sequence = free._build(0, 2)
+    assert new_pos == {} and sequence == [2] and (3, 0, 2) in faces
+
+
+def test_swaps_do_not_cut_off_a_worse_ear():
+    # Boundary p, v, q with a 146-degree corner at v, inner vertex c: swapping (v, c) to (p, q)
+    # would leave the ear (p, v, q), worse than the two triangles it replaces.
+    from meshlab_holefill.algorithms.lssvm_poisson_patch import _ear_guard
+
+    V = np.array([[-1.0, 0.0, 0.0], [0.0, 0.3, 0.0], [1.0, 0.0, 0.0], [0.0, -0.6, 0.0]])
+    F = np.array([[0, 3, 1], [1, 3, 2]])
+    A, B, replaced = np.array([[0, 3, 2]]), np.array([[1, 0, 2]]), np.array([[0, 1]])
+    assert triangle_quality(V, B).min() < triangle_quality(V, F).min()
+    assert not _ear_guard(3)(V, F, A, B, replaced)[0]   # p, v, q on the hole boundary: refused
+    assert _ear_guard(0)(V, F, A, B, replaced)[0]       # inner vertices: left to the Delaunay test
+    V2 = np.array([[-1.0, 0.0, 0.0], [0.0, 1.5, 0.0], [1.0, 0.0, 0.0], [0.0, -1.5, 0.0]])
+    # A 67-degree corner: the ear is better than the thin pair it replaces, the swap may go.
+    assert triangle_quality(V2, B).min() > triangle_quality(V2, F).min()
+    assert _ear_guard(3)(V2, F, A, B, replaced)[0]
+
+
 def test_new_vertices_lie_in_the_plane_of_the_two_front_edges():
     # A non-planar boundary: the first (rule 3) step puts its vertices in the plane of p, v, q.
     from meshlab_holefill.geometry.advancing_front import _AdvancingFront

@@ -17,7 +17,7 @@ from ..geometry.advancing_front import advancing_front_triangulation
 from ..geometry.flips import relax_edges
 from ..geometry.intersections import faces_intersecting
 from ..geometry.laplacian import adjacency_matrix, cotangent_laplacian
-from ..geometry.quality import face_normals, vertex_normals
+from ..geometry.quality import face_normals, triangle_quality, vertex_normals
 from ..geometry.topology import interior_edges
 from ..patch import HoleFillError
 
@@ -203,12 +203,33 @@ def initial_patches(ctx, merge_factor, failures):
     yield X, F, {"domain": "ears", **info}
 
 
+def _ear_guard(k):
+    """``allowed`` test of :func:`relax_edges` for a patch whose first k vertices are the hole boundary.
+
+    Refuses a swap that creates a triangle of three boundary vertices (an ear) and lowers
+    the minimum quality of the two triangles. On a curved patch the circumsphere test can
+    prefer the diagonal that cuts off an ear at a wide border corner (face000's 19-edge hole:
+    quality 0.28 with an angle of 134 degrees at the corner); no later step can repair it,
+    as its vertices are fixed. Other swaps are left to the circumsphere test.
+    """
+    def allowed(V, F, A, B, replaced):
+        ear = (A < k).all(axis=1) | (B < k).all(axis=1)
+        ok = ~ear
+        if ear.any():
+            old = triangle_quality(V, F[replaced[ear].ravel()]).reshape(-1, 2).min(axis=1)
+            new = np.minimum(triangle_quality(V, A[ear]), triangle_quality(V, B[ear]))
+            ok[ear] = new >= old
+        return ok
+    return allowed
+
+
 def relax_patch(X, F, ctx):
     """Delaunay edge swaps on the patch (beyond the paper, needed for the quality target).
 
     Run on the advancing-front patch (the fronts leave thin triangles where they meet) and
     after the Poisson solve (which moves vertices along the surface as well as across it).
-    The boundary edges and the mesh's chords between boundary vertices never swap; whether
+    The boundary edges and the mesh's chords between boundary vertices never swap, nor does
+    an edge whose swap would cut off an ear of lower quality (:func:`_ear_guard`); whether
     the result stays clear of the surrounding mesh is checked once at the end of :func:`fill`.
 
     Returns
@@ -216,12 +237,16 @@ def relax_patch(X, F, ctx):
     F : (q, 3) int64
     swaps : int
     """
-    k = ctx.size
     if len(F) < 2:
         return F, 0
+    return relax_edges(X, F, _fixed_edges(ctx), allowed=_ear_guard(ctx.size))
+
+
+def _fixed_edges(ctx):
+    """Edges no swap may touch: the hole boundary and the mesh's chords between boundary vertices."""
+    k = ctx.size
     loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
-    fixed_edges = np.concatenate([loop_edges, np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2)])
-    return relax_edges(X, F, fixed_edges)
+    return np.concatenate([loop_edges, np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2)])
 
 
 def folds(X, F):

@@ -22,7 +22,10 @@ What the paper leaves open, as chosen here:
   every vertex, at a boundary vertex the mean length of its two boundary edges, at a new
   vertex the mean of v's and its neighbours'. (With the current front edges' lengths instead
   the mesh shrinks ring by ring: the rules never remove vertices from a convex front.)
-* **Merge threshold.** 0.75 target lengths (see :func:`advancing_front_triangulation`).
+* **Merge threshold.** 0.75 target lengths (see :func:`advancing_front_triangulation`). A
+  merge with the vertex beyond p (or q) makes the triangle at p an ear holding p's whole
+  front angle; like rule 1 it is then allowed only for angles a single triangle fits
+  (``MERGE_EAR_MAX``, 120 degrees), otherwise the step falls back to the next rule.
 * **Which side is inside.** The front angle is measured counter-clockwise about the normal
   of the edges' plane oriented like a reference normal (reflex when they disagree). The
   reference normal of a boundary vertex is given (default: the hole's unit vector area), a
@@ -65,6 +68,11 @@ ANGLE_MARGIN = math.radians(2.0)
 # A new triangle may not fold over the triangle behind a front edge it consumes by more than
 # 120 degrees (cosine of the angle between their normals below -0.5).
 FOLD_MIN_COS = -0.5
+# A merge (Step 4) that turns the triangle at v's neighbour p into an ear (p's two front edges
+# and the chord joining their ends) is refused when p's front angle exceeds this: the ear keeps
+# p's whole angle, and above ~133 degrees no triangle reaches quality 0.3. 120 degrees (best
+# quality 0.46) still lets rule 2 close a square by merging with its opposite corner.
+MERGE_EAR_MAX = math.radians(120.0)
 # A front of a disk-like hole shrinks; one that grows past this many times the boundary's
 # vertex count has run out of the hole (over the surrounding surface).
 FRONT_GROWTH_LIMIT = 1.3
@@ -76,10 +84,12 @@ HOVER_FACTOR = 0.35
 class _AdvancingFront:
     """State of one advancing-front run; see :func:`advancing_front_triangulation`."""
 
-    def __init__(self, points, reference_normal, forbidden_edges, merge_factor, max_faces, obstacles=None):
+    def __init__(self, points, reference_normal, forbidden_edges, merge_factor, max_faces, obstacles=None,
+                 merge_ear_max=None):
         k = len(points)
         self.k = k
         self.merge_factor = merge_factor
+        self.merge_ear_max = MERGE_EAR_MAX if merge_ear_max is None else merge_ear_max
         self.max_faces = max_faces
         self.P = [tuple(map(float, p)) for p in points]
         self.N = [tuple(map(float, x)) for x in np.asarray(reference_normal, np.float64).reshape(-1, 3)]
@@ -328,6 +338,15 @@ class _AdvancingFront:
                 target = -j
                 new_pos[target] = pos
             ids.append(target)
+        # A merge with the vertex beyond p (or q) makes the triangle at p (or q) an ear that
+        # closes p's whole front angle: allowed only where a single triangle fits the angle.
+        prev2 = self.node_vertex[self.node_prev[self.node_prev[node]]]
+        next2 = self.node_vertex[self.node_next[self.node_next[node]]]
+        if self.merge_ear_max is not None:
+            if ids[-1] == prev2 and self.node_theta[self.node_prev[node]] > self.merge_ear_max:
+                return None
+            if ids[0] == next2 and self.node_theta[self.node_next[node]] > self.merge_ear_max:
+                return None
         if rule == 2:
             w = ids[0]
             return [(v, q, w), (p, v, w)], new_pos, [w]
@@ -628,7 +647,7 @@ class _AdvancingFront:
 
 
 def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75, max_faces=None,
-                                  reference_normal=None, obstacles=None):
+                                  reference_normal=None, obstacles=None, merge_ear_max=MERGE_EAR_MAX):
     """Triangulate a hole by the advancing front method (Xu et al. 2013, Sec. 3.2).
 
     Parameters
@@ -687,6 +706,6 @@ def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75,
     if max_faces is None:
         h = float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean()) or 1.0
         max_faces = int(20 * area / (0.43 * h * h) + 10 * k + 100)
-    front = _AdvancingFront(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles)
+    front = _AdvancingFront(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ear_max)
     new_vertices, faces = front.run()
     return new_vertices, faces, dict(front.stats)
