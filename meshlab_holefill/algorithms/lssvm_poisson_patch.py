@@ -97,7 +97,7 @@ def planar_boundaries(ctx):
     """Simple planar polygons for the boundary, for holes the 3D advancing front cannot cover.
 
     Not in the paper. The development of the boundary (its edge lengths, and at each vertex
-    the angle the surrounding surface leaves open; :func:`unfolding.develop_loop`), then the
+    the angle the surrounding surface leaves open; :func:`geometry.development.develop_loop`), then the
     projection on the best-fitting plane; those that are simple polygons are returned.
 
     Returns
@@ -105,7 +105,7 @@ def planar_boundaries(ctx):
     list of (name, (k, 3) float64 with z = 0, counter-clockwise seen from +z)
     """
     from ..geometry.pca import fit_plane, project_to_plane
-    from .unfolding import boundary_gap_angles, develop_loop
+    from ..geometry.development import boundary_gap_angles, develop_loop
 
     k = ctx.size
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, k)

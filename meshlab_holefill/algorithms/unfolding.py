@@ -58,8 +58,6 @@ import math
 
 import numpy as np
 
-# lssvm_poisson_patch still imports these two from here; they live in geometry/development.py
-from ..geometry.development import boundary_gap_angles, develop_loop  # noqa: F401
 from ..geometry.pca import fit_plane, plane_frame
 from ..geometry.segments import (is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix,
                                  segment_distance_rows)
@@ -321,7 +319,7 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
     (:func:`project_to_best_plane`) and accept if the linear motion to the projection keeps
     the loop simple (:func:`linear_motion_is_simple`); otherwise restart from the original
     loop, at most ``max_restarts`` annealing runs in all. A ``fallback`` polygon (e.g.
-    :func:`develop_loop`), beyond the paper, is tried after the first failed run; if it is
+    :func:`geometry.development.develop_loop`), beyond the paper, is tried after the first failed run; if it is
     simple it is used and the remaining restarts are skipped.
 
     Parameters
