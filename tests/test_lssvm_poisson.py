@@ -17,7 +17,7 @@ from meshlab_holefill.geometry.quality import face_areas, triangle_quality
 from meshlab_holefill.holes import boundary_loops, hole_context, nonmanifold_edges
 from meshlab_holefill.patch import HoleFillError, Patch, validate_patch
 
-from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample
 
 NAME = "meshing_close_holes_lssvm_poisson"
 UP = (0.0, 0.0, 1.0)
@@ -421,6 +421,97 @@ def test_poisson_solve_with_zero_laplacian_is_the_membrane():
     inner = np.arange(len(X)) >= ctx.size
     # Relaxed weights after the solve differ from the solve's: check the membrane property loosely.
     assert np.abs(L[inner] @ X).max() < 0.05 * ctx.mean_edge_length
+
+
+def _fold_case():
+    """Planar patch (8 boundary vertices, 3 inner) and a solve target moving inner vertex 10 past edge (3, 8).
+
+    Returns X (initial patch), F (its Delaunay faces), T (the target: triangle (3, 8, 10) turned
+    over, a quad whose other diagonal (10, 4) is sound) and a stand-in HoleContext for the swaps.
+    """
+    from types import SimpleNamespace
+
+    from scipy.spatial import Delaunay
+
+    k = 8
+    t = np.linspace(0.0, 2.0 * np.pi, k, endpoint=False)
+    X = np.concatenate([np.stack([np.cos(t), np.sin(t), 0.0 * t], axis=1),
+                        [[-0.35, -0.2, 0.0], [0.35, -0.2, 0.0], [0.0, 0.4, 0.0]]])
+    F = Delaunay(X[:, :2]).simplices.astype(np.int64)
+    A = X[F]
+    cw = np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0])[:, 2] < 0
+    F[cw] = F[cw][:, [0, 2, 1]]
+    T = X.copy()
+    T[10] = X[10] + 1.2 * (0.5 * (X[3] + X[8]) - X[10])
+    return X, F, T, SimpleNamespace(size=k, forbidden_edges=np.zeros((0, 2), np.int64))
+
+
+def test_poisson_solve_folded_across_one_edge_is_kept_when_a_swap_unfolds_it():
+    # The path of 335d403: a solve that turns one quad over is kept with the quad's other diagonal
+    # instead of being discarded. The right-hand side is set so that the solve lands exactly on T.
+    from meshlab_holefill.algorithms.lssvm_poisson_patch import folds
+
+    X, F, T, ctx = _fold_case()
+    free = np.arange(len(X)) >= ctx.size
+    rhs = np.asarray(normalized_cotangent_laplacian(X, F) @ T)[free]
+    regressors = [lambda x, d=d: rhs[:, d] for d in range(3)]
+    assert not folds(X, F) and folds(T, F)
+    Y, G, info = xu.poisson_reposition(X, F, ~free, regressors, relax_ctx=ctx)
+    assert not info["poisson_rejected"] and info["poisson_solves"] == 1
+    assert np.allclose(Y, T, atol=1e-9)  # the solve is kept ...
+    assert not folds(Y, G) and not np.array_equal(np.sort(G, axis=1), np.sort(F, axis=1))  # ... with swapped faces
+    assert sorted(map(sorted, G[(G == 10).any(axis=1)].tolist())).count([3, 8, 10]) == 0
+    # Without the swaps (no HoleContext) the folded solve is discarded.
+    Y0, G0, info0 = xu.poisson_reposition(X, F, ~free, regressors)
+    assert info0["poisson_rejected"] and info0["poisson_solves"] == 0
+    assert np.array_equal(Y0, X) and np.array_equal(G0, F)
+
+
+def test_sliver_repair_leaves_good_patches_alone():
+    from meshlab_holefill.algorithms.lssvm_poisson_patch import repair_slivers
+
+    X, F, T, ctx = _fold_case()
+    fixed = np.arange(len(X)) < ctx.size
+    Y, G, kept = repair_slivers(X, F, fixed, ctx, floor=0.3)
+    assert triangle_quality(X, F).min() >= 0.3
+    assert kept == 0 and Y is X and G is F
+
+
+@pytest.fixture(scope="module")
+def face_hole_227():
+    """face000.ply's largest natural hole (227 edges; the benchmark's face000 hole 1) after Sec. 3.1."""
+    from meshlab_holefill.metrics import corner_quality_bound
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("rangemaps/face000.ply"))
+    V, F = mesh_arrays(ms)
+    loop = [lp for lp in boundary_loops(F) if len(lp) == 227][0]
+    bound = corner_quality_bound(V, F, loop.vertices)
+    ref = xu.prepare_boundary(V, F, [loop], {})
+    return hole_context(ref.V, ref.F, ref.loops[0], rings=xu.RINGS), bound
+
+
+def test_sliver_repair_lifts_the_border_row_the_poisson_solve_squeezes(face_hole_227, monkeypatch):
+    # The 3D front leaves this hole, so the filter's patch is the developed boundary's front
+    # (fill() takes ~3 s to find that out; this builds that patch directly). The Poisson solve
+    # squeezes the triangles along a stretch of the border; smoothing and swaps alone leave 0.216,
+    # while the corner bound is 0.596. The local repair lifts them above 0.3.
+    from meshlab_holefill.algorithms.lssvm_poisson_patch import harmonic_lift, planar_boundaries
+
+    ctx, bound = face_hole_227
+    assert bound > 0.5
+    D = dict(planar_boundaries(ctx))["developed"]
+    new_vertices, F0, _ = advancing_front_triangulation(D, ctx.forbidden_edges, 0.75, reference_normal=UP)
+    X0 = harmonic_lift(np.concatenate([D, new_vertices]), F0, ctx.points)
+    regressors = xu.fit_laplacian_regressors(*xu.training_set(ctx, 2), 10.0, 0.5)
+    X, F, info = xu.reposition(ctx, X0, F0, regressors, 1, True)
+    q = triangle_quality(X, F)
+    assert info["sliver_repairs"] >= 1 and info["poisson_damping"] == 1.0
+    assert q.min() >= 0.3 and q.mean() >= 0.85
+    assert len(xu.context_hits(X, F, ctx)) == 0
+    monkeypatch.setattr(xu, "SLIVER_QUALITY", 0.0)  # without the repair
+    X1, F1, _ = xu.reposition(ctx, X0, F0, regressors, 1, True)
+    assert triangle_quality(X1, F1).min() < 0.3
 
 
 def test_filter_on_a_sphere_hole(tmp_path):

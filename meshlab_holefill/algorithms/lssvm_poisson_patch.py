@@ -291,6 +291,57 @@ def tangential_smoothing(X, F, fixed, iterations=3, step=0.5):
     return X
 
 
+def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3):
+    """Local tangential smoothing around the triangles of quality below ``floor`` (beyond the paper).
+
+    The Poisson solve (Sec. 3.4) can squeeze the row of triangles along a stretch of the
+    border: on face000's 227-edge hole it pulls inner vertices to within a fraction of an
+    edge of the boundary edges and turns the patch back against the border faces there
+    (angle up to 150 degrees at the inner vertex, quality 0.04-0.15). The global
+    :func:`tangential_smoothing` (3 steps) and the swaps lift them to 0.22 only, and a
+    boundary edge cannot be swapped. Here the inner vertices of the triangles below
+    ``floor``, with ``rings`` rings of neighbours, get ``iterations`` further tangential
+    steps (the others stay put) and the patch is swapped again (:func:`relax_patch`); a round
+    is kept only when it raises the patch's minimum quality and does not fold it, and at most
+    ``rounds`` rounds run while the minimum stays below ``floor``. Patches without such
+    triangles are returned unchanged. Measured: face000's 227-edge hole 0.216 -> 0.340
+    (mean 0.918 -> 0.918): 34 vertices moved, by at most 0.35 mean boundary edge lengths; the
+    other benchmark holes have no such triangle.
+
+    Parameters
+    ----------
+    X : (n, 3) float64, F : (m, 3) int64, fixed : (n,) bool (the hole boundary)
+    ctx : HoleContext  (for the swaps' fixed edges)
+
+    Returns
+    -------
+    X : (n, 3) float64
+    F : (m, 3) int64
+    repaired : int  rounds kept
+    """
+    q = triangle_quality(X, F)
+    kept = 0
+    for _ in range(rounds):
+        if len(q) == 0 or q.min() >= floor:
+            break
+        A = adjacency_matrix(F, len(X))
+        region = np.zeros(len(X), bool)
+        region[F[q < floor].ravel()] = True
+        for _ in range(rings):
+            region |= (A @ region.astype(np.float64)) > 0
+        region &= ~np.asarray(fixed, bool)
+        if not region.any():
+            break
+        Y = tangential_smoothing(X, F, ~region, iterations)
+        G, _ = relax_patch(Y, F, ctx)
+        qn = triangle_quality(Y, G)
+        if qn.min() <= q.min() or folds(Y, G):
+            break
+        X, F, q = Y, G, qn
+        kept += 1
+    return X, F, kept
+
+
 def context_hits(X, F, ctx):
     """Patch faces (indices into F) intersecting the HoleContext's surrounding faces.
 
