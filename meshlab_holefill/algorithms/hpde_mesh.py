@@ -167,7 +167,7 @@ def lateral_offsets(P, normals, window=2):
     return np.einsum("ij,ij->i", P - S, inward) if k > 2 * window else np.zeros(k)
 
 
-def triangulate_planar(loop_points, predicted, Q, X, clearance):
+def triangulate_planar(loop_points, predicted, Q, X, clearance, edge_clearance=0.0, stats=None, long_edge=0.0):
     """Constrained triangulation of the boundary and prediction points laid out in 2D (Sec. 4.6).
 
     Triangle keeps every boundary edge and inserts the prediction points; the topology is
@@ -183,6 +183,17 @@ def triangulate_planar(loop_points, predicted, Q, X, clearance):
     Q : (k, 2) float64  2D boundary polygon (must be simple)
     X : (q, 2) float64  2D images of the prediction points
     clearance : float
+    edge_clearance : float
+        Beyond the paper: a prediction point that the triangulation makes the apex of a
+        triangle on a boundary edge longer than ``long_edge`` (2D length L) is left out, and
+        the points retriangulated, when it is nearer than this share of L to that edge (their
+        number goes to ``stats["edge_cleared"]`` when a dict is given). On loop edges much
+        longer than the prediction spacing (range-scan borders, 2-4 EdgeLen) such an apex
+        makes a sliver (apex angle ~145 degrees, 2r/R ~ 0.15) that neither the decimation nor
+        the swaps of Sec. 4.7 can remove. With 0.35 the apex is at least 0.35 L from the edge
+        (2r/R ~ 0.6 for a centred apex). 0 = only ``clearance``.
+    stats : dict, optional
+    long_edge : float  (2D length)
 
     Returns
     -------
@@ -200,24 +211,63 @@ def triangulate_planar(loop_points, predicted, Q, X, clearance):
             idx = np.flatnonzero(keep)
             for i, j in cKDTree(X[idx]).query_pairs(1e-9 * clearance + 1e-12):
                 keep[idx[max(i, j)]] = False
-    for _ in range(3):
+    L = np.linalg.norm(np.roll(Q, -1, axis=0) - Q, axis=1)
+    unused_rounds = cleared = 0
+    while True:
         _, T = triangulate_polygon(Q, extra_points=X[keep])
-        used = np.zeros(k + int(keep.sum()), bool)
-        used[T.ravel()] = True
-        if used.all():
-            break
         idx = np.flatnonzero(keep)
-        keep[idx[~used[k:]]] = False
-    else:
-        raise HoleFillError("triangulation left prediction points unused")
+        used = np.zeros(k + len(idx), bool)
+        used[T.ravel()] = True
+        if not used.all():
+            unused_rounds += 1
+            if unused_rounds >= 3:
+                raise HoleFillError("triangulation left prediction points unused")
+            keep[idx[~used[k:]]] = False
+            continue
+        drop = edge_sliver_apexes(np.concatenate([Q, X[keep]]), T, k, L, long_edge, edge_clearance)
+        if len(drop) == 0:
+            break
+        keep[idx[drop - k]] = False
+        cleared += len(drop)
+    if stats is not None:
+        stats["edge_cleared"] = int(cleared)
     V = np.concatenate([loop_points, predicted[keep]])
     return V, T, orientation, np.flatnonzero(keep)
 
 
-def triangulate_projection(loop_points, predicted, plane_map, clearance):
+def edge_sliver_apexes(Y, T, k, L, long_edge, edge_clearance):
+    """Prediction points that are the apex of a triangle on a long loop edge, too near to it.
+
+    A triangle of T on loop edge (i, i + 1) with L[i] > ``long_edge`` whose apex is a
+    prediction point (index >= k) nearer than ``edge_clearance`` * L[i] to the edge (2D
+    points Y, loop first). Returns the sorted unique apex indices (>= k).
+    """
+    if edge_clearance <= 0 or len(T) == 0 or not np.any(L > long_edge):
+        return np.zeros(0, np.int64)
+    out = []
+    for c in range(3):
+        u, w, apex = T[:, c], T[:, (c + 1) % 3], T[:, (c + 2) % 3]
+        fwd = (u < k) & (w < k) & (w == (u + 1) % k)
+        bwd = (u < k) & (w < k) & (u == (w + 1) % k)
+        e = np.where(fwd, u, w)
+        hit = (fwd | bwd) & (apex >= k)
+        hit[hit] &= L[e[hit]] > long_edge
+        if not hit.any():
+            continue
+        a, b, p = Y[u[hit]], Y[w[hit]], Y[apex[hit]]
+        d = b - a
+        t = np.clip(np.einsum("ij,ij->i", p - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0, 1)
+        near = np.linalg.norm(p - (a + t[:, None] * d), axis=1) < edge_clearance * L[e[hit]]
+        out.append(apex[hit][near])
+    return np.unique(np.concatenate(out)) if out else np.zeros(0, np.int64)
+
+
+def triangulate_projection(loop_points, predicted, plane_map, clearance, edge_clearance=0.0, stats=None,
+                           long_edge=0.0):
     """:func:`triangulate_planar` on the projection of the points by a :class:`PlaneMap`."""
     X = plane_map.to_2d(predicted) if len(predicted) else np.zeros((0, 2))
-    return triangulate_planar(loop_points, predicted, plane_map.to_2d(loop_points), X, clearance)
+    return triangulate_planar(loop_points, predicted, plane_map.to_2d(loop_points), X, clearance, edge_clearance,
+                              stats, long_edge)
 
 
 def split_forbidden_edges(V, F, forbidden_edges):

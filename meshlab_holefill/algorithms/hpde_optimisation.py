@@ -4,7 +4,8 @@ The patch is smoothed by the second-order umbrella anchored to the predicted pos
 (:func:`curvature_smooth`; Taubin's lambda|mu filter, ref. [26], as an option); edges shorter
 than a rate of EdgeLen are collapsed to their midpoints and edges are swapped while that
 raises the smaller angle of their two triangles (Fig. 5). The tangential relaxation and the
-obtuse-edge splits are the option ``relax`` beyond the paper.
+obtuse-edge splits are the option ``relax`` beyond the paper; the final guarded pass on the
+worst triangles (option ``quality_floor``) is in hpde_quality.
 """
 from __future__ import annotations
 
@@ -243,11 +244,23 @@ def remove_valence_three(V, F, n_fixed, forbidden_edges=()):
         new_faces.append(tri)
     if not new_faces:
         return V, F, 0, np.arange(n)
-    F = np.concatenate([F[alive], np.asarray(new_faces, np.int64)])
-    keep = np.flatnonzero(~gone)
-    index = np.full(n, -1, np.int64)
+    V, F, keep = compact_vertices(V, np.concatenate([F[alive], np.asarray(new_faces, np.int64)]), ~gone)
+    return V, F, len(new_faces), keep
+
+
+def compact_vertices(V, F, alive):
+    """Drop the vertices not ``alive`` (removed by collapses) and renumber the faces.
+
+    Returns
+    -------
+    V : (n', 3) float64  the alive vertices, in order
+    F : (m, 3) int64  renumbered
+    keep : (n',) int64  input index of each remaining vertex
+    """
+    keep = np.flatnonzero(alive)
+    index = np.full(len(V), -1, np.int64)
     index[keep] = np.arange(len(keep))
-    return V[keep], index[F], len(new_faces), keep
+    return V[keep], index[F], keep
 
 
 def tangential_relax(V, F, fixed, passes=10, step=0.5):
@@ -422,10 +435,8 @@ def decimate_short_edges(V, F, n_fixed, threshold, forbidden_edges=(), max_round
         F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
         alive_v[vct] = False
         collapses += int(good.sum())
-    keep = np.flatnonzero(alive_v)
-    new_index = np.full(n, -1, np.int64)
-    new_index[keep] = np.arange(len(keep))
-    return V[keep], new_index[F], collapses, keep
+    V, F, keep = compact_vertices(V, F, alive_v)
+    return V, F, collapses, keep
 
 
 def swap_edges_min_angle(V, F, forbidden_edges=(), max_rounds=100):
