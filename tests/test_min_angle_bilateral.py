@@ -342,3 +342,126 @@ def test_faired_patch_is_relaxed_again():
     assert relax_edges(X, patch.faces, loop, allowed=relaxation_guard(ctx), criterion="angles")[1] == 0
     assert triangle_quality(X, patch.faces).min() > 0.5
     assert np.abs(np.linalg.norm(patch.vertices, axis=1) - 1).mean() < 0.02
+
+
+# ----------------------------------------------------------------------------- tangential smoothing (option)
+
+def test_tangential_smoothing_lifts_a_vertex_off_a_border_edge_and_keeps_the_plane():
+    # A square hole split into a fan around an interior vertex pushed next to the bottom edge:
+    # the triangle on that edge is flat (no split or swap of Sec. III.C may touch it, the edge
+    # being the hole border). Smoothing moves the vertex up, in the plane, and never lowers the
+    # smallest quality around it.
+    from meshlab_holefill.algorithms.min_angle_bilateral import tangential_smoothing
+
+    V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [2, 2, 0], [1, 2, 0], [0, 2, 0], [0, 1, 0],
+                  [1.0, 0.1, 0]], float)
+    k = 8
+    F = np.array([[i, (i + 1) % k, k] for i in range(k)])
+    loop = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    q0 = triangle_quality(V, F)
+    movable = np.arange(len(V)) >= k
+    one, _ = tangential_smoothing(V, F, movable, 1, fixed=loop, split=False)
+    assert triangle_quality(one, F).min() >= q0.min()
+    V1, F1 = tangential_smoothing(V, F, movable, 10, fixed=loop, split=False)
+    assert np.array_equal(V1[:k], V[:k]) and np.abs(V1[:, 2]).max() < 1e-12
+    q1 = triangle_quality(V1, F1)
+    assert q0.min() < 0.3 and q1.min() > 0.6
+    assert np.allclose(V1[k], [1, 1, 0], atol=0.05)
+    # With the bisections (the option's default) the patch stays planar and no worse.
+    V2, F2 = tangential_smoothing(V, F, movable, 10, fixed=loop)
+    assert np.abs(V2[:, 2]).max() < 1e-12 and triangle_quality(V2, F2).min() > 0.6
+
+
+def test_smoothing_is_off_by_default_and_leaves_the_default_patch_alone():
+    import inspect
+
+    from meshlab_holefill.algorithms.min_angle_bilateral import PARAMS
+
+    assert "smoothing" not in {p.name for p in PARAMS}  # not a filter parameter yet
+    assert inspect.signature(fill).parameters["smoothing"].default == 0
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.4)
+    ctx = _first_hole_context(V, F)
+    a, b = fill(ctx), fill(ctx, smoothing=0)
+    assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+
+
+@pytest.fixture(scope="module")
+def face_scan():
+    """face000.ply (range scan: jagged hole borders with long edges) and its boundary loops."""
+    import os
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(os.path.join(os.path.dirname(sample("bunny.obj")), "rangemaps", "face000.ply"))
+    V, F = mesh_arrays(ms)
+    return V, F, boundary_loops(F)
+
+
+@pytest.mark.parametrize("edges", [86, 142])
+def test_smoothing_option_lifts_the_slivers_the_refinement_leaves_on_scan_holes(face_scan, edges):
+    # face000's holes of 86 and 142 edges: the paper's steps leave centroids next to border
+    # edges (min quality 0.298 and 0.211, although no border corner forces a triangle below
+    # 0.76 / 0.64); the smoothing option (beyond the paper) lifts them.
+    from meshlab_holefill.metrics import corner_quality_bound
+
+    V, F, loops = face_scan
+    loop = next(lp for lp in loops if len(lp) == edges)
+    ctx = hole_context(V, F, loop, vertex_face_incidence(F, len(V)), rings=2)
+    assert corner_quality_bound(V, F, loop.vertices) > 0.6
+    plain = fill(ctx)
+    smoothed = fill(ctx, smoothing=10)
+    q0 = triangle_quality(plain.all_points(ctx.points), plain.faces)
+    q1 = triangle_quality(smoothed.all_points(ctx.points), smoothed.faces)
+    assert q0.min() < 0.3 and q0.mean() < 0.86
+    assert q1.min() >= 0.3 and q1.mean() >= 0.9
+    validate_patch(smoothed, ctx.points, ctx.forbidden_edges)
+
+
+def test_bilateral_step_pulls_a_flat_cap_inward_and_fairing_with_smoothing_beats_the_flat_fill():
+    # Diagnosis of the distance to the removed surface (Sec. III.D): the filter moves each new
+    # vertex toward its neighbours' tangent planes, so on a convex hole it pushes the refined
+    # (nearly flat) patch further inside the sphere; the options fairing=thinplate with
+    # iterations=0 and smoothing lie closer to the sphere than the plain minimum-angle fill.
+    V, F, _ = sphere_with_holes(subdiv=5, centers=[(0, 0, 1)], radius=0.35)
+    ctx = _first_hole_context(V, F)
+    refined, filtered = fill(ctx, iterations=0), fill(ctx)
+    assert np.array_equal(refined.faces, filtered.faces)
+    r = lambda p: np.linalg.norm(p.vertices, axis=1)
+    assert r(filtered).mean() < r(refined).mean() - 1e-4
+
+    def sphere_gap(patch, samples=6):
+        # Mean radial gap over points spread on the patch faces (barycentric grid).
+        X = patch.all_points(ctx.points)
+        T = X[patch.faces]
+        w = [(a, b, samples - a - b) for a in range(samples + 1) for b in range(samples + 1 - a)]
+        P = np.concatenate([(a * T[:, 0] + b * T[:, 1] + c * T[:, 2]) / samples for a, b, c in w])
+        area = np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+        return np.average(np.abs(np.linalg.norm(P, axis=1) - 1), weights=np.tile(area, len(w)))
+
+    from meshlab_holefill.patch import Patch
+
+    flat = Patch(vertices=np.zeros((0, 3)), faces=min_angle_triangulation(ctx.points, ctx.loop_normals,
+                                                                          ctx.forbidden_edges))
+    faired = fill(ctx, fairing="thinplate", iterations=0, smoothing=10)
+    assert sphere_gap(filtered) > sphere_gap(flat)
+    assert sphere_gap(faired) < 0.5 * sphere_gap(flat)
+    q = triangle_quality(faired.all_points(ctx.points), faired.faces)
+    assert q.min() > 0.5 and q.mean() > 0.9
+
+
+def test_bisect_obtuse_splits_the_chord_of_an_obtuse_ear():
+    # An ear with a 140-degree border corner at vertex 1: its chord (0, 2) is split at its
+    # midpoint, which joins vertex 1 to the rest of the patch (no swap or move could).
+    from meshlab_holefill.algorithms.min_angle_bilateral import bisect_obtuse
+
+    h = np.tan(np.radians(20))
+    V = np.array([[0, 0, 0], [1, -h, 0], [2, 0, 0], [1, 1.5, 0]], float)
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    loop = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
+    q0 = triangle_quality(V, F).min()
+    V1, F1, movable = bisect_obtuse(V, F, np.zeros(4, bool), loop)
+    assert len(V1) == 5 and np.allclose(V1[4], [1, 0, 0]) and movable.tolist() == [False] * 4 + [True]
+    assert len(F1) == 4 and triangle_quality(V1, F1).min() > q0
+    n = np.cross(V1[F1[:, 1]] - V1[F1[:, 0]], V1[F1[:, 2]] - V1[F1[:, 0]])
+    assert np.all(n[:, 2] > 0)  # orientation kept
+    # A fixed chord is never split.
+    assert len(bisect_obtuse(V, F, np.zeros(4, bool), np.concatenate([loop, [[0, 2]]]))[0]) == 4
