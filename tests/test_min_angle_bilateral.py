@@ -360,15 +360,15 @@ def test_tangential_smoothing_lifts_a_vertex_off_a_border_edge_and_keeps_the_pla
     loop = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
     q0 = triangle_quality(V, F)
     movable = np.arange(len(V)) >= k
-    one, _ = tangential_smoothing(V, F, movable, 1, fixed=loop, split=False)
+    one, _, _ = tangential_smoothing(V, F, movable, 1, fixed=loop, split=False)
     assert triangle_quality(one, F).min() >= q0.min()
-    V1, F1 = tangential_smoothing(V, F, movable, 10, fixed=loop, split=False)
+    V1, F1, _ = tangential_smoothing(V, F, movable, 10, fixed=loop, split=False)
     assert np.array_equal(V1[:k], V[:k]) and np.abs(V1[:, 2]).max() < 1e-12
     q1 = triangle_quality(V1, F1)
     assert q0.min() < 0.3 and q1.min() > 0.6
     assert np.allclose(V1[k], [1, 1, 0], atol=0.05)
     # With the bisections (the option's default) the patch stays planar and no worse.
-    V2, F2 = tangential_smoothing(V, F, movable, 10, fixed=loop)
+    V2, F2, _ = tangential_smoothing(V, F, movable, 10, fixed=loop)
     assert np.abs(V2[:, 2]).max() < 1e-12 and triangle_quality(V2, F2).min() > 0.6
 
 
@@ -458,10 +458,57 @@ def test_bisect_obtuse_splits_the_chord_of_an_obtuse_ear():
     F = np.array([[0, 1, 2], [0, 2, 3]])
     loop = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
     q0 = triangle_quality(V, F).min()
-    V1, F1, movable = bisect_obtuse(V, F, np.zeros(4, bool), loop)
+    V1, F1, movable, scale = bisect_obtuse(V, F, np.zeros(4, bool), loop, np.array([1.0, 2, 3, 4]))
     assert len(V1) == 5 and np.allclose(V1[4], [1, 0, 0]) and movable.tolist() == [False] * 4 + [True]
+    assert scale.tolist() == [1, 2, 3, 4, 2]
     assert len(F1) == 4 and triangle_quality(V1, F1).min() > q0
     n = np.cross(V1[F1[:, 1]] - V1[F1[:, 0]], V1[F1[:, 2]] - V1[F1[:, 0]])
     assert np.all(n[:, 2] > 0)  # orientation kept
     # A fixed chord is never split.
     assert len(bisect_obtuse(V, F, np.zeros(4, bool), np.concatenate([loop, [[0, 2]]]))[0]) == 4
+
+
+def test_smoothing_option_removes_a_centroid_stuck_in_a_narrow_scan_hole(face_scan):
+    # face000's 23-edge hole is a strip about one edge wide: the refinement leaves a centroid
+    # next to its 2.2-long border edge (quality 0.117, corner bound 0.50); no tangential move
+    # frees it, a collapse (collapse_poor, part of the smoothing option) does.
+    from meshlab_holefill.algorithms.min_angle_bilateral import tangential_smoothing
+
+    V, F, loops = face_scan
+    loop = next(lp for lp in loops if len(lp) == 23)
+    ctx = hole_context(V, F, loop, vertex_face_incidence(F, len(V)), rings=2)
+    plain = fill(ctx)
+    assert triangle_quality(plain.all_points(ctx.points), plain.faces).min() < 0.15
+    X, Fp = plain.all_points(ctx.points), plain.faces
+    k = ctx.size
+    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    fixed = np.concatenate([loop_edges, ctx.forbidden_edges.reshape(-1, 2)])
+    movable = np.arange(len(X)) >= k
+    no_collapse, F1, _ = tangential_smoothing(X, Fp, movable, 10, fixed=fixed, split=False)
+    assert triangle_quality(no_collapse, F1).min() < 0.3
+    smoothed = fill(ctx, smoothing=10)
+    q = triangle_quality(smoothed.all_points(ctx.points), smoothed.faces)
+    assert q.min() >= 0.3 and q.mean() >= 0.8
+    validate_patch(smoothed, ctx.points, ctx.forbidden_edges)
+
+
+def test_collapse_poor_keeps_the_link_condition_and_fixed_edges():
+    # A vertex squeezed against the bottom edge (0, 1) of a fan: it is collapsed into the
+    # neighbour that gives the best smallest quality around it; the patch stays a valid disk.
+    from meshlab_holefill.algorithms.min_angle_bilateral import collapse_poor
+    from meshlab_holefill.patch import Patch
+
+    V = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [1, 2.2, 0], [0, 2, 0], [1.0, 0.05, 0], [1.0, 1.2, 0]], float)
+    k = 5
+    F = np.array([[0, 1, 5], [1, 6, 5], [1, 2, 6], [2, 3, 6], [3, 4, 6], [4, 0, 6], [0, 5, 6]])
+    loop = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    movable = np.arange(len(V)) >= k
+    q0 = triangle_quality(V, F).min()
+    V1, F1, m1, a1 = collapse_poor(V, F, movable, loop, np.arange(7.0))
+    assert len(V1) == 6 and len(F1) == 5 and a1.tolist() == [0, 1, 2, 3, 4, 6]
+    assert triangle_quality(V1, F1).min() > q0
+    validate_patch(Patch(vertices=V1[k:], faces=F1), V1[:k], np.zeros((0, 2), np.int64))
+    assert np.array_equal(V1[:k], V[:k])  # loop vertices never go
+    # Once nothing is poor, nothing changes.
+    V2, F2, _, _ = collapse_poor(V1, F1, m1, loop)
+    assert np.array_equal(V2, V1) and np.array_equal(F2, F1)
