@@ -156,3 +156,19 @@ def test_capped_island_outline_quality_is_not_judged():
     got = _as_dict(criteria(rows, [_row(dist_patch_to_gt_mean_permille=0.2)], target))
     assert got["quality min (≥ 0.3)"] == ("0.400", True)
     assert got["holes with min < 0.3 not forced by a sharp border corner"] == ("0 (0 forced)", True)
+
+
+def test_targets_table_judges_option_sets_but_not_the_comparison_variant():
+    from types import SimpleNamespace
+
+    from meshlab_holefill.acceptance import targets_table
+    from meshlab_holefill.comparison import parse_fillers
+
+    fillers = parse_fillers("lssvm_poisson,lssvm_poisson:laplacian_prediction=zero,"
+                            "min_angle_bilateral:fairing=thinplate,meshing_close_holes:maxholesize=all")
+    labels = [f.label for f in fillers]
+    holes = [dict(_row(case="sphere"), filler=lab) for lab in labels]
+    header, rows, _ = targets_table(SimpleNamespace(fillers=fillers, holes=holes), labels[-1])
+    assert header == ["criterion", "`lssvm_poisson`", "`min_angle_bilateral (fairing=thinplate)`"]
+    versus = [r for r in rows if r[0].startswith("patch→GT ‰ on sphere")]
+    assert versus and versus[0][1].endswith("✓") and versus[0][2] == ""  # only the default is compared with it

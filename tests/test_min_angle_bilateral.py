@@ -377,7 +377,7 @@ def test_smoothing_is_off_by_default_and_leaves_the_default_patch_alone():
 
     from meshlab_holefill.algorithms.min_angle_bilateral import PARAMS
 
-    assert "smoothing" not in {p.name for p in PARAMS}  # not a filter parameter yet
+    assert next(p for p in PARAMS if p.name == "smoothing").default == 0
     assert inspect.signature(fill).parameters["smoothing"].default == 0
     V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.4)
     ctx = _first_hole_context(V, F)
