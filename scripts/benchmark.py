@@ -338,6 +338,7 @@ def main(argv=None):
     fillers = parse_fillers(args.filters or None, args.refinehole)
     t0 = time.perf_counter()
     os.makedirs(args.out, exist_ok=True)
+    load_at_start = os.getloadavg()[0]  # other jobs on the machine slow every timing below
     text, result = f"Measured by `{command}` on {time.strftime('%Y-%m-%d')} ({os.cpu_count()} cores).\n", None
     if not args.no_suite:
         cases = [load_case(c) for c in args.cases.split(",") if c]
@@ -346,8 +347,8 @@ def main(argv=None):
         write_report(result, suite_dir, pictures=not args.no_pictures, command=command)
         suite_seconds = time.perf_counter() - t0
         print(f"# suite: {suite_seconds:.1f} s (report in {suite_dir})", file=sys.stderr)
-        text = (f"Measured by `{command}` on {time.strftime('%Y-%m-%d')} ({os.cpu_count()} cores, shared with "
-                f"other jobs): {suite_seconds:.0f} s for the suite including the report. Meshes: "
+        text = (f"Measured by `{command}` on {time.strftime('%Y-%m-%d')} ({os.cpu_count()} cores, load average "
+                f"{load_at_start:.1f} at the start): {suite_seconds:.0f} s for the suite including the report. Meshes: "
                 + ", ".join(f"{c['case']} ({len(c['holes'])} {c['kind']})" for c in result.cases)
                 + f". Full report: `{suite_dir}/report.md` (tables, charts, a picture of every hole).\n\n"
                 + to_markdown(summary_blocks(result)))
