@@ -546,21 +546,37 @@ def patch_guard(ctx, check_intersections=False):
         if not check_intersections or not ok.any():
             return ok
         idx = np.flatnonzero(ok)
-        s = len(idx)
-        new = np.concatenate([A[idx], B[idx]])
-        bad = np.zeros(2 * s, bool)
-        bad[patch_crossings(ctx, V, None, faces=new)] = True
-        # Against the rest of the patch: the faces a swap replaces do not count.
-        from .geometry.intersections import intersecting_pairs
-
-        allF = np.concatenate([new, F])
-        pairs = intersecting_pairs(V, allF, np.arange(2 * s), np.arange(2 * s, len(allF)))
-        if len(pairs):
-            q, other_face = pairs[:, 0], pairs[:, 1] - 2 * s
-            own = replaced[idx][q % s]
-            real = (other_face != own[:, 0]) & (other_face != own[:, 1])
-            bad[q[real]] = True
-        ok[idx] &= ~(bad[:s] | bad[s:])
+        ok[idx] &= ~swaps_crossing(ctx, V, F, A[idx], B[idx], replaced[idx])
         return ok
 
     return allowed
+
+
+def swaps_crossing(ctx, V, F, A, B, replaced):
+    """Which edge swaps would make a patch cross the surrounding faces or itself.
+
+    Parameters
+    ----------
+    ctx : HoleContext
+    V : (k + p, 3) float64  the current patch's points (loop first, as in a Patch)
+    F : (q, 3) int          the current patch's faces
+    A, B : (s, 3) int       the two triangles each swap would create
+    replaced : (s, 2) int   the faces of ``F`` each swap replaces (they do not count against it)
+
+    Returns
+    -------
+    (s,) bool  True where a new triangle intersects the mesh near the hole or the rest of the patch
+    """
+    from .geometry.intersections import intersecting_pairs
+
+    s = len(A)
+    new = np.concatenate([A, B])
+    bad = np.zeros(2 * s, bool)
+    bad[patch_crossings(ctx, V, None, faces=new)] = True
+    allF = np.concatenate([new, F])
+    pairs = intersecting_pairs(V, allF, np.arange(2 * s), np.arange(2 * s, len(allF)))
+    if len(pairs):
+        q, other = pairs[:, 0], pairs[:, 1] - 2 * s
+        own = replaced[q % s]
+        bad[q[(other != own[:, 0]) & (other != own[:, 1])]] = True
+    return bad[:s] | bad[s:]

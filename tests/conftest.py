@@ -58,3 +58,14 @@ def bunny_scan():
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(sample("bunny10k_textured.obj"))
     return ms
+
+
+@pytest.fixture(scope="session")
+def face_scan():
+    """face000.ply (range scan: jagged hole borders with long edges) and its boundary loops."""
+    from meshlab_holefill.holes import boundary_loops
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("rangemaps/face000.ply"))
+    V, F = mesh_arrays(ms)
+    return V, F, boundary_loops(F)

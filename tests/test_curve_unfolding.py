@@ -275,8 +275,8 @@ def test_planar_domain_is_scaled_to_the_loops_perimeter():
     assert cu.polygon_perimeter(Qs) == pytest.approx(cu.polygon_perimeter(P))
 
 
-@pytest.mark.parametrize("energy, order", [("area", 1), ("fairing", 2)])
-def test_embedding_solves_its_energy(energy, order):
+def sphere_cap_domain():
+    """A sphere hole's context and its refined planar domain (points, faces in patch numbering)."""
     ms = pymeshlab.MeshSet()
     ms.create_sphere(subdiv=3)
     V, F = mesh_arrays(ms)
@@ -284,6 +284,12 @@ def test_embedding_solves_its_energy(energy, order):
     ctx = hole_context(V, F, boundary_loops(F)[0], rings=2)
     points, Fp = cu.refine_planar(cu.scale_to_loop(project_to_best_plane(ctx.points)[0], ctx.points)[0],
                                   float(ctx.edge_scale.mean()))
+    return ctx, points, Fp
+
+
+@pytest.mark.parametrize("energy, order", [("area", 1), ("fairing", 2)])
+def test_embedding_solves_its_energy(energy, order):
+    ctx, points, Fp = sphere_cap_domain()
     s = len(points) - ctx.size
     interior = embed_patch(ctx, s, Fp, energy=energy)
     n_ctx = len(ctx.vertices)
@@ -427,13 +433,7 @@ def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wra
 
 def sphere_cap_embedding(energy="fairing"):
     """A refined planar domain of a sphere hole embedded by E_DF: joint positions, faces, free vertices."""
-    ms = pymeshlab.MeshSet()
-    ms.create_sphere(subdiv=3)
-    V, F = mesh_arrays(ms)
-    _, F, _ = cut_disks(V, F, [(0, 0, 1)], 0.6)
-    ctx = hole_context(V, F, boundary_loops(F)[0], rings=2)
-    points, Fp = cu.refine_planar(cu.scale_to_loop(project_to_best_plane(ctx.points)[0], ctx.points)[0],
-                                  float(ctx.edge_scale.mean()))
+    ctx, points, Fp = sphere_cap_domain()
     s = len(points) - ctx.size
     n_ctx = len(ctx.vertices)
     joint = np.concatenate([ctx.faces, np.where(Fp < ctx.size, Fp, Fp - ctx.size + n_ctx)])
@@ -469,17 +469,6 @@ def test_tangential_relaxation_never_flips_a_face():
     normal = lambda Z: np.cross(Z[star[:, 1]] - Z[star[:, 0]], Z[star[:, 2]] - Z[star[:, 0]])
     Y = tangential_relaxation(Xw, joint, free)
     assert np.all(np.einsum("ij,ij->i", normal(Xw), normal(Y)) > 0)
-
-
-@pytest.fixture(scope="module")
-def face_scan():
-    """face000.ply (range scan, jagged borders with long edges) and its boundary loops."""
-    import os
-
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(os.path.join(os.path.dirname(sample("bunny.obj")), "rangemaps", "face000.ply"))
-    V, F = mesh_arrays(ms)
-    return V, F, boundary_loops(F)
 
 
 @pytest.mark.parametrize("edges", [31, 36, 76, 86])

@@ -687,18 +687,23 @@ def test_curvature_smoothing_keeps_a_small_sphere_patch_on_the_sphere():
     assert depth(curv) < 0.25 * depth(taubin)
 
 
-def test_curvature_smoothing_removes_noise_and_keeps_a_plane():
+def flat_hole_patch(radius):
+    """A round hole in a flat grid and its removed faces as a patch: (ctx, points X, faces, inner count)."""
     V, F = grid_plane(30)
-    F_cut, removed = cut(V, F, (0.5, 0.5, 0), 0.2)
+    F_cut, removed = cut(V, F, (0.5, 0.5, 0), radius)
     ctx = context(V, F_cut)
     index = {int(g): i for i, g in enumerate(ctx.global_index[:ctx.size])}
     inner = [int(v) for v in np.unique(removed) if int(v) not in index]
     for j, v in enumerate(inner):
         index[v] = ctx.size + j
     X = np.concatenate([ctx.points, V[inner]])
-    Fp = np.vectorize(index.get)(removed).astype(np.int64)
+    return ctx, X, np.vectorize(index.get)(removed).astype(np.int64), len(inner)
+
+
+def test_curvature_smoothing_removes_noise_and_keeps_a_plane():
+    ctx, X, Fp, n_inner = flat_hole_patch(0.2)
     noisy = X.copy()
-    noisy[ctx.size:, 2] = np.random.default_rng(0).normal(0, 0.01, len(inner))
+    noisy[ctx.size:, 2] = np.random.default_rng(0).normal(0, 0.01, n_inner)
     S = hpde_optimisation.curvature_smooth(noisy, Fp, ctx.size, ctx.vertices, ctx.faces, passes=60)
     assert np.abs(S[ctx.size:, 2]).max() < 0.2 * np.abs(noisy[ctx.size:, 2]).max()
     flat = hpde_optimisation.curvature_smooth(X, Fp, ctx.size, ctx.vertices, ctx.faces, passes=60)
@@ -707,18 +712,11 @@ def test_curvature_smoothing_removes_noise_and_keeps_a_plane():
 
 def bump_patch(noise=0.0, height=0.05):
     """A flat hole in a grid and a patch on a Gaussian bump inside it (the loop stays flat)."""
-    V, F = grid_plane(30)
-    F_cut, removed = cut(V, F, (0.5, 0.5, 0), 0.25)
-    ctx = context(V, F_cut)
-    index = {int(g): i for i, g in enumerate(ctx.global_index[:ctx.size])}
-    inner = [int(v) for v in np.unique(removed) if int(v) not in index]
-    for j, v in enumerate(inner):
-        index[v] = ctx.size + j
-    X = np.concatenate([ctx.points, V[inner]])
+    ctx, X, F, n_inner = flat_hole_patch(0.25)
     r2 = ((X[ctx.size:, :2] - 0.5) ** 2).sum(axis=1)
     truth = height * np.exp(-r2 / 0.01)
-    X[ctx.size:, 2] = truth + np.random.default_rng(1).normal(0, noise, len(inner))
-    return ctx, X, np.vectorize(index.get)(removed).astype(np.int64), truth
+    X[ctx.size:, 2] = truth + np.random.default_rng(1).normal(0, noise, n_inner)
+    return ctx, X, F, truth
 
 
 def test_anchored_smoothing_keeps_the_prediction_and_removes_jitter():

@@ -385,17 +385,6 @@ def test_smoothing_is_off_by_default_and_leaves_the_default_patch_alone():
     assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
 
 
-@pytest.fixture(scope="module")
-def face_scan():
-    """face000.ply (range scan: jagged hole borders with long edges) and its boundary loops."""
-    import os
-
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(os.path.join(os.path.dirname(sample("bunny.obj")), "rangemaps", "face000.ply"))
-    V, F = mesh_arrays(ms)
-    return V, F, boundary_loops(F)
-
-
 @pytest.mark.parametrize("edges", [86, 142])
 def test_smoothing_option_lifts_the_slivers_the_refinement_leaves_on_scan_holes(face_scan, edges):
     # face000's holes of 86 and 142 edges: the paper's steps leave centroids next to border

@@ -54,7 +54,7 @@ from ..geometry.fairing import fair_patch_in_context
 from ..geometry.flips import relax_edges
 from ..geometry.refine import refine_patch
 from ..geometry.topology import edge_pair_set
-from ..holes import patch_crossings, patch_guard
+from ..holes import patch_crossings, patch_guard, swaps_crossing
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
 
@@ -316,8 +316,6 @@ def relaxation_guard(ctx):
     -------
     callable ``allowed(V, F, A, B, replaced) -> (s,) bool`` for :func:`geometry.flips.relax_edges`
     """
-    from ..geometry.intersections import intersecting_pairs
-
     sector = patch_guard(ctx)
 
     def allowed(V, F, A, B, replaced):
@@ -325,19 +323,7 @@ def relaxation_guard(ctx):
         idx = np.flatnonzero(~ok)
         if len(idx) == 0:
             return ok
-        s = len(idx)
-        new = np.concatenate([A[idx], B[idx]])
-        bad = np.zeros(2 * s, bool)
-        bad[patch_crossings(ctx, V, None, faces=new)] = True
-        allF = np.concatenate([new, F])
-        pairs = intersecting_pairs(V, allF, np.arange(2 * s), np.arange(2 * s, len(allF)))
-        if len(pairs):
-            q, other = pairs[:, 0], pairs[:, 1] - 2 * s
-            own = replaced[idx][q % s]
-            # The two faces a swap replaces are not part of the patch after it.
-            real = (other != own[:, 0]) & (other != own[:, 1])
-            bad[q[real]] = True
-        ok[idx] = ~(bad[:s] | bad[s:])
+        ok[idx] = ~swaps_crossing(ctx, V, F, A[idx], B[idx], replaced[idx])
         return ok
 
     return allowed
