@@ -656,17 +656,24 @@ def test_record_returns_the_smoothed_prediction_points(sphere_hole):
     assert np.abs(np.linalg.norm(S, axis=1) - 1).max() < 0.2 * hpde.ring_edge_length(ctx)
 
 
-def sphere_cap_patch(radius):
-    """A hole in the unit sphere and, as its patch, the removed triangles (vertices exactly on the sphere)."""
-    V, F = sphere_mesh(4)
-    F_cut, removed = cut(V, F, (0, 0, 1.0), radius)
+def removed_patch(V, F, center, radius):
+    """Cut a round hole and return its context and, as its patch, the removed triangles.
+
+    Returns (ctx, points X with the loop first, faces in patch numbering, number of inner vertices).
+    """
+    F_cut, removed = cut(V, F, center, radius)
     ctx = context(V, F_cut)
     index = {int(g): i for i, g in enumerate(ctx.global_index[:ctx.size])}
     inner = [int(v) for v in np.unique(removed) if int(v) not in index]
     for j, v in enumerate(inner):
         index[v] = ctx.size + j
     X = np.concatenate([ctx.points, V[inner]])
-    return ctx, X, np.vectorize(index.get)(removed).astype(np.int64)
+    return ctx, X, np.vectorize(index.get)(removed).astype(np.int64), len(inner)
+
+
+def sphere_cap_patch(radius):
+    """A hole in the unit sphere and, as its patch, the removed triangles (vertices exactly on the sphere)."""
+    return removed_patch(*sphere_mesh(4), (0, 0, 1.0), radius)[:3]
 
 
 def test_curvature_smoothing_keeps_a_small_sphere_patch_on_the_sphere():
@@ -689,15 +696,7 @@ def test_curvature_smoothing_keeps_a_small_sphere_patch_on_the_sphere():
 
 def flat_hole_patch(radius):
     """A round hole in a flat grid and its removed faces as a patch: (ctx, points X, faces, inner count)."""
-    V, F = grid_plane(30)
-    F_cut, removed = cut(V, F, (0.5, 0.5, 0), radius)
-    ctx = context(V, F_cut)
-    index = {int(g): i for i, g in enumerate(ctx.global_index[:ctx.size])}
-    inner = [int(v) for v in np.unique(removed) if int(v) not in index]
-    for j, v in enumerate(inner):
-        index[v] = ctx.size + j
-    X = np.concatenate([ctx.points, V[inner]])
-    return ctx, X, np.vectorize(index.get)(removed).astype(np.int64), len(inner)
+    return removed_patch(*grid_plane(30), (0.5, 0.5, 0), radius)
 
 
 def test_curvature_smoothing_removes_noise_and_keeps_a_plane():
