@@ -316,10 +316,13 @@ def test_steps_that_cross_the_surrounding_mesh_are_rejected():
     P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     wall = np.array([[0.5, 0.5, -1], [0.9, 0.1, -1], [0.7, 0.3, 1.0]], float)  # pierces triangle (0, 1, 2)
     front = _AdvancingFront(P, UP, (), 0.75, 100, (np.concatenate([P, wall]), np.array([[4, 5, 6]])))
-    assert not front._clear_of_obstacles([(0, 1, 2)], {})
-    assert front._clear_of_obstacles([(0, 2, 3)], {})
+    corners = lambda f: [[tuple(P[x]) for x in f]]  # noqa: E731
+    assert front.obstacles.crossed([(0, 1, 2)], corners((0, 1, 2)))
+    assert not front.obstacles.crossed([(0, 2, 3)], corners((0, 2, 3)))
+    assert front.obstacles.tests == 2
     # A new vertex hovering right over a mesh face is refused too.
-    assert front._obstacle_distance((0.7, 0.3, 0.0), 0.1) < 0.01
+    assert front.obstacles.distance((0.7, 0.3, 0.0), 0.1) < 0.01
+    assert front.obstacles.distance((0.2, 0.8, 0.0), 0.1) == 0.1  # nothing within reach
 
 
 def test_front_that_runs_out_of_the_hole_stops():

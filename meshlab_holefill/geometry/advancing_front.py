@@ -56,8 +56,8 @@ import math
 import numpy as np
 
 from ..patch import HoleFillError
-from .front_predicates import (cross, direction_angle, dot, front_angle, norm, point_triangle_distance, scaled,
-                               segments_cross, segments_hit_triangles, sub, unit)
+from .front_obstacles import FrontObstacles
+from .front_predicates import cross, direction_angle, dot, front_angle, norm, scaled, segments_cross, sub, unit
 
 ONE_TRIANGLE_MAX = math.radians(75.0)
 TWO_TRIANGLES_MAX = math.radians(135.0)
@@ -128,7 +128,7 @@ class _AdvancingFront:
         self.heap = []
         self.blocked = []
         self.stats = {"steps": 0, "rule1": 0, "rule2": 0, "rule3": 0, "merges": 0, "splits": 0,
-                      "rejected": 0, "obstacle_tests": 0}
+                      "rejected": 0, "obstacle_tests": 0}  # the last from self.obstacles
         self._set_obstacles(obstacles)
         for i in range(k):
             self._update_node(i)
@@ -405,111 +405,27 @@ class _AdvancingFront:
                     return False
         if new_edges and not self._no_crossing(node, new_edges, new_pos, m):
             return False
-        if self.obstacle_grid is None:
+        if self.obstacles is None:
             return True
         v = self.node_vertex[node]
         clearance = HOVER_FACTOR * self.S[v]
         for pos in new_pos.values():
-            if self._obstacle_distance(pos, clearance) < clearance:
+            if self.obstacles.distance(pos, clearance) < clearance:
                 return False
-        return self._clear_of_obstacles(faces, new_pos)
-
-    def _obstacle_candidates(self, lo, hi):
-        x0, y0, z0 = self._key(lo)
-        x1, y1, z1 = self._key(hi)
-        cand = set()
-        grid = self.obstacle_grid
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                for iz in range(z0, z1 + 1):
-                    cell = grid.get((ix, iy, iz))
-                    if cell:
-                        cand.update(cell)
-        if not cand:
-            return np.zeros(0, np.int64)
-        cand = np.fromiter(cand, np.int64, len(cand))
-        pad = 1e-9 * self.cell
-        keep = np.all(self.obstacle_hi[cand] >= np.asarray(lo) - pad, axis=1) & \
-            np.all(self.obstacle_lo[cand] <= np.asarray(hi) + pad, axis=1)
-        return cand[keep]
-
-    def _obstacle_distance(self, pos, radius):
-        """Distance from pos to the nearest surrounding mesh face, if below radius (else radius)."""
-        cand = self._obstacle_candidates([x - radius for x in pos], [x + radius for x in pos])
-        if len(cand) == 0:
-            return radius
-        T = self.obstacle_V[self.obstacle_F[cand]]
-        d = point_triangle_distance(np.asarray(pos, np.float64), T)
-        return min(float(d.min()), radius)
+        return not self.obstacles.crossed(faces, [[self._pos(x, new_pos) for x in f] for f in faces])
 
     def _set_obstacles(self, obstacles):
-        """Index the surrounding mesh faces by a grid of their bounding boxes."""
-        self.obstacle_grid = None
-        if obstacles is None:
+        """Index the surrounding mesh; its border faces are the triangles behind the boundary edges."""
+        self.obstacles = None
+        if obstacles is None or len(np.asarray(obstacles[1]).reshape(-1, 3)) == 0:
             return
-        OV, OF = obstacles
-        OV = np.asarray(OV, np.float64)
-        OF = np.asarray(OF, np.int64).reshape(-1, 3)
-        if len(OF) == 0:
-            return
-        self.obstacle_V, self.obstacle_F = OV, OF
-        # The triangles behind the boundary edges: the mesh's border faces.
-        k = self.k
-        border = OF[(OF < k).sum(axis=1) >= 2]
-        for f in border.tolist():
+        self.obstacles = FrontObstacles(obstacles[0], obstacles[1], self.cell, self.k)
+        OV, k = self.obstacles.V, self.k
+        for f in self.obstacles.border_faces().tolist():
             for a, b in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0])):
                 if (b, a) in self.front_edges and a < k and b < k:
                     c = cross(sub(OV[f[1]], OV[f[0]]), sub(OV[f[2]], OV[f[0]]))
                     self.front_edges[(b, a)] = unit(tuple(map(float, c)))
-        corners = OV[OF]
-        self.obstacle_lo, self.obstacle_hi = corners.min(axis=1), corners.max(axis=1)
-        lo = np.floor(self.obstacle_lo / self.cell).astype(np.int64)
-        hi = np.floor(self.obstacle_hi / self.cell).astype(np.int64)
-        grid = {}
-        for f, (a, b) in enumerate(zip(lo.tolist(), hi.tolist())):
-            for ix in range(a[0], b[0] + 1):
-                for iy in range(a[1], b[1] + 1):
-                    for iz in range(a[2], b[2] + 1):
-                        grid.setdefault((ix, iy, iz), []).append(f)
-        self.obstacle_grid = grid
-
-    def _clear_of_obstacles(self, faces, new_pos):
-        """No new triangle intersects a surrounding mesh face (shared boundary vertices allowed)."""
-        pts = [self._pos(x, new_pos) for f in faces for x in f]
-        lo = [min(p[i] for p in pts) for i in range(3)]
-        hi = [max(p[i] for p in pts) for i in range(3)]
-        cand = self._obstacle_candidates(lo, hi)
-        if len(cand) == 0:
-            return True
-        self.stats["obstacle_tests"] += 1
-        k = self.k
-        OF = self.obstacle_F[cand]
-        OV = self.obstacle_V
-        # Pairs (new triangle, obstacle) and the vertices they share (boundary vertices only).
-        segs_a, segs_b, tris = [], [], []
-        for f in faces:
-            T = [self._pos(x, new_pos) for x in f]
-            for o in OF.tolist():
-                shared = [x for x in f if 0 <= x < k and x in o]
-                O = [tuple(OV[x]) for x in o]
-                if len(shared) >= 2:
-                    continue  # across a boundary edge: the front-angle checks keep them apart
-                if len(shared) == 1:
-                    s = shared[0]
-                    ta = [T[j] for j in range(3) if f[j] != s]
-                    ob = [O[j] for j in range(3) if o[j] != s]
-                    segs_a += [ta[0], ob[0]]
-                    segs_b += [ta[1], ob[1]]
-                    tris += [O, T]
-                else:
-                    for j in range(3):
-                        segs_a += [T[j], O[j]]
-                        segs_b += [T[(j + 1) % 3], O[(j + 1) % 3]]
-                        tris += [O, T]
-        if not tris:
-            return True
-        return not segments_hit_triangles(np.asarray(segs_a), np.asarray(segs_b), np.asarray(tris),
-                                           1e-9 * self.cell).any()
 
     def _no_crossing(self, node, new_edges, new_pos, m):
         """No new edge crosses a nearby front edge, in the plane of the front angle."""
@@ -708,4 +624,7 @@ def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75,
         max_faces = int(20 * area / (0.43 * h * h) + 10 * k + 100)
     front = _AdvancingFront(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ear_max)
     new_vertices, faces = front.run()
-    return new_vertices, faces, dict(front.stats)
+    stats = dict(front.stats)
+    if front.obstacles is not None:
+        stats["obstacle_tests"] = front.obstacles.tests
+    return new_vertices, faces, stats
