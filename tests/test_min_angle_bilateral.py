@@ -351,7 +351,7 @@ def test_tangential_smoothing_lifts_a_vertex_off_a_border_edge_and_keeps_the_pla
     # the triangle on that edge is flat (no split or swap of Sec. III.C may touch it, the edge
     # being the hole border). Smoothing moves the vertex up, in the plane, and never lowers the
     # smallest quality around it.
-    from meshlab_holefill.algorithms.min_angle_bilateral import tangential_smoothing
+    from meshlab_holefill.algorithms.min_angle_smoothing import tangential_smoothing
 
     V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [2, 2, 0], [1, 2, 0], [0, 2, 0], [0, 1, 0],
                   [1.0, 0.1, 0]], float)
@@ -440,7 +440,7 @@ def test_bilateral_step_pulls_a_flat_cap_inward_and_fairing_with_smoothing_beats
 def test_bisect_obtuse_splits_the_chord_of_an_obtuse_ear():
     # An ear with a 140-degree border corner at vertex 1: its chord (0, 2) is split at its
     # midpoint, which joins vertex 1 to the rest of the patch (no swap or move could).
-    from meshlab_holefill.algorithms.min_angle_bilateral import bisect_obtuse
+    from meshlab_holefill.algorithms.min_angle_smoothing import bisect_obtuse
 
     h = np.tan(np.radians(20))
     V = np.array([[0, 0, 0], [1, -h, 0], [2, 0, 0], [1, 1.5, 0]], float)
@@ -461,7 +461,7 @@ def test_smoothing_option_removes_a_centroid_stuck_in_a_narrow_scan_hole(face_sc
     # face000's 23-edge hole is a strip about one edge wide: the refinement leaves a centroid
     # next to its 2.2-long border edge (quality 0.117, corner bound 0.50); no tangential move
     # frees it, a collapse (collapse_poor, part of the smoothing option) does.
-    from meshlab_holefill.algorithms.min_angle_bilateral import tangential_smoothing
+    from meshlab_holefill.algorithms.min_angle_smoothing import tangential_smoothing
 
     V, F, loops = face_scan
     loop = next(lp for lp in loops if len(lp) == 23)
@@ -484,7 +484,7 @@ def test_smoothing_option_removes_a_centroid_stuck_in_a_narrow_scan_hole(face_sc
 def test_collapse_poor_keeps_the_link_condition_and_fixed_edges():
     # A vertex squeezed against the bottom edge (0, 1) of a fan: it is collapsed into the
     # neighbour that gives the best smallest quality around it; the patch stays a valid disk.
-    from meshlab_holefill.algorithms.min_angle_bilateral import collapse_poor
+    from meshlab_holefill.algorithms.min_angle_smoothing import collapse_poor
     from meshlab_holefill.patch import Patch
 
     V = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [1, 2.2, 0], [0, 2, 0], [1.0, 0.05, 0], [1.0, 1.2, 0]], float)
