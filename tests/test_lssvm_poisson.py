@@ -426,6 +426,26 @@ def test_poisson_solve_with_zero_laplacian_is_the_membrane():
     assert np.abs(L[inner] @ X).max() < 0.05 * ctx.mean_edge_length
 
 
+def test_repeated_poisson_solves_converge_to_their_own_weights():
+    # Sec. 3.4: L_Vn depends on the positions, so each further solve uses the previous result's
+    # weights; the displacement shrinks and the final positions satisfy their own Laplacian system.
+    from meshlab_holefill.algorithms.lssvm_poisson import poisson_reposition
+
+    V, F, _ = sphere_hole()
+    ctx = context_of(V, F)
+    patch = xu.fill(ctx, laplacian_prediction="zero", relax=False)
+    X, fixed = patch.all_points(ctx.points), np.arange(ctx.size + len(patch.vertices)) < ctx.size
+    X[~fixed] += 0.3 * ctx.mean_edge_length * np.random.default_rng(0).normal(size=((~fixed).sum(), 3))
+    residuals, changes = [], []
+    for iterations in (1, 2, 4, 8):
+        Y, G, info = poisson_reposition(X, patch.faces, fixed, None, iterations=iterations)
+        assert info["poisson_solves"] == iterations and not info["poisson_rejected"]
+        changes.append(info["poisson_last_change"])
+        residuals.append(np.abs(normalized_cotangent_laplacian(Y, G)[~fixed] @ Y).max() / ctx.mean_edge_length)
+    assert np.all(np.diff(changes) < 0) and np.all(np.diff(residuals) < 0)
+    assert residuals[-1] < 0.05 * residuals[0]
+
+
 def _fold_case():
     """Planar patch (8 boundary vertices, 3 inner) and a solve target moving inner vertex 10 past edge (3, 8).
 
