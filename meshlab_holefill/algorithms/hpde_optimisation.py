@@ -13,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry.flips import relax_edges
-from ..geometry.quality import corner_angles, face_normals, unique_edges
+from ..geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
 from ..geometry.topology import edge_pair_set, interior_edges
 
 # Taubin's example filter (ref. [26]): lambda = 0.33, mu = -0.34, pass band k_PB ~ 0.1.
@@ -412,8 +412,8 @@ def decimate_short_edges(V, F, n_fixed, threshold, forbidden_edges=(), max_round
         corners = V[F[faces]]
         moved = (F[faces] == a[rows, None]) | (F[faces] == b[rows, None])
         new_corners = np.where(moved[..., None], newpos[rows, None, :], corners)
-        n_old = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        n_new = np.cross(new_corners[:, 1] - new_corners[:, 0], new_corners[:, 2] - new_corners[:, 0])
+        n_old = cross_rows(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        n_new = cross_rows(new_corners[:, 1] - new_corners[:, 0], new_corners[:, 2] - new_corners[:, 0])
         ok_face = np.einsum("ij,ij->i", n_old, n_new) > COLLAPSE_MIN_COS * np.linalg.norm(n_old, axis=1) * \
             np.linalg.norm(n_new, axis=1)
         bad = np.zeros(len(a), bool)

@@ -29,21 +29,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry.quality import face_normals, triangle_quality, vertex_normals
+from ..geometry.quality import cross_rows, face_normals, triangle_quality, vertex_normals
 from ..geometry.topology import edge_pair_set
 from .hpde_optimisation import compact_vertices
 
 TURN_COS = 0.5  # a changed triangle may turn by less than 60 degrees
 BORDER_COS = np.cos(np.radians(150.0))  # and bend less than 150 degrees against the mesh across a loop edge
 GAIN = 1e-6
-
-
-def _cross(u, w):
-    out = np.empty(np.broadcast_shapes(u.shape, w.shape))
-    out[..., 0] = u[..., 1] * w[..., 2] - u[..., 2] * w[..., 1]
-    out[..., 1] = u[..., 2] * w[..., 0] - u[..., 0] * w[..., 2]
-    out[..., 2] = u[..., 0] * w[..., 1] - u[..., 1] * w[..., 0]
-    return out
 
 
 def _quality(P):
@@ -54,7 +46,7 @@ def _quality(P):
     a = np.sqrt((e1 * e1).sum(-1))
     b = np.sqrt((e2 * e2).sum(-1))
     c = np.sqrt((e0 * e0).sum(-1))
-    cr = _cross(e0, -e2)
+    cr = cross_rows(e0, -e2)
     area2 = (cr * cr).sum(-1) / 4.0
     den = (a + b + c) * a * b * c
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -266,7 +258,7 @@ class _Patch:
             q = self.valid(T, W, ref)
             if q is None:
                 continue
-            cr = np.cross(W[:, 1] - W[:, 0], W[:, 2] - W[:, 0])
+            cr = cross_rows(W[:, 1] - W[:, 0], W[:, 2] - W[:, 0])
             if np.any(cr @ ref_v <= TURN_COS * np.linalg.norm(cr, axis=1)):
                 continue
             qmin = q.min()

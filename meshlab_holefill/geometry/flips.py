@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .quality import corner_angles, face_normals
+from .quality import corner_angles, cross_rows, face_normals
 from .topology import interior_edges, undirected_keys
 
 
@@ -17,9 +17,9 @@ def circumcenters(V, F):
     """
     A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     a, b = B - A, C - A
-    axb = np.cross(a, b)
+    axb = cross_rows(a, b)
     denom = 2.0 * np.einsum("ij,ij->i", axb, axb)
-    num = np.cross(np.einsum("ij,ij->i", a, a)[:, None] * b - np.einsum("ij,ij->i", b, b)[:, None] * a, axb)
+    num = cross_rows(np.einsum("ij,ij->i", a, a)[:, None] * b - np.einsum("ij,ij->i", b, b)[:, None] * a, axb)
     with np.errstate(divide="ignore", invalid="ignore"):
         offset = num / denom[:, None]
     centers = A + offset
@@ -31,13 +31,13 @@ def circumcenters(V, F):
 
 
 def _triangle_normals(P, Q, R):
-    return np.cross(Q - P, R - P)
+    return cross_rows(Q - P, R - P)
 
 
 def _angle_at(P, Q, R):
     """Angle at P of the triangles (P, Q, R), row-wise."""
     u, w = Q - P, R - P
-    return np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+    return np.arctan2(np.linalg.norm(cross_rows(u, w), axis=1), np.einsum("ij,ij->i", u, w))
 
 
 def min_angle_scores(V, old1, old2, new1, new2):

@@ -9,6 +9,8 @@ import math
 
 import numpy as np
 
+from .quality import cross_rows
+
 # The plane of the two front edges is used when its normal is within 30 degrees of the
 # reference normal and the edges make an angle of at least ~8.6 degrees (sin > 0.15).
 PLANE_MIN_COS = 0.866
@@ -104,12 +106,6 @@ def segments_cross(a0, a1, b0, b1):
         lo_b, hi_b = sorted((b0[axis], b1[axis]))
         return hi_a >= lo_b and hi_b >= lo_a
     return True
-
-
-def cross_rows(a, b):
-    """Row-wise cross products of (n, 3) arrays (np.cross is slow on the small arrays used here)."""
-    return np.column_stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]])
 
 
 def dot_rows(a, b):

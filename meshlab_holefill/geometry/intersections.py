@@ -43,6 +43,8 @@ degenerate face with a face it shares an edge with.
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .quality import cross_rows
+
 FOLD_ANGLE = 1e-3  # radians of opening below which edge-adjacent faces overlap
 CHUNK = 200_000  # candidate pairs processed at once, bounds temporary memory
 
@@ -195,7 +197,7 @@ def _folded(T1, T2, sh1, sh2, fold_angle):
     ua -= e * _dot(ua, e)[:, None]
     ub -= e * _dot(ub, e)[:, None]
     # atan2 stays accurate near 0, where arccos of the cosine would not
-    return np.arctan2(np.linalg.norm(_cross(ua, ub), axis=1), _dot(ua, ub)) < fold_angle
+    return np.arctan2(np.linalg.norm(cross_rows(ua, ub), axis=1), _dot(ua, ub)) < fold_angle
 
 
 def _edges_meet(Ts, Tt, nt, shs, degs, degt, one, S, tol):
@@ -230,7 +232,7 @@ def _clip(P0, P1, T, nh, slab, grow):
     cons = [(slab - d0, slab - d1), (slab + d0, slab + d1)]
     for k in range(3):
         a, b, c = T[:, k], T[:, (k + 1) % 3], T[:, (k + 2) % 3]
-        m = _unit(_cross(nh, b - a))  # in-plane inward normal of edge ab
+        m = _unit(cross_rows(nh, b - a))  # in-plane inward normal of edge ab
         cons.append((_dot(P0 - a, m) + grow, _dot(P1 - a, m) + grow))
         # cap the corner at a; grown edge lines alone reach far out of sharp corners
         u = _unit(_unit(b - a) + _unit(c - a))
@@ -248,20 +250,11 @@ def _clip(P0, P1, T, nh, slab, grow):
 
 def _unit_normal(T, tol):
     """Unit normals (k, 3) and degeneracy flags (k,) of triangles (k, 3, 3)."""
-    n = _cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    n = cross_rows(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
     ln = np.linalg.norm(n, axis=1)
     longest = np.linalg.norm(T - T[:, [1, 2, 0]], axis=2).max(1)
     deg = ln <= tol * longest  # |n| = longest edge * smallest height
     return n / np.where(deg, 1.0, ln)[:, None], deg
-
-
-def _cross(a, b):
-    """Row-wise cross product of (k, 3) arrays (np.cross's axis handling dominates at this size)."""
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    return out
 
 
 def _unit(x):

@@ -4,6 +4,19 @@ from __future__ import annotations
 import numpy as np
 
 
+def cross_rows(a, b):
+    """Cross products of (..., 3) arrays along the last axis, broadcasting like np.cross.
+
+    The same arithmetic as np.cross (bit-identical results), without its axis handling, which
+    dominates on the small arrays the per-hole loops use.
+    """
+    out = np.empty(np.broadcast_shapes(np.shape(a), np.shape(b)))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
 def face_normals(V, F, normalize=True):
     """Face normals from the right-hand rule.
 
@@ -21,7 +34,7 @@ def face_normals(V, F, normalize=True):
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F)
-    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    N = cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
     if not normalize:
         return N
     lengths = np.linalg.norm(N, axis=1)
@@ -97,7 +110,7 @@ def corner_angles(V, F):
         p = V[F[:, k]]
         u = V[F[:, (k + 1) % 3]] - p
         w = V[F[:, (k + 2) % 3]] - p
-        out[:, k] = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+        out[:, k] = np.arctan2(np.linalg.norm(cross_rows(u, w), axis=1), np.einsum("ij,ij->i", u, w))
     return out
 
 
