@@ -95,8 +95,13 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE)
     in_a = np.zeros(len(F), bool)
     in_a[a] = True
 
-    for iq, ja in _candidates(V[F[q]], V[F[a]], tol):
-        i, j = q[iq], a[ja]
+    # The candidate search yields one small block per pair of radius bins; the narrow phase's
+    # cost is mostly per call, so the blocks are joined and tested CHUNK pairs at a time.
+    blocks = list(_candidates(V[F[q]], V[F[a]], tol))
+    iq_all = np.concatenate([b[0] for b in blocks]) if blocks else np.zeros(0, np.int64)
+    ja_all = np.concatenate([b[1] for b in blocks]) if blocks else np.zeros(0, np.int64)
+    for s in range(0, len(iq_all), CHUNK):
+        i, j = q[iq_all[s:s + CHUNK]], a[ja_all[s:s + CHUNK]]
         # (i, j) and (j, i) are both generated when both faces are in both sets
         keep = (i != j) & ~((i > j) & in_q[j] & in_a[i])
         i, j = i[keep], j[keep]
