@@ -3,8 +3,9 @@ import pymeshlab
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from meshlab_holefill.holes import (boundary_halfedges, boundary_loops, hole_context, inside_hole_sector,
-                                    loop_measures, nonmanifold_edges, vertex_face_incidence)
+from meshlab_holefill.hole_guards import inside_hole_sector
+from meshlab_holefill.holes import (boundary_halfedges, boundary_loops, hole_context, loop_measures, nonmanifold_edges,
+                                    vertex_face_incidence)
 
 from conftest import cut_disks, grid, mesh_arrays, sample, sphere_with_holes
 

@@ -9,7 +9,8 @@ from meshlab_holefill.algorithms.min_angle_bilateral import (boundary_angles, fi
                                                              normal_angle_threshold, relaxation_guard)
 from meshlab_holefill.geometry.flips import relax_edges
 from meshlab_holefill.geometry.quality import triangle_quality
-from meshlab_holefill.holes import boundary_loops, hole_context, patch_guard, vertex_face_incidence
+from meshlab_holefill.hole_guards import patch_guard
+from meshlab_holefill.holes import boundary_loops, hole_context, vertex_face_incidence
 from meshlab_holefill.patch import validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
@@ -171,7 +172,7 @@ def test_relaxation_guard_still_refuses_a_swap_through_the_surrounding_mesh():
 
 def test_scalar_sector_test_agrees_with_the_vectorised_one():
     from meshlab_holefill.algorithms.min_angle_bilateral import _in_sector
-    from meshlab_holefill.holes import inside_hole_sector
+    from meshlab_holefill.hole_guards import inside_hole_sector
 
     rng = np.random.default_rng(3)
     agree = 0

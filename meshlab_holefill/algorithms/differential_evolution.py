@@ -146,8 +146,8 @@ PARAMS = [
               minimum=0, maximum=1000),
 ]
 
-EDGE_CLEARANCE = 0.35  # beyond the paper: ... and sliver apexes nearer than this * the length of a loop edge
-LONG_EDGE = 2.0  # longer than this * EdgeLen (mesh_steps.triangulate_planar)
+EDGE_CLEARANCE = 0.35  # beyond the paper: a sliver apex nearer than this * L to a loop edge of length L ...
+LONG_EDGE = 2.0  # ... longer than this * EdgeLen is left out (mesh_steps.triangulate_planar)
 CLEARANCE = 0.25  # prediction points nearer than this * EdgeLen to the projected boundary are left out
 OUTLIER_ROUNDS = 4  # rounds of leaving out prediction points on faces that stay folded
 LAST_RESORT_ANGLE = np.radians(175.0)  # largest crease the loop-only last resort accepts
@@ -155,9 +155,9 @@ LAST_RESORT_FLOORS = (0.4, 0.6)  # quality pass floors of the loop-only last res
 RELAX_ROUNDS = 3  # rounds of sliver collapse + obtuse-edge splits + tangential relaxation + swaps (relax)
 SLIVER_ANGLE = np.radians(140.0)  # a free vertex this flat against a loop edge is collapsed onto it
 MIN_COVERAGE = 0.5  # a pairing keeping fewer base points than this share yields to the other choice
-GOOD_KEPT_SHARE = 0.5
+GOOD_KEPT_SHARE = 0.5  # a layout keeping fewer prediction points is used only if no other keeps more
 STANDING_PLANE_COS = 0.5  # a PCA plane whose normal is further than 60 deg from the surface's stands across it
-QUALITY_TARGET = 0.5  # relax: free vertices of triangles with 2r/R below this are moved (improve_worst_vertices)  # a layout keeping fewer prediction points is used only if no other keeps more
+QUALITY_TARGET = 0.5  # relax: free vertices of triangles with 2r/R below this are moved (improve_worst_vertices)
 
 
 def ring_edge_length(ctx):

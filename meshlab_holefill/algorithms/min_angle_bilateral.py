@@ -54,7 +54,7 @@ from ..geometry.fairing import fair_patch_in_context
 from ..geometry.flips import relax_edges
 from ..geometry.refine import refine_patch
 from ..geometry.topology import edge_pair_set
-from ..holes import patch_crossings, patch_guard, swaps_crossing
+from ..hole_guards import patch_crossings, patch_guard, swaps_crossing
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
 from .min_angle_smoothing import tangential_smoothing
@@ -150,7 +150,7 @@ def _cross3(a, b):
 
 
 def _in_sector(apex, normal, prev_point, next_point, target, margin=1e-9):
-    """Scalar :func:`holes.inside_hole_sector` for one target (plain floats: called once per ear).
+    """Scalar :func:`hole_guards.inside_hole_sector` for one target (plain floats: called once per ear).
 
     True when the segment apex -> target starts into the hole sector, swept counter-clockwise
     about the normal from the next boundary vertex to the previous one.
@@ -303,7 +303,7 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
 def relaxation_guard(ctx):
     """Veto for relaxation swaps: the hole-sector test, with an exact second opinion.
 
-    The sector test (:func:`holes.patch_guard`) refuses a swap whose new edge leaves a
+    The sector test (:func:`hole_guards.patch_guard`) refuses a swap whose new edge leaves a
     boundary vertex outside its hole sector, measured in the tangent plane of the mesh
     normal there. Where the patch meets the surrounding surface at a large angle (a nearly
     flat patch in a strongly curved hole, up to 100 degrees on the bunny's largest cut
