@@ -69,3 +69,21 @@ def face_scan():
     ms.load_new_mesh(sample("rangemaps/face000.ply"))
     V, F = mesh_arrays(ms)
     return V, F, boundary_loops(F)
+
+
+def random_planar_patch(k, points, seed):
+    """A regular k-gon (loop first, counter-clockwise) with random inner points, Delaunay-triangulated in z = 0."""
+    from scipy.spatial import Delaunay
+
+    t = 2 * np.pi * np.arange(k) / k
+    loop = np.stack([np.cos(t), np.sin(t)], axis=1)
+    rng = np.random.default_rng(seed)
+    # inside the inscribed circle, some right next to the loop: slivers
+    r, a = 0.97 * np.cos(np.pi / k) * np.sqrt(rng.random(points)), 2 * np.pi * rng.random(points)
+    inner = np.stack([r * np.cos(a), r * np.sin(a)], axis=1)
+    P = np.concatenate([loop, inner])
+    F = Delaunay(P).simplices.astype(np.int64)
+    A = P[F]
+    cw = (A[:, 1, 0] - A[:, 0, 0]) * (A[:, 2, 1] - A[:, 0, 1]) < (A[:, 1, 1] - A[:, 0, 1]) * (A[:, 2, 0] - A[:, 0, 0])
+    F[cw] = F[cw][:, [0, 2, 1]]
+    return np.column_stack([P, np.zeros(len(P))]), F

@@ -894,3 +894,20 @@ def test_raise_min_quality_lifts_a_sliver_and_keeps_the_loop():
     # Same area covered: nothing was folded or torn.
     from meshlab_holefill.geometry.quality import face_areas
     assert face_areas(V2, F2).sum() == pytest.approx(face_areas(X, F_p).sum())
+
+
+@settings(max_examples=25, deadline=None)
+@given(k=st.integers(6, 16), points=st.integers(3, 25), seed=st.integers(0, 10_000))
+def test_quality_pass_never_lowers_the_minimum_and_keeps_the_disc(k, points, seed):
+    from meshlab_holefill.algorithms import hpde_quality
+    from meshlab_holefill.geometry.quality import face_areas, face_normals
+
+    from conftest import random_planar_patch
+
+    X, F = random_planar_patch(k, points, seed)
+    q0 = triangle_quality(X, F).min()
+    V2, F2, keep, _ = hpde_quality.raise_min_quality(X, F, k)
+    assert np.array_equal(V2[:k], X[:k]) and np.array_equal(keep[:k], np.arange(k))
+    assert triangle_quality(V2, F2).min() >= q0 - 1e-12
+    assert np.abs(V2[:, 2]).max() < 1e-12 and np.all(face_normals(V2, F2)[:, 2] > 0)  # no fold, no flip
+    assert face_areas(V2, F2).sum() == pytest.approx(face_areas(X, F).sum())  # the same disc, no tear

@@ -2,6 +2,8 @@
 import numpy as np
 import pymeshlab
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import dataclasses
 
@@ -13,7 +15,7 @@ from meshlab_holefill.hole_guards import patch_guard
 from meshlab_holefill.holes import boundary_loops, hole_context, vertex_face_incidence
 from meshlab_holefill.patch import validate_patch
 
-from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, random_planar_patch, sample, sphere_with_holes
 
 UP = np.array([0.0, 0.0, 1.0])
 # Counter-clockwise L shape seen from +z: the vertex (1, 1) is the concave one.
@@ -502,3 +504,19 @@ def test_collapse_poor_keeps_the_link_condition_and_fixed_edges():
     # Once nothing is poor, nothing changes.
     V2, F2, _, _ = collapse_poor(V1, F1, m1, loop)
     assert np.array_equal(V2, V1) and np.array_equal(F2, F1)
+
+
+@settings(max_examples=25, deadline=None)
+@given(k=st.integers(6, 16), points=st.integers(3, 25), seed=st.integers(0, 10_000), split=st.booleans())
+def test_smoothing_option_keeps_the_loop_and_the_disc(k, points, seed, split):
+    from meshlab_holefill.algorithms.min_angle_smoothing import tangential_smoothing
+    from meshlab_holefill.geometry.quality import face_areas, face_normals
+
+    X, F = random_planar_patch(k, points, seed)
+    loop = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    V2, F2, _ = tangential_smoothing(X, F, np.arange(len(X)) >= k, 5, fixed=loop, split=split)
+    assert np.array_equal(V2[:k], X[:k])
+    assert np.abs(V2[:, 2]).max() < 1e-12 and np.all(face_normals(V2, F2)[:, 2] > 0)  # no fold, no flip
+    assert face_areas(V2, F2).sum() == pytest.approx(face_areas(X, F).sum())  # the same disc, no tear
+    if not split:
+        assert triangle_quality(V2, F2).min() >= triangle_quality(X, F).min() - 1e-12
