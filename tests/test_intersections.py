@@ -156,6 +156,10 @@ def test_random_soup_matches_brute_force(seed, chunk, monkeypatch):
     assert {tuple(p) for p in intersecting_pairs(V, F, allf, allf)} == expected
     q, a = allf[:15], allf[15:]
     assert {tuple(p) for p in intersecting_pairs(V, F, q, a)} == {p for p in expected if p[0] < 15 <= p[1]}
+    # one face against the rest: most of `against` lies outside its box and is dropped first
+    for f in range(3):
+        got = {tuple(sorted(p)) for p in intersecting_pairs(V, F, [f], allf)}
+        assert got == {p for p in expected if f in p}
     assert len(expected) > 5  # the soup is dense enough to mean something
 
 

@@ -83,11 +83,20 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE)
     if len(q) == 0 or len(a) == 0:
         return out[0]
 
-    used = np.unique(F[np.concatenate([q, a])])
-    P = V[used] + 0.0  # +0.0 turns -0.0 into 0.0 so the welding below sees them equal
     if tol is None:
+        P = V[np.unique(F[np.concatenate([q, a])])]
         diag = np.linalg.norm(P.max(0) - P.min(0))
         tol = 1e-9 * diag + 1e-13 * np.abs(P).max()
+    # Faces of `against` outside the query faces' common box (grown by tol) meet none of them;
+    # dropping them first spares the candidate search and the welding that work (a few new
+    # triangles tested against a whole ring of faces).
+    Tq, Ta = V[F[q]], V[F[a]]
+    lo, hi = Tq.min(axis=(0, 1)) - tol, Tq.max(axis=(0, 1)) + tol
+    a = a[np.all(Ta.max(axis=1) >= lo, axis=1) & np.all(Ta.min(axis=1) <= hi, axis=1)]
+    if len(a) == 0:
+        return out[0]
+    used = np.unique(F[np.concatenate([q, a])])
+    P = V[used] + 0.0  # +0.0 turns -0.0 into 0.0 so the welding below sees them equal
     canon = np.zeros(len(V), np.int64)
     canon[used] = np.unique(P, axis=0, return_inverse=True)[1].ravel()
     in_q = np.zeros(len(F), bool)
