@@ -92,8 +92,13 @@ def triangle_quality(V, F):
     -------
     q : (m,) float64 in [0, 1]
     """
-    L = edge_lengths(V, F)
-    area = face_areas(V, F)
+    # One gather of the corners (the per-hole loops call this on a few faces at a time); the
+    # same arithmetic as edge_lengths and face_areas.
+    P = np.asarray(V, dtype=np.float64)[np.asarray(F)]
+    a, b, c = P[:, 1] - P[:, 2], P[:, 2] - P[:, 0], P[:, 0] - P[:, 1]
+    L = np.sqrt(np.stack([(a * a).sum(axis=1), (b * b).sum(axis=1), (c * c).sum(axis=1)], axis=1))
+    N = cross_rows(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    area = 0.5 * np.sqrt((N * N).sum(axis=1))
     # r = 2A / (a+b+c), R = abc / (4A)  =>  2r/R = 16 A^2 / ((a+b+c) abc)
     denom = L.sum(axis=1) * L.prod(axis=1)
     q = np.zeros(len(F))
