@@ -90,6 +90,21 @@ PARAMS = [
               "edges again. Natural holes' mean quality 0.79 -> 0.84 with 10 rounds; with fairing=thinplate and "
               "iterations=0 every benchmark target is met (see tangential_smoothing).",
               minimum=0, maximum=100),
+    ParamSpec("relaxation", "enum", "angles",
+              "Edge relaxation test of the refinement (Sec. III.C, Fig. 4): 'angles' = the two triangles "
+              "unfolded into one plane about their common edge (opposite angles adding up to more than pi: swap), "
+              "the paper's circumcircle test of a planar quad; 'sphere' = the circumspheres in space, which on a "
+              "folded quad can keep a sliver.",
+              choices=("angles", "sphere")),
+    ParamSpec("neighbourhood", "enum", "ring",
+              "Bilateral filter neighbourhood (Sec. III.D): 'ring' = the pseudo-code's 1-ring; 'radius' = every "
+              "point within rho = 2 sigma_c (Eq. 4, after Fleishman et al.), the surrounding mesh's vertices "
+              "included (with sigma_c = 0.1 no point is that close: use sigma_c >= 0.5 with it).",
+              choices=("ring", "radius")),
+    ParamSpec("filter_guard", "float", 0.3,
+              "Guard on the bilateral step: a move that would leave a new triangle with quality 2r/R below "
+              "min(filter_guard, its quality before), or flip it, is undone; 0 turns the guard off.",
+              minimum=0.0, maximum=1.0),
 ]
 
 
@@ -496,30 +511,7 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     Parameters
     ----------
     ctx : HoleContext
-    alpha, sigma_c, sigma_s, iterations, fairing : see PARAMS
-    relaxation : {"angles", "sphere"}
-        Edge relaxation test of the refinement (Sec. III.C, Fig. 4): "angles" tests the two
-        triangles unfolded into one plane about their common edge (opposite angles adding up
-        to more than pi: swap), the paper's circumcircle test on a planar quad, which picks one
-        diagonal of a folded one; "sphere" tests the circumspheres in space, which on a folded
-        quad can keep a sliver.
-    neighbourhood : {"ring", "radius"}
-        Bilateral filter neighbourhood (Sec. III.D): "ring" is the pseudo-code's 1-ring;
-        "radius" takes every point within rho = 2 sigma_c (Eq. 4, after Fleishman et al.), the
-        surrounding mesh's fixed vertices (``ctx.vertices[k:]``) included. With sigma_c = 0.1
-        no point is that close: use sigma_c >= 0.5 with it.
-    filter_guard : float
-        Guard on the bilateral step: a move that would leave a new triangle with quality 2r/R
-        below min(filter_guard, its quality before), or flip it, is undone; 0 turns it off.
-    smoothing : int
-        Beyond the paper, off by default (0): rounds of :func:`tangential_smoothing` (with
-        :func:`bisect_obtuse`) of the new vertices after refinement and fairing, before the
-        bilateral filter; kept only when the smoothed patch crosses nothing the unsmoothed one
-        did not. Natural holes' mean quality 0.79 -> 0.84 with 10 rounds; with
-        ``fairing="thinplate", iterations=0`` every target of the benchmark is met (see the
-        module docstring).
-        (relaxation, neighbourhood and filter_guard are not filter parameters yet: the .mlx round-trip
-        test lists the parameters.)
+    alpha, sigma_c, sigma_s, iterations, fairing, relaxation, neighbourhood, filter_guard, smoothing : see PARAMS
 
     Returns
     -------
