@@ -164,3 +164,15 @@ def test_percentage_lengths_are_converted_like_builtin_filters():
     assert resolve_params(spec, {}, ms)["radius"] == pytest.approx(diag / 100)
     assert resolve_params(spec, {"radius": pymeshlab.PureValue(0.5)}, ms)["radius"] == 0.5
     assert resolve_params(spec, {"radius": pymeshlab.PercentageValue(10)}, ms)["radius"] == pytest.approx(diag / 10)
+
+
+@pytest.mark.parametrize("module", ["curve_unfolding", "differential_evolution", "lssvm_poisson", "min_angle_bilateral"])
+def test_every_fill_keyword_is_a_filter_parameter_with_the_same_default(module):
+    # What an algorithm can do, a MeshSet user (and a .mlx script, and the CLI) can ask for.
+    import importlib
+    import inspect
+
+    mod = importlib.import_module(f"meshlab_holefill.algorithms.{module}")
+    keywords = {name: p.default for name, p in inspect.signature(mod.fill).parameters.items()
+                if name not in ("ctx", "record")}  # record: the sphere experiment's hook for SP_i
+    assert {p.name: p.default for p in mod.PARAMS} == pytest.approx(keywords)
