@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 from meshlab_holefill.algorithms import lssvm_poisson as xu
 from meshlab_holefill.algorithms.lssvm import kkt_matrix, lssvm_fit, rbf_kernel
 from meshlab_holefill.algorithms.lssvm_poisson_patch import normalized_cotangent_laplacian
-from meshlab_holefill.geometry.advancing_front import advancing_front_triangulation, front_angle
+from meshlab_holefill.geometry.advancing_front import advancing_front_triangulation
+from meshlab_holefill.geometry.front_predicates import front_angle
 from meshlab_holefill.geometry.border_split import split_long_boundary_edges
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import face_areas, triangle_quality

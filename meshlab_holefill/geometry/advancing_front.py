@@ -14,7 +14,7 @@ the same front is merged with it (Step 4): with one of v's two neighbours the st
 to the rule with one vertex less, with any other vertex the front is split in two there. The
 front is updated (Step 5) and the steps repeat until every front is closed (Step 6). Fronts
 are cyclic linked lists of nodes (a vertex may be on two fronts after a split); a heap keeps
-the angles.
+the angles (:class:`.front_state.FrontState`).
 
 What the paper leaves open, as chosen here:
 
@@ -50,14 +50,14 @@ triangle count: it always ends.
 """
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
 
 from ..patch import HoleFillError
 from .front_obstacles import FrontObstacles
-from .front_predicates import cross, direction_angle, dot, front_angle, norm, scaled, segments_cross, sub, unit
+from .front_state import FrontState
+from .front_predicates import cross, direction_angle, dot, norm, scaled, segments_cross, sub, unit
 
 ONE_TRIANGLE_MAX = math.radians(75.0)
 TWO_TRIANGLES_MAX = math.radians(135.0)
@@ -81,125 +81,18 @@ FRONT_GROWTH_LIMIT = 1.3
 HOVER_FACTOR = 0.35
 
 
-class _AdvancingFront:
-    """State of one advancing-front run; see :func:`advancing_front_triangulation`."""
+class _AdvancingFront(FrontState):
+    """One advancing-front run: Steps 2-4 and 6 on a :class:`FrontState`; see :func:`advancing_front_triangulation`."""
 
     def __init__(self, points, reference_normal, forbidden_edges, merge_factor, max_faces, obstacles=None,
                  merge_ear_max=None):
-        k = len(points)
-        self.k = k
+        super().__init__(points, reference_normal, forbidden_edges)
         self.merge_factor = merge_factor
         self.merge_ear_max = MERGE_EAR_MAX if merge_ear_max is None else merge_ear_max
         self.max_faces = max_faces
-        self.P = [tuple(map(float, p)) for p in points]
-        self.N = [tuple(map(float, x)) for x in np.asarray(reference_normal, np.float64).reshape(-1, 3)]
-        if len(self.N) == 1:
-            self.N = self.N * k
-        lengths = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
-        self.S = (0.5 * (lengths + np.roll(lengths, 1))).tolist()
-        self.longest_edge = float(lengths.max())
-        self.faces = []
-        self.edges = set()
-        # Directed front edge -> unit normal of the triangle behind it (None: unknown).
-        self.front_edges = {}
-        for i in range(k):
-            j = (i + 1) % k
-            self.edges.add((min(i, j), max(i, j)))
-            self.front_edges[(i, j)] = None
-        for a, b in np.asarray(forbidden_edges, np.int64).reshape(-1, 2).tolist():
-            self.edges.add((min(a, b), max(a, b)))
-        # Uniform grid over the front vertices for neighbourhood queries.
-        self.cell = max(2.0 * float(np.mean(lengths)), 1e-300)
-        self.grid = {}
-        # Nodes of the cyclic front lists.
-        self.node_vertex = list(range(k))
-        self.node_prev = [(i - 1) % k for i in range(k)]
-        self.node_next = [(i + 1) % k for i in range(k)]
-        self.node_front = [0] * k
-        self.node_alive = [True] * k
-        self.node_version = [0] * k
-        self.node_theta = [0.0] * k
-        self.node_plane = [None] * k
-        self.vertex_nodes = {i: {i} for i in range(k)}
-        for i in range(k):
-            self._grid_add(i)
-        self.front_size = {0: k}
-        self.next_label = 1
-        self.heap = []
-        self.blocked = []
-        self.stats = {"steps": 0, "rule1": 0, "rule2": 0, "rule3": 0, "merges": 0, "splits": 0,
-                      "rejected": 0, "obstacle_tests": 0}  # the last from self.obstacles
         self._set_obstacles(obstacles)
-        for i in range(k):
+        for i in range(self.k):
             self._update_node(i)
-
-    # ----------------------------------------------------------------- bookkeeping
-    def _key(self, pos):
-        c = self.cell
-        return (math.floor(pos[0] / c), math.floor(pos[1] / c), math.floor(pos[2] / c))
-
-    def _grid_add(self, vertex):
-        self.grid.setdefault(self._key(self.P[vertex]), set()).add(vertex)
-
-    def _near(self, pos, radius):
-        """Front vertices within ``radius`` of pos (superset from the grid, then exact)."""
-        x0, y0, z0 = self._key((pos[0] - radius, pos[1] - radius, pos[2] - radius))
-        x1, y1, z1 = self._key((pos[0] + radius, pos[1] + radius, pos[2] + radius))
-        r2 = radius * radius
-        out = []
-        P, grid = self.P, self.grid
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                for iz in range(z0, z1 + 1):
-                    cell = grid.get((ix, iy, iz))
-                    if cell:
-                        for u in cell:
-                            x = P[u]
-                            d = (x[0] - pos[0]) ** 2 + (x[1] - pos[1]) ** 2 + (x[2] - pos[2]) ** 2
-                            if d <= r2:
-                                out.append((d, u))
-        return out
-
-    def _new_node(self, vertex, label):
-        i = len(self.node_vertex)
-        self.node_vertex.append(vertex)
-        self.node_prev.append(-1)
-        self.node_next.append(-1)
-        self.node_front.append(label)
-        self.node_alive.append(True)
-        self.node_version.append(0)
-        self.node_theta.append(0.0)
-        self.node_plane.append(None)
-        nodes = self.vertex_nodes.setdefault(vertex, set())
-        if not nodes:
-            self._grid_add(vertex)
-        nodes.add(i)
-        return i
-
-    def _kill_node(self, i):
-        self.node_alive[i] = False
-        self.node_version[i] += 1
-        v = self.node_vertex[i]
-        nodes = self.vertex_nodes[v]
-        nodes.discard(i)
-        if not nodes:
-            self.grid[self._key(self.P[v])].discard(v)
-
-    def _update_node(self, i):
-        v = self.node_vertex[i]
-        p = self.node_vertex[self.node_prev[i]]
-        q = self.node_vertex[self.node_next[i]]
-        theta, m = front_angle(self.P[v], self.P[p], self.P[q], self.N[v])
-        self.node_theta[i] = theta
-        self.node_plane[i] = m
-        self.node_version[i] += 1
-        heapq.heappush(self.heap, (theta, i, self.node_version[i]))
-
-    def _same_front_node(self, u, label):
-        for x in self.vertex_nodes.get(u, ()):
-            if self.node_front[x] == label:
-                return x
-        return -1
 
     # ----------------------------------------------------------------- main loop
     def run(self):
@@ -219,10 +112,7 @@ class _AdvancingFront:
                                     f"({sum(self.front_size.values())} front vertices left)")
             if self._advance(node):
                 self.stats["steps"] += 1
-                for b in self.blocked:
-                    if self.node_alive[b]:
-                        heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
-                self.blocked = []
+                self._release_blocked()
             else:
                 self.stats["rejected"] += 1
                 self.blocked.append(node)
@@ -264,19 +154,9 @@ class _AdvancingFront:
                     self._kill_node(i)
                 del self.front_size[label]
                 self.stats["fan_closures"] = self.stats.get("fan_closures", 0) + 1
-                for b in self.blocked:
-                    if self.node_alive[b]:
-                        heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
-                self.blocked = []
+                self._release_blocked()
                 return True
         return False
-
-    def _pop(self):
-        while self.heap:
-            theta, i, version = heapq.heappop(self.heap)
-            if self.node_alive[i] and self.node_version[i] == version:
-                return i
-        return None
 
     def _advance(self, node):
         """Apply the angle rule at ``node`` (Sec. 3.2, Step 3) or its first valid fallback."""
@@ -463,103 +343,6 @@ class _AdvancingFront:
                         return False
         return True
 
-    def _apply(self, node, rule, faces, new_pos, sequence):
-        label = self.node_front[node]
-        v = self.node_vertex[node]
-        prev, nxt = self.node_prev[node], self.node_next[node]
-        p, q = self.node_vertex[prev], self.node_vertex[nxt]
-        ids = {}
-        if new_pos:
-            size = (self.S[v] + self.S[p] + self.S[q]) / 3.0
-            normal = unit(tuple(self.N[v][i] + self.N[p][i] + self.N[q][i] for i in range(3)))
-            for temp in sorted(new_pos, reverse=True):
-                ids[temp] = len(self.P)
-                self.P.append(new_pos[temp])
-                self.N.append(normal)
-                self.S.append(size)
-        faces = [tuple(ids.get(x, x) for x in f) for f in faces]
-        sequence = [ids.get(x, x) for x in sequence]
-        directed = []
-        face_normal = {}
-        for f in faces:
-            self.faces.append(f)
-            directed += [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])]
-            c = unit(cross(sub(self.P[f[1]], self.P[f[0]]), sub(self.P[f[2]], self.P[f[0]])))
-            for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0])):
-                face_normal[e] = c
-        dset = set(directed)
-        for a, b in directed:
-            self.edges.add((min(a, b), max(a, b)))
-            if (a, b) in self.front_edges:
-                del self.front_edges[(a, b)]
-            elif (b, a) not in dset:
-                self.front_edges[(b, a)] = face_normal[(a, b)]
-        self.stats[f"rule{rule}"] += 1
-        self.stats["merges"] += len(sequence) - len(ids)
-        # Linked-list surgery: p -> sequence -> q replaces p -> v -> q.
-        self._kill_node(node)
-        chain = [prev] + [self._new_node(x, label) for x in sequence] + [nxt]
-        for a, b in zip(chain[:-1], chain[1:]):
-            self.node_next[a] = b
-            self.node_prev[b] = a
-        dirty = set(chain)
-        self.front_size[label] += len(sequence) - 1
-        if self.front_size[label] <= 2:
-            # The last triangle of this front consumed all its edges.
-            for x in (prev, nxt):
-                if self.node_alive[x]:
-                    self._kill_node(x)
-            del self.front_size[label]
-            return
-        # A merged vertex is now twice on its front: split the front there.
-        for w in chain[1:-1]:
-            if not self.node_alive[w]:
-                continue
-            u = self.node_vertex[w]
-            others = [x for x in self.vertex_nodes[u] if x != w and self.node_front[x] == self.node_front[w]]
-            if others:
-                dirty |= self._split(w, others[0])
-        for x in dirty:
-            if self.node_alive[x]:
-                self._update_node(x)
-
-    def _split(self, w, u):
-        """Split the front through nodes w and u of one vertex into two cycles; drop cycles of <= 2 nodes."""
-        self.stats["splits"] += 1
-        label = self.node_front[w]
-        wn, un = self.node_next[w], self.node_next[u]
-        self.node_next[w], self.node_prev[un] = un, w
-        self.node_next[u], self.node_prev[wn] = wn, u
-        # Walk both cycles in lockstep: the shorter one is found in O(its length).
-        a, b, la, lb = self.node_next[w], self.node_next[u], 1, 1
-        while a != w and b != u:
-            a, b, la, lb = self.node_next[a], self.node_next[b], la + 1, lb + 1
-        short, short_len = (w, la) if a == w else (u, lb)
-        long_start = u if short == w else w
-        long_len = self.front_size[label] - short_len
-        cycle = [short]
-        x = self.node_next[short]
-        while x != short:
-            cycle.append(x)
-            x = self.node_next[x]
-        if short_len <= 2:
-            for x in cycle:
-                self._kill_node(x)
-        else:
-            new_label = self.next_label
-            self.next_label += 1
-            for x in cycle:
-                self.node_front[x] = new_label
-            self.front_size[new_label] = short_len
-        self.front_size[label] = long_len
-        if long_len <= 2:
-            x = long_start
-            for _ in range(long_len):
-                nx = self.node_next[x]
-                self._kill_node(x)
-                x = nx
-            del self.front_size[label]
-        return {w, u, wn, un}
 
 
 def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75, max_faces=None,
