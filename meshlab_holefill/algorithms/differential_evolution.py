@@ -90,9 +90,10 @@ from ..registry import ParamSpec
 from . import hpde_folds as folds
 from . import hpde_mesh as mesh_steps
 from . import hpde_optimisation as optimisation
-from . import hpde_quality
 from . import hpde_prediction as prediction
+from . import hpde_quality
 from . import hpde_sections as sections
+from .hpde_smooth_optimise import RELAX_ROUNDS, smooth_and_optimise
 
 RINGS = 2
 
@@ -152,12 +153,9 @@ CLEARANCE = 0.25  # prediction points nearer than this * EdgeLen to the projecte
 OUTLIER_ROUNDS = 4  # rounds of leaving out prediction points on faces that stay folded
 LAST_RESORT_ANGLE = np.radians(175.0)  # largest crease the loop-only last resort accepts
 LAST_RESORT_FLOORS = (0.4, 0.6)  # quality pass floors of the loop-only last resort (splits give it inner vertices)
-RELAX_ROUNDS = 3  # rounds of sliver collapse + obtuse-edge splits + tangential relaxation + swaps (relax)
-SLIVER_ANGLE = np.radians(140.0)  # a free vertex this flat against a loop edge is collapsed onto it
 MIN_COVERAGE = 0.5  # a pairing keeping fewer base points than this share yields to the other choice
 GOOD_KEPT_SHARE = 0.5  # a layout keeping fewer prediction points is used only if no other keeps more
 STANDING_PLANE_COS = 0.5  # a PCA plane whose normal is further than 60 deg from the surface's stands across it
-QUALITY_TARGET = 0.5  # relax: free vertices of triangles with 2r/R below this are moved (improve_worst_vertices)
 
 
 def ring_edge_length(ctx):
@@ -335,108 +333,6 @@ def triangulate(ctx, base, normals, seg, layout, prediction_result, edge_len, ex
         if folds.fold_overs(V, F, pmap.reference_normals(V, F, orientation)).any():
             raise HoleFillError(f"fold-over after mapping the {layout} triangulation back to 3D")
     return V, F, use[kept]
-
-
-def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, decimation_rate, relax=0,
-                        smoothing="curvature", record=None, anchor=0.0, quality_floor=0.0):
-    """Step 7 (Sec. 4.7) with the fold repairs: smoothing, decimation, min-angle swaps.
-
-    ``record`` (a dict, optional) receives ``smoothed_points``: the smoothed prediction points
-    SP_i of Sec. 4.7, before decimation (the points the errors of Eq. 17 are measured on).
-
-    Returns
-    -------
-    V, F : the patch (loop vertices first)
-    stats : dict  ``kept``, ``collapses``, ``swaps``, ``fold_repairs``
-    bad_ids : (r,) int64  prediction points on faces still folded (empty when the patch is clean)
-    """
-    k = ctx.size
-    stats = {"kept": int(len(V) - k)}
-    n_before = len(V)
-    V, F, splits = mesh_steps.split_forbidden_edges(V, F, ctx.forbidden_edges)
-    ids = np.concatenate([ids, np.full(len(V) - n_before, -1, np.int64)])  # -1: not a prediction point
-    stats["forbidden_splits"] = int(splits)
-    V, F, repairs = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-    if smoothing == "taubin":
-        V = optimisation.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth)
-    else:
-        V = optimisation.curvature_smooth(V, F, k, ctx.vertices, ctx.faces, passes=num_smooth,
-                                          weights="scale" if smoothing == "curvature_scaled" else "uniform", anchor=anchor)
-    if record is not None:
-        record["smoothed_points"] = V[k:][ids >= 0].copy()
-    V, F, collapses, keep = optimisation.decimate_short_edges(V, F, k, decimation_rate * edge_len, ctx.forbidden_edges)
-    ids = ids[keep[k:] - k]
-    F, swaps = optimisation.swap_edges_min_angle(V, F, ctx.forbidden_edges)
-    V, F, more = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-    splits = 0
-    snapshot = (V, F, ids, swaps, collapses)
-    for _ in range(RELAX_ROUNDS if relax > 0 else 0):
-        # Not the vertices split off an obtuse edge: they start flat and the relaxation moves them.
-        eligible = np.concatenate([np.zeros(k, bool), ids != -2])
-        V, F, c, keep = optimisation.decimate_short_edges(V, F, k, 1e-9 * edge_len, ctx.forbidden_edges, max_rounds=5,
-                                                        sliver_angle=SLIVER_ANGLE, sliver_eligible=eligible)
-        ids = ids[keep[k:] - k]
-        collapses += c
-        n_before = len(V)
-        V, F, s = optimisation.split_obtuse_edges(V, F, k)
-        ids = np.concatenate([ids, np.full(len(V) - n_before, -2, np.int64)])  # -2: obtuse split
-        splits += s
-        V, F, r3, keep = optimisation.remove_valence_three(V, F, k, ctx.forbidden_edges)
-        ids = ids[keep[k:] - k]
-        collapses += r3
-        V = optimisation.tangential_relax(V, F, np.arange(len(V)) < k, passes=relax)
-        F, more_swaps = optimisation.swap_edges_min_angle(V, F, ctx.forbidden_edges)
-        swaps += more_swaps
-        if s == 0 and c == 0:
-            break
-    stats["obtuse_splits"] = int(splits)
-    if relax > 0:
-        # The swaps cannot lift a triangle whose long edge is on the loop: move its apex.
-        moved = 0
-        for _ in range(2):
-            V, m_ = optimisation.improve_worst_vertices(V, F, k, target=QUALITY_TARGET)
-            F, more_swaps = optimisation.swap_edges_min_angle(V, F, ctx.forbidden_edges)
-            moved += m_
-            swaps += more_swaps
-            if m_ == 0 and more_swaps == 0:
-                break
-        stats["quality_moves"] = int(moved)
-    if relax > 0 and folds.local_folds(V, F, mesh_normals).any():
-        V, F, again = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-        more += again
-        if (folds.local_folds(V, F, mesh_normals) & ~folds.boundary_ears(F, k)).any():
-            V, F, ids, swaps, collapses = snapshot  # the relaxation folded what it could not repair: undo it
-            stats["relax_undone"] = True
-    def fold_count(V_, F_):
-        return int((folds.local_folds(V_, F_, mesh_normals) & ~folds.boundary_ears(F_, k)).sum())
-
-    if quality_floor > 0 and fold_count(V, F) == 0:
-        # Beyond the paper (hpde_quality): guarded swaps / moves / collapses of the triangles
-        # below the floor; undone if it makes the patch cross the surrounding rings.
-        Vq, Fq, keep, qstats = hpde_quality.raise_min_quality(V, F, k, ctx.forbidden_edges, mesh_normals,
-                                                               floor=quality_floor, fold_test=fold_count)
-        if any(qstats.values()):
-            crossing = folds.intersects_surroundings(ctx, Vq, Fq)
-            if not crossing or folds.intersects_surroundings(ctx, V, F):
-                V, F, ids = Vq, Fq, np.where(keep[k:] >= 0, ids[np.maximum(keep[k:] - k, 0)], -1)
-                swaps += qstats["swaps"]
-                collapses += qstats["collapses"]
-                stats["quality_moves"] = stats.get("quality_moves", 0) + qstats["moves"]
-                stats["quality_splits"] = qstats["splits"]
-                stats["crossing"] = bool(crossing)
-            else:
-                stats["quality_pass_undone"] = True
-    stats.update(collapses=int(collapses), swaps=int(swaps), fold_repairs=int(repairs + more))
-    bad = folds.local_folds(V, F, mesh_normals)
-    # A fold of an ear (three consecutive loop vertices) is the boundary's own shape (a 3-edge
-    # hole in a crumpled scan has no other patch); it is kept and counted, the filter's
-    # intersection check still applies. Any other fold must go.
-    loop_only = folds.boundary_ears(F, k)
-    stats["boundary_folds"] = int((bad & loop_only).sum())
-    stats["folds_left"] = int((bad & ~loop_only).sum())
-    verts = np.unique(F[bad & ~loop_only].ravel())
-    bad_ids = ids[verts[verts >= k] - k]
-    return V, F, stats, bad_ids[bad_ids >= 0]
 
 
 def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=100, critical_dihedral=90.0,
