@@ -457,6 +457,60 @@ def test_taubin_smoothing_keeps_boundary_and_a_planar_patch_planar():
     assert S[:, 2].max() > lap[:, 2].max()
 
 
+def umbrella_modes(V, F, fixed):
+    """Frequencies and modes of K = I - D^-1 A on the free vertices (dense reference), ascending."""
+    from meshlab_holefill.geometry.laplacian import adjacency_matrix
+
+    A = adjacency_matrix(F, len(V)).toarray()
+    free = np.flatnonzero(~fixed)
+    K = np.eye(len(free)) - (A / A.sum(1, keepdims=True))[np.ix_(free, free)]
+    w, U = np.linalg.eig(K)
+    order = np.argsort(w.real)
+    return w.real[order], U.real[:, order]
+
+
+def test_lowest_dirichlet_frequency_matches_the_dense_spectrum():
+    from meshlab_holefill.geometry.laplacian import lowest_dirichlet_frequency
+
+    for n in (8, 24):  # 49 free vertices (dense path) and 529 (sparse shift-invert path)
+        V, F = grid_plane(n)
+        fixed = (V[:, 0] % 1 == 0) | (V[:, 1] % 1 == 0)
+        w, _ = umbrella_modes(V, F, fixed)
+        assert lowest_dirichlet_frequency(F, len(V), ~fixed) == pytest.approx(w[0], rel=1e-9)
+        assert w[0] > 0
+    assert np.isnan(lowest_dirichlet_frequency(F, len(V), np.zeros(len(V), bool)))
+
+
+def test_taubin_pass_band_at_the_lowest_frequency_keeps_the_smoothest_shape_and_damps_the_rest():
+    # Sec. 4.7 / ref. [26] with k_PB = k_1: the lowest mode of the patch passes with gain
+    # exactly 1, the next one is scaled by f(k_2)^N, f(k) = (1 - lambda k)(1 - mu k) < 1.
+    V, F = grid_plane(6)  # 25 free vertices, k_1 = 0.165: a small hole's patch
+    fixed = (V[:, 0] % 1 == 0) | (V[:, 1] % 1 == 0)
+    w, U = umbrella_modes(V, F, fixed)
+    lam = hpde_optimisation.TAUBIN_LAMBDA
+    mu = hpde_optimisation.taubin_mu(lam, w[0])
+    for mode, gain in ((0, 1.0), (1, ((1 - lam * w[1]) * (1 - mu * w[1])) ** 60)):
+        X = V.copy()
+        X[~fixed, 2] = 0.1 * U[:, mode] / np.abs(U[:, mode]).max()
+        S = hpde_optimisation.taubin_smooth(X, F, fixed, passes=60)
+        assert np.allclose(S[:, :2], V[:, :2], atol=1e-12)  # a regular grid has no tangential umbrella
+        assert np.allclose(S[:, 2], gain * X[:, 2], atol=1e-9)
+    assert gain < 0.9
+    # Taubin's closed-surface band (k_PB ~ 0.09 < k_1) damps even the smoothest shape.
+    X[~fixed, 2] = 0.1 * U[:, 0] / np.abs(U[:, 0]).max()
+    S = hpde_optimisation.taubin_smooth(X, F, fixed, passes=60, mu=-0.34)
+    damped = ((1 - lam * w[0]) * (1 + 0.34 * w[0])) ** 60
+    assert damped < 0.95 and np.allclose(S[:, 2], damped * X[:, 2], atol=1e-9)
+    with pytest.raises(ValueError, match="pass band"):
+        hpde_optimisation.taubin_mu(lam, 1.0 / lam)
+
+
+def test_hpde_default_smoothing_is_taubin_with_the_patch_pass_band():
+    names = {p.name: p for p in hpde.PARAMS}
+    assert names["smoothing"].default == "taubin" and names["num_smooth"].default == 60
+    assert names["taubin_pass_band"].default == 0.0 and names["taubin_lambda"].default == 0.33
+
+
 def test_decimation_collapses_short_edges_to_midpoints():
     V, F = grid_plane(6)
     k_boundary = np.flatnonzero((V[:, 0] % 1 == 0) | (V[:, 1] % 1 == 0))
@@ -688,7 +742,7 @@ def test_curvature_smoothing_keeps_a_small_sphere_patch_on_the_sphere():
     depth = lambda Y: np.abs(np.linalg.norm(Y[k:], axis=1) - 1.0).mean()  # noqa: E731
     sag = 1.0 - ctx.points[:, 2].mean()  # depth of the flat cap below the sphere
     curv = hpde_optimisation.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60)
-    taubin = hpde_optimisation.taubin_smooth(X, F, fixed, passes=60)
+    taubin = hpde_optimisation.taubin_smooth(X, F, fixed, passes=60, mu=-0.34)  # Taubin's example filter
     assert np.array_equal(curv[:k], X[:k])
     assert depth(taubin) > 0.03 * sag > depth(curv)
     assert depth(curv) < 0.25 * depth(taubin)
@@ -742,8 +796,8 @@ def test_smoothing_anchor_parameter_defaults_and_zero_is_free_smoothing(sphere_h
     names = {p.name: p for p in hpde.PARAMS}
     assert names["smoothing_anchor"].default == 0.15 and names["arc_tangent"].default == "secant"
     _, _, _, ctx = sphere_hole
-    a = hpde.fill(ctx, seed=0, smoothing_anchor=0.0)
-    b = hpde.fill(ctx, seed=0)
+    a = hpde.fill(ctx, seed=0, smoothing="curvature", smoothing_anchor=0.0)
+    b = hpde.fill(ctx, seed=0, smoothing="curvature")
     assert len(a.vertices) != len(b.vertices) or not np.allclose(a.vertices, b.vertices)
 
 

@@ -1,7 +1,8 @@
 """HPDE step 7 (Xie and Zou 2013, Sec. 4.7): smoothing and optimisation of the patch.
 
-The patch is smoothed by the second-order umbrella anchored to the predicted positions
-(:func:`curvature_smooth`; Taubin's lambda|mu filter, ref. [26], as an option); edges shorter
+The patch is smoothed by Taubin's lambda|mu filter (ref. [26], :func:`taubin_smooth`, its pass
+band at the patch's lowest frequency; the second-order umbrella anchored to the predicted
+positions, :func:`curvature_smooth`, as an option); edges shorter
 than a rate of EdgeLen are collapsed to their midpoints and edges are swapped while that
 raises the smaller angle of their two triangles (Fig. 5). The tangential relaxation and the
 obtuse-edge splits are the option ``relax`` beyond the paper; the final guarded pass on the
@@ -13,23 +14,42 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry.flips import relax_edges
+from ..geometry.laplacian import lowest_dirichlet_frequency
 from ..geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
 from ..geometry.topology import edge_pair_set, interior_edges
 
-# Taubin's example filter (ref. [26]): lambda = 0.33, mu = -0.34, pass band k_PB ~ 0.1.
+# Taubin's lambda (ref. [26]); mu follows from the pass band (taubin_smooth).
 TAUBIN_LAMBDA = 0.33
-TAUBIN_MU = -0.34
 # A collapse may turn no surrounding face by more than this (cosine of 60 degrees); a swap
 # may turn its two faces no further from their former mean normal.
 COLLAPSE_MIN_COS = 0.5
 
 
-def taubin_smooth(V, F, fixed, passes=60, lam=TAUBIN_LAMBDA, mu=TAUBIN_MU):
+def taubin_mu(lam, pass_band):
+    """Taubin's mu for a given lambda and pass-band frequency: 1 / lambda + 1 / mu = k_PB."""
+    if not 0.0 < pass_band < 1.0 / lam:
+        raise ValueError(f"pass band {pass_band} must lie in (0, 1 / lambda = {1.0 / lam:.3g})")
+    return 1.0 / (pass_band - 1.0 / lam)
+
+
+def taubin_smooth(V, F, fixed, passes=60, lam=TAUBIN_LAMBDA, mu=None, pass_band=0.0):
     """Non-shrinking lambda|mu smoothing of the free vertices (Sec. 4.7, ref. [26]).
 
-    One pass = a Gaussian step with lambda followed by an un-shrinking step with mu, both
-    with the umbrella operator (v_i += factor * (mean of neighbours - v_i)); fixed vertices
-    (the boundary) do not move but are neighbours.
+    One pass = a Gaussian step with lambda followed by an un-shrinking step with mu < -lambda,
+    both with the umbrella operator (v_i += factor * (mean of neighbours - v_i)); fixed
+    vertices (the boundary) do not move but are neighbours. With frequencies k of the
+    umbrella (eigenvalues of K = I - W), N passes scale each mode by f(k)^N,
+    f(k) = (1 - lambda k)(1 - mu k): f(k_PB) = 1 at the pass-band frequency
+    k_PB = 1 / lambda + 1 / mu, lower frequencies pass, higher ones are damped.
+
+    Taubin's example (lambda 0.33, mu -0.34, k_PB ~ 0.09) suits a closed surface, whose
+    lowest frequencies are ~0. A patch with a fixed loop has no mode below its lowest
+    Dirichlet frequency k_1 (:func:`..geometry.laplacian.lowest_dirichlet_frequency`), which is
+    0.1-0.3 on a patch a few edges across: with k_PB = 0.09 every mode is damped and the patch
+    flattens towards the membrane of the loop. ``pass_band=0`` (default) sets k_PB = k_1 of
+    the patch, so that its smoothest shape (the bulge the prediction gives it) passes
+    unchanged and every rougher mode is damped, without amplifying any mode (none lies below
+    k_1).
 
     Parameters
     ----------
@@ -37,6 +57,9 @@ def taubin_smooth(V, F, fixed, passes=60, lam=TAUBIN_LAMBDA, mu=TAUBIN_MU):
     F : (m, 3) int
     fixed : (n,) bool
     passes : int  NumSmooth
+    lam : float  lambda, in (0, 1)
+    mu : float, optional  mu; given, it overrides ``pass_band``
+    pass_band : float  k_PB; 0 = the patch's lowest Dirichlet frequency
 
     Returns
     -------
@@ -46,11 +69,14 @@ def taubin_smooth(V, F, fixed, passes=60, lam=TAUBIN_LAMBDA, mu=TAUBIN_MU):
     n = len(V)
     if passes <= 0 or np.all(fixed):
         return V
+    free = ~np.asarray(fixed, bool)
+    if mu is None:
+        k_pb = pass_band if pass_band > 0 else lowest_dirichlet_frequency(F, n, free)
+        mu = taubin_mu(lam, k_pb)
     E = unique_edges(np.asarray(F, np.int64))
     A = sp.coo_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n)).tocsr()
     deg = np.asarray(A.sum(axis=1)).ravel()
     W = sp.diags(1.0 / np.maximum(deg, 1)) @ A
-    free = ~np.asarray(fixed, bool)
     Wf = W[free].tocsr()
     for _ in range(passes):
         for factor in (lam, mu):
@@ -75,12 +101,11 @@ def curvature_smooth(V, F, k, context_vertices, context_faces, passes=60, weight
     with a matching tangent plane; U is 0 at outer vertices of the context whose ring is
     incomplete.
 
-    Why not Taubin's lambda|mu filter (option ``smoothing='taubin'``): it is non-shrinking on a
-    closed surface, whose lowest frequencies lie in its pass band; on a patch with a fixed
-    boundary every frequency lies above k_PB ~ 0.1 once the patch is a few edges across, so the
-    filter draws a small patch towards the flat membrane of the loop (measured on the
-    benchmark's small holes: patches of points exactly on the true surface go from 0.07-0.19
-    to 0.34-0.77 per mille of the diagonal after 60 passes).
+    Compared with Taubin's lambda|mu filter (the default, :func:`taubin_smooth`): with the loop
+    fixed, Taubin's filter damps every mode above its pass band and draws a small patch
+    towards the membrane of the loop (patches of points exactly on the true surface go from
+    0.07-0.19 to 0.34-0.77 per mille of the diagonal after 60 passes with k_PB = 0.09), while
+    this smoothing keeps a patch of constant curvature where it is.
 
     Parameters
     ----------

@@ -21,7 +21,8 @@ QUALITY_TARGET = 0.5  # relax: free vertices of triangles with 2r/R below this a
 
 
 def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, decimation_rate, relax=0,
-                        smoothing="curvature", record=None, anchor=0.0, quality_floor=0.0):
+                        smoothing="taubin", record=None, anchor=0.0, quality_floor=0.0,
+                        pass_band=0.0, taubin_lambda=optimisation.TAUBIN_LAMBDA):
     """Step 7 (Sec. 4.7) with the fold repairs: smoothing, decimation, min-angle swaps.
 
     ``record`` (a dict, optional) receives ``smoothed_points``: the smoothed prediction points
@@ -41,7 +42,8 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, deci
     stats["forbidden_splits"] = int(splits)
     V, F, repairs = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
     if smoothing == "taubin":
-        V = optimisation.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth)
+        V = optimisation.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth, lam=taubin_lambda,
+                                        pass_band=pass_band)
     else:
         V = optimisation.curvature_smooth(V, F, k, ctx.vertices, ctx.faces, passes=num_smooth,
                                           weights="scale" if smoothing == "curvature_scaled" else "uniform", anchor=anchor)

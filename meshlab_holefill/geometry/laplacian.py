@@ -66,3 +66,37 @@ def cotangent_laplacian(V, F, n=None):
     W = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
     deg = np.asarray(W.sum(axis=1)).ravel()
     return (W - sp.diags(deg)).tocsr()
+
+
+def lowest_dirichlet_frequency(F, n, free):
+    """Smallest eigenvalue of the umbrella operator K = I - D^-1 A on the free vertices.
+
+    With the other vertices held fixed (a Dirichlet boundary), ``free`` vertices evolve under
+    umbrella smoothing x <- x - t K x, whose eigenvalues ("frequencies", Taubin 1995) lie in
+    (0, 2]; the lowest one belongs to the smoothest shape the free vertices can take over the
+    fixed boundary. K is similar to the symmetric D^-1/2 (D - A) D^-1/2 restricted to the free
+    vertices, whose spectrum is computed instead.
+
+    Parameters
+    ----------
+    F : (m, 3) int
+    n : int  number of vertices
+    free : (n,) bool
+
+    Returns
+    -------
+    float  the lowest frequency (nan when there is no free vertex)
+    """
+    free = np.flatnonzero(np.asarray(free, bool))
+    if len(free) == 0:
+        return float("nan")
+    A = adjacency_matrix(F, n)
+    deg = np.maximum(np.asarray(A.sum(axis=1)).ravel()[free], 1.0)
+    scale = sp.diags(1.0 / np.sqrt(deg))
+    S = (sp.identity(len(free)) - scale @ A[free][:, free] @ scale).tocsc()
+    if len(free) <= 400:
+        return float(np.linalg.eigvalsh(S.toarray())[0])
+    from scipy.sparse.linalg import eigsh
+
+    # Shift-invert about 0: S is positive definite when every free component touches the boundary.
+    return float(eigsh(S, k=1, sigma=0.0, which="LM", return_eigenvectors=False)[0])
