@@ -16,7 +16,8 @@ from meshlab_holefill.algorithms.embedding import (embed_patch, embedding_energy
 from meshlab_holefill.algorithms.unfolding import (anneal_loop, colour_classes, linear_motion_is_simple,
                                                    planarity_energy, planarity_terms, project_to_best_plane,
                                                    unfold_loop)
-from meshlab_holefill.geometry.development import boundary_gap_angles, develop_loop, simple_development
+from meshlab_holefill.geometry.development import (MIN_CLOSURE_RATIO, boundary_gap_angles, close_lengths, develop_loop,
+                                                   simple_development)
 from meshlab_holefill.comparison import MeshCase, prepare_case
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
@@ -287,7 +288,7 @@ def sphere_cap_domain():
     return ctx, points, Fp
 
 
-@pytest.mark.parametrize("energy, order", [("area", 1), ("fairing", 2)])
+@pytest.mark.parametrize("energy, order", [("area", 1), ("area_interior", 1), ("fairing", 2)])
 def test_embedding_solves_its_energy(energy, order):
     ctx, points, Fp = sphere_cap_domain()
     s = len(points) - ctx.size
@@ -295,10 +296,12 @@ def test_embedding_solves_its_energy(energy, order):
     n_ctx = len(ctx.vertices)
     joint = np.concatenate([ctx.faces, np.where(Fp < ctx.size, Fp, Fp - ctx.size + n_ctx)])
     free = np.arange(n_ctx + s) >= n_ctx
-    R = energy_rows(joint, n_ctx + s, free, order)
+    R = energy_rows(joint, n_ctx + s, free, order, anchors=energy == "area")
     X = np.concatenate([ctx.vertices, interior])
     energy_value, gradient = embedding_energy(X, R, free)
     assert np.abs(gradient).max() < 1e-10
+    if energy == "area":  # least-squares mesh: loop rows too, so U(p) cannot vanish everywhere
+        assert s < R.shape[0] <= s + ctx.size and energy_value > 0
     # The paper's quasi-Newton solve (L-BFGS) reaches the same minimiser.
     start = X.copy()
     start[free] = ctx.points.mean(axis=0)
@@ -313,6 +316,30 @@ def test_embedding_solves_its_energy(energy, order):
                                   options={"maxiter": 20000, "gtol": 1e-12, "ftol": 1e-15})
     assert res.fun >= energy_value - 1e-12
     assert np.abs(res.x.reshape(-1, 3) - interior).max() < 1e-3
+
+
+def test_least_squares_mesh_rows_follow_the_surrounding_slope():
+    # E_AREA over P_Int alone is a membrane spanning the loop; the least-squares mesh's loop
+    # rows make the patch leave the loop along the sphere, much closer to it.
+    ctx, points, Fp = sphere_cap_domain()
+    s = len(points) - ctx.size
+    off = {e: np.abs(np.linalg.norm(embed_patch(ctx, s, Fp, energy=e), axis=1) - 1).mean()
+           for e in ("area", "area_interior", "fairing")}
+    assert off["area"] < 0.5 * off["area_interior"]
+    n_ctx = len(ctx.vertices)
+    joint = np.concatenate([ctx.faces, np.where(Fp < ctx.size, Fp, Fp - ctx.size + n_ctx)])
+    free = np.arange(n_ctx + s) >= n_ctx
+    R = energy_rows(joint, n_ctx + s, free, 1, anchors=True)
+    W = energy_rows(joint, n_ctx + s, np.ones(n_ctx + s, bool), 1)
+    # the anchor rows are exactly the fixed vertices whose umbrella reaches a free vertex: the loop
+    touching = np.flatnonzero(np.asarray(abs(W[:n_ctx, n_ctx:]).sum(axis=1)).ravel() > 0)
+    assert 0 < len(touching) and touching.max() < ctx.size
+    assert R.shape[0] == s + len(touching)
+
+
+def test_energy_parameters_default_to_the_least_squares_mesh():
+    names = {p.name: p for p in cu.PARAMS}
+    assert names["energy"].default == "area" and names["area_rows"].default == "mesh"
 
 
 # ----------------------------------------------------------------------------- fill() and the filter
@@ -387,6 +414,29 @@ def torus_wrapped_hole():
     return hole_context(case.V0, case.F0, boundary_loops(case.F0)[hole.loop_index], rings=cu.RINGS)
 
 
+def test_development_closure_never_reverses_an_edge():
+    # A wide gap makes the plain least-squares closure (no bound) push the long last edge
+    # past zero: reversed, it would turn the polygon's corners at its ends inside out.
+    th = np.radians([0, 90, 180, 270, 430])
+    lengths = np.array([1.0, 1.0, 1.0, 0.3, 2.0])
+    D = np.c_[np.cos(th), np.sin(th)]
+    plain = close_lengths(lengths, D, min_ratio=-np.inf)
+    assert plain[4] < 0 and plain @ D == pytest.approx(np.zeros(2), abs=1e-12)
+    closed = close_lengths(lengths, D)
+    assert closed @ D == pytest.approx(np.zeros(2), abs=1e-12)
+    assert np.all(closed >= MIN_CLOSURE_RATIO * lengths - 1e-12)
+    # The active set gives the bounded minimiser of sum (dl_i / l_i)^2.
+    res = scipy.optimize.minimize(lambda x: np.sum((x / lengths - 1.0) ** 2), lengths, method="SLSQP",
+                                  bounds=[(MIN_CLOSURE_RATIO * v, None) for v in lengths],
+                                  constraints={"type": "eq", "fun": lambda x: x @ D}, options={"ftol": 1e-14})
+    assert closed == pytest.approx(res.x, abs=1e-6)
+    # Without an edge at the bound the closure is the plain one.
+    th2 = np.radians([0, 90, 180, 250, 300])
+    D2 = np.c_[np.cos(th2), np.sin(th2)]
+    ones = np.array([1.0, 1.0, 1.0, 1.0, 3.0])
+    assert np.array_equal(close_lengths(ones, D2), close_lengths(ones, D2, min_ratio=-np.inf))
+
+
 def test_relaxed_development_unfolds_the_wrapped_torus_hole(torus_wrapped_hole):
     ctx = torus_wrapped_hole
     P, m = ctx.points, ctx.size
@@ -411,8 +461,8 @@ def test_relaxed_development_unfolds_the_wrapped_torus_hole(torus_wrapped_hole):
 def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wrapped_hole):
     ctx = torus_wrapped_hole
     # tangential=False: the swaps alone, and the energy must then be solved exactly.
-    plain = cu.fill(ctx, max_restarts=2, swaps=False, tangential=False)
-    swapped = cu.fill(ctx, max_restarts=2, tangential=False)
+    plain = cu.fill(ctx, max_restarts=2, swaps=False, tangential=False, energy="fairing")
+    swapped = cu.fill(ctx, max_restarts=2, tangential=False, energy="fairing")
     q0 = triangle_quality(plain.all_points(ctx.points), plain.faces)
     q1 = triangle_quality(swapped.all_points(ctx.points), swapped.faces)
     assert q0.min() < 0.3 <= q1.min() and q1.mean() >= max(q0.mean(), 0.85)
@@ -426,6 +476,16 @@ def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wra
     free = np.arange(n_ctx + s) >= n_ctx
     _, gradient = embedding_energy(np.concatenate([ctx.vertices, swapped.vertices]),
                                    energy_rows(joint, n_ctx + s, free, 2), free)
+    assert np.abs(gradient).max() < 1e-10
+    # Likewise the least-squares mesh (E_AREA with the loop rows) after its own swaps.
+    swapped = cu.fill(ctx, max_restarts=2, tangential=False, energy="area")
+    assert swapped.info["edge_swaps"] > 0
+    s = len(swapped.vertices)
+    joint = np.concatenate([ctx.faces, np.where(swapped.faces < ctx.size, swapped.faces,
+                                                swapped.faces - ctx.size + n_ctx)])
+    free = np.arange(n_ctx + s) >= n_ctx
+    _, gradient = embedding_energy(np.concatenate([ctx.vertices, swapped.vertices]),
+                                   energy_rows(joint, n_ctx + s, free, 1, anchors=True), free)
     assert np.abs(gradient).max() < 1e-10
 
 
@@ -478,8 +538,8 @@ def test_tangential_relaxation_lifts_the_triangles_fairing_squeezes_on_scan_hole
     assert outline_ratios(V, F, [loops[i]])[0] < 0.9  # a hole, not an island's outline
     ctx = hole_context(V, F, loops[i], rings=cu.RINGS)
     bound = corner_quality_bound(V, F, loops[i].vertices)
-    faired = cu.fill(ctx, tangential=False)
-    relaxed = cu.fill(ctx)
+    faired = cu.fill(ctx, tangential=False, energy="fairing")
+    relaxed = cu.fill(ctx, energy="fairing")
     q0 = triangle_quality(faired.all_points(ctx.points), faired.faces)
     q1 = triangle_quality(relaxed.all_points(ctx.points), relaxed.faces)
     # E_DF alone squeezes a triangle below 0.3 although no border corner forces it.
