@@ -60,7 +60,7 @@ Readings of passages the paper leaves open (each documented at the function that
   shape of the patch passes with gain 1 and no mode is amplified. Taubin's closed-surface
   value (mu = -0.34, k_PB ~ 0.09) lies below k_1 = 0.1-0.4 of a patch a few edges across
   and damps every mode; per mille of the diagonal on the benchmark's small / medium / large
-  holes: k_PB = 0.09 0.308 / 1.796 / 1.647, k_PB = k_1 0.278 / 1.817 / 1.586, MeshLab 0.296 /
+  holes: k_PB = 0.09 0.308 / 1.796 / 1.647, k_PB = k_1 0.277 / 1.804 / 1.595, MeshLab 0.296 /
   5.85 / 21.4 (2026-12-01). Option ``smoothing='curvature'``: the second-order umbrella
   (Kobbelt 1998) on the patch glued to its surrounding rings, whose fixed points have the
   uniform turning angles of Sec. 5.2.2, anchored to the predictions (``smoothing_anchor``

@@ -16,7 +16,7 @@ rows of the loop vertices, whose 1-rings reach into the surrounding surface (the
 only ones that involve the unknowns besides P_Int's), so the patch leaves the loop along the
 surrounding surface's slope. ``energy='area'`` is the least-squares mesh; ``'area_interior'``
 the sum over P_Int as printed (measured on the benchmark's cut holes, small / medium / large,
-per mille of the diagonal: 0.19 / 1.85 / 5.23 against 0.70 / 6.91 / 19.4, MeshLab 0.30 / 5.89 /
+per mille of the diagonal: 0.19 / 1.86 / 5.24 against 0.70 / 6.69 / 19.4, MeshLab 0.30 / 5.89 /
 21.3).
 
 Beyond the paper, :func:`tangential_relaxation` (option ``tangential`` of the filter) keeps the
