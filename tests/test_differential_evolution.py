@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 import meshlab_holefill  # noqa: F401  (registers the filters)
 from meshlab_holefill.algorithms import differential_evolution as hpde
 from meshlab_holefill.algorithms import (hpde_experiment, hpde_folds, hpde_mesh, hpde_optimisation,
-                                         hpde_prediction, hpde_sections)
+                                         hpde_prediction, hpde_sections, hpde_smoothing)
 from meshlab_holefill.geometry.de import de_rand_1_bin, reflect_into_bounds
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.holes import boundary_loops, hole_context
@@ -443,17 +443,17 @@ def test_taubin_smoothing_keeps_boundary_and_a_planar_patch_planar():
     fixed[np.flatnonzero((V[:, 0] % 1 == 0) | (V[:, 1] % 1 == 0))] = True
     W = V.copy()
     W[~fixed, :2] += rng.normal(scale=0.02, size=((~fixed).sum(), 2))
-    S = hpde_optimisation.taubin_smooth(W, F, fixed, passes=60)
+    S = hpde_smoothing.taubin_smooth(W, F, fixed, passes=60)
     assert np.array_equal(S[fixed], W[fixed])
     assert np.abs(S[:, 2]).max() == 0.0
     # Non-shrinking: a bump keeps most of its height (plain Laplacian smoothing would flatten it).
     B = V.copy()
     r2 = ((V[:, :2] - 0.5) ** 2).sum(1)
     B[:, 2] = np.where(fixed, 0, 0.3 * (0.25 - np.minimum(r2, 0.25)))
-    S = hpde_optimisation.taubin_smooth(B, F, fixed, passes=60)
+    S = hpde_smoothing.taubin_smooth(B, F, fixed, passes=60)
     lap = B.copy()
     for _ in range(120):
-        lap = hpde_optimisation.taubin_smooth(lap, F, fixed, passes=1, lam=0.33, mu=0.0)
+        lap = hpde_smoothing.taubin_smooth(lap, F, fixed, passes=1, lam=0.33, mu=0.0)
     assert S[:, 2].max() > lap[:, 2].max()
 
 
@@ -487,22 +487,22 @@ def test_taubin_pass_band_at_the_lowest_frequency_keeps_the_smoothest_shape_and_
     V, F = grid_plane(6)  # 25 free vertices, k_1 = 0.165: a small hole's patch
     fixed = (V[:, 0] % 1 == 0) | (V[:, 1] % 1 == 0)
     w, U = umbrella_modes(V, F, fixed)
-    lam = hpde_optimisation.TAUBIN_LAMBDA
-    mu = hpde_optimisation.taubin_mu(lam, w[0])
+    lam = hpde_smoothing.TAUBIN_LAMBDA
+    mu = hpde_smoothing.taubin_mu(lam, w[0])
     for mode, gain in ((0, 1.0), (1, ((1 - lam * w[1]) * (1 - mu * w[1])) ** 60)):
         X = V.copy()
         X[~fixed, 2] = 0.1 * U[:, mode] / np.abs(U[:, mode]).max()
-        S = hpde_optimisation.taubin_smooth(X, F, fixed, passes=60)
+        S = hpde_smoothing.taubin_smooth(X, F, fixed, passes=60)
         assert np.allclose(S[:, :2], V[:, :2], atol=1e-12)  # a regular grid has no tangential umbrella
         assert np.allclose(S[:, 2], gain * X[:, 2], atol=1e-9)
     assert gain < 0.9
     # Taubin's closed-surface band (k_PB ~ 0.09 < k_1) damps even the smoothest shape.
     X[~fixed, 2] = 0.1 * U[:, 0] / np.abs(U[:, 0]).max()
-    S = hpde_optimisation.taubin_smooth(X, F, fixed, passes=60, mu=-0.34)
+    S = hpde_smoothing.taubin_smooth(X, F, fixed, passes=60, mu=-0.34)
     damped = ((1 - lam * w[0]) * (1 + 0.34 * w[0])) ** 60
     assert damped < 0.95 and np.allclose(S[:, 2], damped * X[:, 2], atol=1e-9)
     with pytest.raises(ValueError, match="pass band"):
-        hpde_optimisation.taubin_mu(lam, 1.0 / lam)
+        hpde_smoothing.taubin_mu(lam, 1.0 / lam)
 
 
 def test_hpde_default_smoothing_is_taubin_with_the_patch_pass_band():
@@ -741,8 +741,8 @@ def test_curvature_smoothing_keeps_a_small_sphere_patch_on_the_sphere():
     fixed = np.arange(len(X)) < k
     depth = lambda Y: np.abs(np.linalg.norm(Y[k:], axis=1) - 1.0).mean()  # noqa: E731
     sag = 1.0 - ctx.points[:, 2].mean()  # depth of the flat cap below the sphere
-    curv = hpde_optimisation.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60)
-    taubin = hpde_optimisation.taubin_smooth(X, F, fixed, passes=60, mu=-0.34)  # Taubin's example filter
+    curv = hpde_smoothing.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60)
+    taubin = hpde_smoothing.taubin_smooth(X, F, fixed, passes=60, mu=-0.34)  # Taubin's example filter
     assert np.array_equal(curv[:k], X[:k])
     assert depth(taubin) > 0.03 * sag > depth(curv)
     assert depth(curv) < 0.25 * depth(taubin)
@@ -757,9 +757,9 @@ def test_curvature_smoothing_removes_noise_and_keeps_a_plane():
     ctx, X, Fp, n_inner = flat_hole_patch(0.2)
     noisy = X.copy()
     noisy[ctx.size:, 2] = np.random.default_rng(0).normal(0, 0.01, n_inner)
-    S = hpde_optimisation.curvature_smooth(noisy, Fp, ctx.size, ctx.vertices, ctx.faces, passes=60)
+    S = hpde_smoothing.curvature_smooth(noisy, Fp, ctx.size, ctx.vertices, ctx.faces, passes=60)
     assert np.abs(S[ctx.size:, 2]).max() < 0.2 * np.abs(noisy[ctx.size:, 2]).max()
-    flat = hpde_optimisation.curvature_smooth(X, Fp, ctx.size, ctx.vertices, ctx.faces, passes=60)
+    flat = hpde_smoothing.curvature_smooth(X, Fp, ctx.size, ctx.vertices, ctx.faces, passes=60)
     assert np.abs(flat[:, 2]).max() < 1e-12
 
 
@@ -780,15 +780,15 @@ def test_anchored_smoothing_keeps_the_prediction_and_removes_jitter():
     ctx, X, F, truth = bump_patch(noise=0.004)
     k = ctx.size
     err = lambda Y: np.abs(Y[k:, 2] - truth).mean()  # noqa: E731
-    free = hpde_optimisation.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60)
-    anchored = hpde_optimisation.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60, anchor=0.15)
+    free = hpde_smoothing.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60)
+    anchored = hpde_smoothing.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60, anchor=0.15)
     assert np.array_equal(anchored[:k], X[:k])
     assert err(free) > 0.3 * truth.mean()  # the bump is mostly gone
     assert err(anchored) < 0.6 * err(X)  # most of the jitter removed
     assert err(anchored) < 0.5 * err(free)
     # Without noise the anchored smoothing barely moves a smooth prediction.
     ctx, X, F, truth = bump_patch(noise=0.0)
-    anchored = hpde_optimisation.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60, anchor=0.15)
+    anchored = hpde_smoothing.curvature_smooth(X, F, k, ctx.vertices, ctx.faces, passes=60, anchor=0.15)
     assert np.abs(anchored[k:, 2] - truth).max() < 0.2 * truth.max()
 
 

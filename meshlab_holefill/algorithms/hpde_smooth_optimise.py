@@ -14,6 +14,7 @@ from . import hpde_folds as folds
 from . import hpde_mesh as mesh_steps
 from . import hpde_optimisation as optimisation
 from . import hpde_quality
+from . import hpde_smoothing as smoothing_steps
 
 RELAX_ROUNDS = 3  # rounds of sliver collapse + obtuse-edge splits + tangential relaxation + swaps (relax)
 SLIVER_ANGLE = np.radians(140.0)  # a free vertex this flat against a loop edge is collapsed onto it
@@ -22,7 +23,7 @@ QUALITY_TARGET = 0.5  # relax: free vertices of triangles with 2r/R below this a
 
 def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, decimation_rate, relax=0,
                         smoothing="taubin", record=None, anchor=0.0, quality_floor=0.0,
-                        pass_band=0.0, taubin_lambda=optimisation.TAUBIN_LAMBDA):
+                        pass_band=0.0, taubin_lambda=smoothing_steps.TAUBIN_LAMBDA):
     """Step 7 (Sec. 4.7) with the fold repairs: smoothing, decimation, min-angle swaps.
 
     ``record`` (a dict, optional) receives ``smoothed_points``: the smoothed prediction points
@@ -42,11 +43,11 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, deci
     stats["forbidden_splits"] = int(splits)
     V, F, repairs = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
     if smoothing == "taubin":
-        V = optimisation.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth, lam=taubin_lambda,
-                                        pass_band=pass_band)
+        V = smoothing_steps.taubin_smooth(V, F, np.arange(len(V)) < k, passes=num_smooth, lam=taubin_lambda,
+                                          pass_band=pass_band)
     else:
-        V = optimisation.curvature_smooth(V, F, k, ctx.vertices, ctx.faces, passes=num_smooth,
-                                          weights="scale" if smoothing == "curvature_scaled" else "uniform", anchor=anchor)
+        V = smoothing_steps.curvature_smooth(V, F, k, ctx.vertices, ctx.faces, passes=num_smooth, anchor=anchor,
+                                             weights="scale" if smoothing == "curvature_scaled" else "uniform")
     if record is not None:
         record["smoothed_points"] = V[k:][ids >= 0].copy()
     V, F, collapses, keep = optimisation.decimate_short_edges(V, F, k, decimation_rate * edge_len, ctx.forbidden_edges)
