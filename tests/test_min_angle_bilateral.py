@@ -7,8 +7,9 @@ from hypothesis import strategies as st
 
 import dataclasses
 
-from meshlab_holefill.algorithms.min_angle_bilateral import (boundary_angles, fill, min_angle_triangulation,
-                                                             normal_angle_threshold, relaxation_guard)
+from meshlab_holefill.algorithms.min_angle_bilateral import fill, relaxation_guard
+from meshlab_holefill.algorithms.min_angle_triangulation import (boundary_angles, min_angle_triangulation,
+                                                                 normal_angle_threshold)
 from meshlab_holefill.geometry.flips import relax_edges
 from meshlab_holefill.geometry.quality import triangle_quality
 from meshlab_holefill.hole_guards import patch_guard
@@ -173,7 +174,7 @@ def test_relaxation_guard_still_refuses_a_swap_through_the_surrounding_mesh():
 # ----------------------------------------------------------------------------- speed-ups kept exact
 
 def test_scalar_sector_test_agrees_with_the_vectorised_one():
-    from meshlab_holefill.algorithms.min_angle_bilateral import _in_sector
+    from meshlab_holefill.algorithms.min_angle_triangulation import _in_sector
     from meshlab_holefill.hole_guards import inside_hole_sector
 
     rng = np.random.default_rng(3)

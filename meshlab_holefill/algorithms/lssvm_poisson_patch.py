@@ -189,7 +189,7 @@ def initial_patches(ctx, merge_factor, failures):
         stats["domain"] = name
         yield harmonic_lift(np.concatenate([D, new_vertices]), F, P), F, stats
     from ..geometry.refine import refine_patch
-    from .min_angle_bilateral import min_angle_triangulation
+    from .min_angle_triangulation import min_angle_triangulation
 
     k = ctx.size
     try:
