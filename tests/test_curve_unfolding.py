@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from meshlab_holefill import FILTERS, HoleFillError
 from meshlab_holefill.algorithms import curve_unfolding as cu
+from meshlab_holefill.algorithms import unfolded_triangulation as tri
 from meshlab_holefill.algorithms.embedding import (embed_patch, embedding_energy, energy_rows, tangential_relaxation,
                                                    umbrella_operator, vertex_normals)
 from meshlab_holefill.algorithms.unfolding import (anneal_loop, colour_classes, linear_motion_is_simple,
@@ -230,7 +231,7 @@ def star_polygon(radii):
 @given(st.lists(st.floats(0.3, 1.0), min_size=5, max_size=30))
 def test_cdt_keeps_every_boundary_edge_and_adds_no_steiner_point(radii):
     Q = star_polygon(radii)
-    points, F = cu.constrained_delaunay(Q)
+    points, F = tri.constrained_delaunay(Q)
     m = len(Q)
     assert np.array_equal(points, Q) and len(F) == m - 2
     edges = edge_set(F)
@@ -251,7 +252,7 @@ def test_cdt_keeps_every_boundary_edge_and_adds_no_steiner_point(radii):
 
 def test_forbidden_chords_are_broken_by_a_steiner_point():
     square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
-    points, F = cu.constrained_delaunay(square, [[0, 2], [1, 3]])
+    points, F = tri.constrained_delaunay(square, [[0, 2], [1, 3]])
     edges = {tuple(sorted(e)) for e in edge_set(F)}
     assert len(points) > 4 and (0, 2) not in edges and (1, 3) not in edges
 
@@ -260,7 +261,7 @@ def test_refinement_meets_chews_angle_and_length_bounds():
     h = 0.1
     m = 40
     Q = star_polygon(np.full(m, h / (2 * np.sin(np.pi / m))))  # regular polygon with edges h
-    points, F = cu.refine_planar(Q, h)
+    points, F = tri.refine_planar(Q, h)
     assert np.array_equal(points[:m], Q)  # boundary untouched: no Steiner point on it
     assert all((i, (i + 1) % m) in edge_set(F) for i in range(m))
     X = np.c_[points, np.zeros(len(points))]
@@ -272,8 +273,8 @@ def test_refinement_meets_chews_angle_and_length_bounds():
 
 def test_planar_domain_is_scaled_to_the_loops_perimeter():
     P = np.array([[0, 0, 0], [2, 0, 1], [2, 2, 0], [0, 2, 1]], float)
-    Qs, scale = cu.scale_to_loop(project_to_best_plane(P)[0], P)
-    assert cu.polygon_perimeter(Qs) == pytest.approx(cu.polygon_perimeter(P))
+    Qs, scale = tri.scale_to_loop(project_to_best_plane(P)[0], P)
+    assert tri.polygon_perimeter(Qs) == pytest.approx(tri.polygon_perimeter(P))
 
 
 def sphere_cap_domain():
@@ -283,7 +284,7 @@ def sphere_cap_domain():
     V, F = mesh_arrays(ms)
     _, F, _ = cut_disks(V, F, [(0, 0, 1)], 0.6)
     ctx = hole_context(V, F, boundary_loops(F)[0], rings=2)
-    points, Fp = cu.refine_planar(cu.scale_to_loop(project_to_best_plane(ctx.points)[0], ctx.points)[0],
+    points, Fp = tri.refine_planar(tri.scale_to_loop(project_to_best_plane(ctx.points)[0], ctx.points)[0],
                                   float(ctx.edge_scale.mean()))
     return ctx, points, Fp
 
@@ -559,7 +560,7 @@ def test_repair_prefers_a_domain_whose_patch_clears_a_folded_border_to_a_sliver_
     ctx = hole_context(V, F, loops[1], rings=cu.RINGS)
     assert len(loops[1]) == 22 and corner_quality_bound(V, F, loops[1].vertices) > 0.3
     first, _ = unfold_loop(ctx.points, np.random.default_rng(0))
-    X, Fp = cu.triangulate_and_embed(ctx, first, np.arange(ctx.size), [], "fairing", True, True)
+    X, Fp = tri.triangulate_and_embed(ctx, first, np.arange(ctx.size), [], "fairing", True, True)
     assert len(cu.crossing_faces(ctx, X, Fp)) > 0  # the paper's patch crosses the fold
     # Ear clipping alone (the first domain only) ends with a sliver ear.
     n_bad, Xe, Fe, clipped, _, _ = cu.repair_crossings(ctx, [(first, "annealing", None)], X, Fp, "fairing", True, True)
