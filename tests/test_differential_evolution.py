@@ -477,7 +477,7 @@ def test_lowest_dirichlet_frequency_matches_the_dense_spectrum():
         fixed = (V[:, 0] % 1 == 0) | (V[:, 1] % 1 == 0)
         w, _ = umbrella_modes(V, F, fixed)
         assert lowest_dirichlet_frequency(F, len(V), ~fixed) == pytest.approx(w[0], rel=1e-9)
-        assert w[0] > 0
+        assert 0 < w[0] <= 1
     assert np.isnan(lowest_dirichlet_frequency(F, len(V), np.zeros(len(V), bool)))
 
 
@@ -509,6 +509,9 @@ def test_hpde_default_smoothing_is_taubin_with_the_patch_pass_band():
     names = {p.name: p for p in hpde.PARAMS}
     assert names["smoothing"].default == "taubin" and names["num_smooth"].default == 60
     assert names["taubin_pass_band"].default == 0.0 and names["taubin_lambda"].default == 0.33
+    # Every allowed pair gives a valid mu (k_PB < 1 / lambda), so no combination fails mid-run.
+    assert names["taubin_pass_band"].maximum < 1.0 / names["taubin_lambda"].maximum
+    assert hpde_smoothing.taubin_mu(names["taubin_lambda"].maximum, names["taubin_pass_band"].maximum) < 0
 
 
 def test_decimation_collapses_short_edges_to_midpoints():

@@ -131,7 +131,8 @@ PARAMS = [
     ParamSpec("taubin_pass_band", "float", 0.0,
               "Pass-band frequency k_PB = 1/lambda + 1/mu of the Taubin filter (lambda 0.33); 0 = the patch's "
               "lowest Dirichlet frequency, so the smoothest shape of the patch passes unchanged (Taubin's "
-              "closed-surface value 0.1 flattens small patches).", minimum=0.0, maximum=3.0),
+              "closed-surface value 0.1 flattens small patches). At most 1, so it stays below 1/lambda "
+              "(a patch's lowest frequency is at most 1 too).", minimum=0.0, maximum=1.0),
     ParamSpec("smoothing_anchor", "float", 0.15,
               "smoothing=curvature: weight w of the predicted positions in the smoothing of Sec. 4.7 (reading: the smoothing filters "
               "the prediction, it does not replace it): each pass solves towards (U^2 + w) x = w x_pred, which "

@@ -75,7 +75,8 @@ def lowest_dirichlet_frequency(F, n, free):
     umbrella smoothing x <- x - t K x, whose eigenvalues ("frequencies", Taubin 1995) lie in
     (0, 2]; the lowest one belongs to the smoothest shape the free vertices can take over the
     fixed boundary. K is similar to the symmetric D^-1/2 (D - A) D^-1/2 restricted to the free
-    vertices, whose spectrum is computed instead.
+    vertices, whose spectrum is computed instead; its diagonal is 1, so the lowest frequency is
+    at most 1.
 
     Parameters
     ----------
