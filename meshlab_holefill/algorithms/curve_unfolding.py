@@ -18,10 +18,10 @@ medium / large: least-squares mesh 0.190 / 1.857 / 5.242, interior rows 0.70 / 6
 E_DF 0.202 / 1.995 / 5.452, MeshLab 0.296 / 5.85 / 21.4; :mod:`.embedding`).
 
 Beyond the paper (options, on by default because the benchmark targets need them):
-``fallback`` unfolds
-loops that annealing does not (loops wrapped around a tube or a knob) by developing them with
-the surface's own angles; ``tangential`` moves the embedded interior vertices within their
-tangent planes to E_AREA's spacing on E_DF's shape (:func:`.embedding.tangential_relaxation`);
+``fallback`` unfolds loops that annealing does not (loops wrapped around a tube or a knob) by
+developing them with the surface's own angles; ``tangential`` moves the embedded interior
+vertices within their tangent planes until the umbrella has no tangential part, even spacing
+on the solved shape (:func:`.embedding.tangential_relaxation`);
 ``repair`` replaces a patch that crosses the surrounding mesh (scan borders with folded sliver
 faces) by the best patch of another planar domain that crosses nothing, else clips the ears of
 the boundary vertices involved and fills the rest of the loop again (:func:`repair_crossings`);
@@ -99,8 +99,8 @@ PARAMS = [
               "surface leaves a wide opening."),
     ParamSpec("tangential", "bool", True,
               "Beyond the paper: after each energy solve, move the interior vertices within their tangent planes "
-              "until the uniform umbrella U has no tangential part (E_DF's shape, E_AREA's spacing); E_DF alone "
-              "squeezes triangles next to long border edges and wide openings."),
+              "until the uniform umbrella U has no tangential part (the energy's shape, evenly spaced); E_DF "
+              "alone squeezes triangles next to long border edges and wide openings."),
     ParamSpec("seed", "int", 0, "Seed of the simulated annealing (same seed, same patch).",
               minimum=0, maximum=2**31 - 1),
 ]

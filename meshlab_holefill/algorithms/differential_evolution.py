@@ -134,8 +134,8 @@ PARAMS = [
               "closed-surface value 0.1 flattens small patches). At most 1, so it stays below 1/lambda "
               "(a patch's lowest frequency is at most 1 too).", minimum=0.0, maximum=1.0),
     ParamSpec("smoothing_anchor", "float", 0.15,
-              "smoothing=curvature: weight w of the predicted positions in the smoothing of Sec. 4.7 (reading: the smoothing filters "
-              "the prediction, it does not replace it): each pass solves towards (U^2 + w) x = w x_pred, which "
+              "smoothing=curvature: weight w of the predicted positions in the smoothing of Sec. 4.7 (reading: "
+              "the smoothing filters the prediction, it does not replace it): each pass solves towards (U^2 + w) x = w x_pred, which "
               "removes wavelengths below ~2 pi / (2 w^(1/4)) ~ 5 edges (the section-plane jitter) and keeps the "
               "DE shape; 0 = free smoothing, which converges to the thin-plate fill of the loop on narrow holes.",
               minimum=0.0, maximum=100.0),

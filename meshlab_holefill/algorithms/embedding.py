@@ -242,8 +242,8 @@ def embed_patch(ctx, n_interior, F, energy="fairing", boundary=None, extra_faces
 
     Boundary vertices go to their loop positions, interior vertices minimise E_AREA
     (``energy='area'``: the least-squares mesh, loop rows included; ``'area_interior'``: the
-    sum over P_Int only, a membrane) or E_DF (``'fairing'``). The operators are built on the patch joined
-    to the surrounding faces of ``ctx``: U of an interior vertex only sees the patch, while
+    sum over P_Int only, a membrane) or E_DF (``'fairing'``). The operators are built on the
+    patch joined to the surrounding faces of ``ctx``: U of an interior vertex only sees the patch, while
     U of a boundary vertex, needed by E_DF, uses its whole 1-ring in the filled model, which
     carries the slope of the surrounding surface into the patch (the boundary condition of
     Kobbelt et al.'s discrete fairing, which the paper cites for E_DF).
