@@ -124,7 +124,7 @@ PARAMS = [
               "'curvature' = second-order umbrella with the surrounding rings anchored to the prediction "
               "(smoothing_anchor), whose fixed points have uniform turning angles (Sec. 5.2.2); "
               "'curvature_scaled' = the same with scale-dependent weights.",
-              choices=("taubin", "curvature", "curvature_scaled")),
+              choices=("curvature", "curvature_scaled", "taubin")),  # order kept: .mlx enums are indices
     ParamSpec("taubin_lambda", "float", 0.33,
               "lambda of the Taubin filter (the Gaussian step of each pass; Taubin's example 0.33).",
               minimum=0.01, maximum=0.9),
