@@ -326,6 +326,28 @@ def test_steps_that_cross_the_surrounding_mesh_are_rejected():
     assert front.obstacles.distance((0.2, 0.8, 0.0), 0.1) == 0.1  # nothing within reach
 
 
+def test_refused_nodes_far_from_a_step_stay_refused_without_changing_the_patch(monkeypatch):
+    # After a step only the refused nodes within the reach of its checks are retried
+    # (_release_blocked_near); retrying every refused node must give the same patches. On
+    # bunny10k_textured one hole's front refuses 35 steps, 2 of them kept back after far steps.
+    from meshlab_holefill.geometry import advancing_front
+
+    def run():
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(sample("bunny10k_textured.obj"))
+        res = ms.meshing_close_holes_lssvm_poisson()
+        return mesh_arrays(ms), res["holes"]
+
+    (V1, F1), holes = run()
+    kept = sum(h.get("afm_kept_blocked") or 0 for h in holes)
+    assert kept > 0
+    monkeypatch.setattr(advancing_front._AdvancingFront, "_release_blocked_near",
+                        lambda self, new_faces: self._release_blocked())
+    (V2, F2), holes_full = run()
+    assert np.array_equal(V1, V2) and np.array_equal(F1, F2)
+    assert sum(h.get("afm_kept_blocked") or 0 for h in holes_full) == 0
+
+
 def test_front_that_runs_out_of_the_hole_stops():
     # The outer border of a flat grid, read as a hole, is the plane outside the square: with
     # the surface normals the front grows outward without end; it must stop with a reason.

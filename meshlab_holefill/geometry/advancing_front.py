@@ -50,6 +50,7 @@ triangle count: it always ends.
 """
 from __future__ import annotations
 
+import heapq
 import math
 
 import numpy as np
@@ -91,6 +92,10 @@ class _AdvancingFront(FrontState):
         self.merge_ear_max = MERGE_EAR_MAX if merge_ear_max is None else merge_ear_max
         self.max_faces = max_faces
         self._set_obstacles(obstacles)
+        # Bounds of the reach of one step's checks (_release_blocked_near): new vertices take
+        # the mean sizing value of three vertices, so no S exceeds the loop's largest.
+        self.S_max = max(self.S)
+        self.max_edge = self.longest_edge
         for i in range(self.k):
             self._update_node(i)
 
@@ -110,14 +115,50 @@ class _AdvancingFront(FrontState):
                     continue
                 raise HoleFillError("advancing front is stuck: no valid triangle can be added "
                                     f"({sum(self.front_size.values())} front vertices left)")
+            n_faces, n_topology = len(self.faces), self.stats["merges"] + self.stats["splits"]
             if self._advance(node):
                 self.stats["steps"] += 1
-                self._release_blocked()
+                if self.stats["merges"] + self.stats["splits"] != n_topology:
+                    self._release_blocked()  # a split relabels a whole front: any refusal may change
+                else:
+                    self._release_blocked_near(self.faces[n_faces:])
             else:
                 self.stats["rejected"] += 1
                 self.blocked.append(node)
         F = np.asarray(self.faces, np.int64).reshape(-1, 3)
         return np.asarray(self.P[self.k:], np.float64).reshape(-1, 3), F
+
+    def _release_blocked_near(self, new_faces):
+        """Put back on the heap the refused nodes that the step which made ``new_faces`` may unblock.
+
+        The checks of a step at node B (:meth:`_build`, :meth:`_valid`) read the front only
+        near B's vertex: its candidate triangles reach max(longest front edge, (1 +
+        merge_factor) S_max), the crossing test one loop edge further, the front-angle and
+        merge-ear tests the nodes up to three front edges along. A step whose triangles have no
+        vertex within that reach leaves B's verdict as it was, so B stays refused, and the steps
+        taken are those of releasing every refused node after each step (which made failing
+        runs on large holes quadratic: every step retried every refused node). Splits relabel
+        whole fronts and release them all.
+        """
+        verts = {x for f in new_faces for x in f}
+        P = self.P
+        for a, b, c in new_faces:
+            for x, y in ((a, b), (b, c), (c, a)):
+                self.max_edge = max(self.max_edge, norm(sub(P[x], P[y])))
+        reach = 3.0 * self.max_edge + (1.0 + self.merge_factor) * self.S_max + self.longest_edge
+        r2 = reach * reach
+        points = [P[x] for x in verts]
+        still = []
+        for b in self.blocked:
+            if not self.node_alive[b]:
+                continue
+            X = P[self.node_vertex[b]]
+            if any((X[0] - Y[0]) ** 2 + (X[1] - Y[1]) ** 2 + (X[2] - Y[2]) ** 2 <= r2 for Y in points):
+                heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
+            else:
+                still.append(b)
+        self.stats["kept_blocked"] = self.stats.get("kept_blocked", 0) + len(still)
+        self.blocked = still
 
     def _close_small_front(self):
         """Last resort when every step is rejected: close a front of at most 6 vertices by a fan.
@@ -383,7 +424,8 @@ def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75,
         Indices into ``concatenate([points, new_vertices])``, oriented like the boundary.
     stats : dict
         ``steps``, ``rule1``, ``rule2``, ``rule3``, ``merges``, ``splits``, ``rejected``
-        (and ``fan_closures`` when the last resort was used).
+        (and ``fan_closures`` when the last resort was used, ``kept_blocked`` when refused
+        nodes were left out of a retry because the step was beyond their reach).
 
     Raises
     ------
