@@ -60,15 +60,26 @@ def bunny_scan():
     return ms
 
 
-@pytest.fixture(scope="session")
-def face_scan():
-    """face000.ply (range scan: jagged hole borders with long edges) and its boundary loops."""
+def scan_with_loops(name):
+    """A sample mesh's vertices, faces and boundary loops."""
     from meshlab_holefill.holes import boundary_loops
 
     ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(sample("rangemaps/face000.ply"))
+    ms.load_new_mesh(sample(name))
     V, F = mesh_arrays(ms)
     return V, F, boundary_loops(F)
+
+
+@pytest.fixture(scope="session")
+def face_scan():
+    """face000.ply (range scan: jagged hole borders with long edges) and its boundary loops."""
+    return scan_with_loops("rangemaps/face000.ply")
+
+
+@pytest.fixture(scope="session")
+def bunny_loops():
+    """bunny10k_textured.obj (the bunny scan's 5 natural holes) and its boundary loops."""
+    return scan_with_loops("bunny10k_textured.obj")
 
 
 def random_planar_patch(k, points, seed):

@@ -27,7 +27,7 @@ from meshlab_holefill.holes import boundary_loops, hole_context, nonmanifold_edg
 from meshlab_holefill.metrics import corner_quality_bound
 from meshlab_holefill.patch import validate_patch
 
-from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sphere_with_holes
 
 
 # ----------------------------------------------------------------------------- shapes
@@ -75,14 +75,6 @@ def mean_edge(P):
 
 def edge_set(F):
     return {tuple(e) for f in np.asarray(F).tolist() for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
-
-
-@pytest.fixture(scope="module")
-def bunny_loops():
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(sample("bunny10k_textured.obj"))
-    V, F = mesh_arrays(ms)
-    return V, F, boundary_loops(F)
 
 
 # ----------------------------------------------------------------------------- Sec. 3.1 building blocks
