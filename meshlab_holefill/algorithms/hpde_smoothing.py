@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..geometry.laplacian import lowest_dirichlet_frequency
+from ..geometry.laplacian import adjacency_matrix, lowest_dirichlet_frequency
 from ..geometry.quality import unique_edges
 
 # Taubin's lambda (ref. [26]); mu follows from the pass band (taubin_smooth).
@@ -63,11 +63,10 @@ def taubin_smooth(V, F, fixed, passes=60, lam=TAUBIN_LAMBDA, mu=None, pass_band=
     if passes <= 0 or np.all(fixed):
         return V
     free = ~np.asarray(fixed, bool)
+    A = adjacency_matrix(F, n)
     if mu is None:
-        k_pb = pass_band if pass_band > 0 else lowest_dirichlet_frequency(F, n, free)
+        k_pb = pass_band if pass_band > 0 else lowest_dirichlet_frequency(F, n, free, adjacency=A)
         mu = taubin_mu(lam, k_pb)
-    E = unique_edges(np.asarray(F, np.int64))
-    A = sp.coo_matrix((np.ones(2 * len(E)), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n)).tocsr()
     deg = np.asarray(A.sum(axis=1)).ravel()
     W = sp.diags(1.0 / np.maximum(deg, 1)) @ A
     Wf = W[free].tocsr()

@@ -68,7 +68,7 @@ def cotangent_laplacian(V, F, n=None):
     return (W - sp.diags(deg)).tocsr()
 
 
-def lowest_dirichlet_frequency(F, n, free):
+def lowest_dirichlet_frequency(F, n, free, adjacency=None):
     """Smallest eigenvalue of the umbrella operator K = I - D^-1 A on the free vertices.
 
     With the other vertices held fixed (a Dirichlet boundary), ``free`` vertices evolve under
@@ -83,6 +83,7 @@ def lowest_dirichlet_frequency(F, n, free):
     F : (m, 3) int
     n : int  number of vertices
     free : (n,) bool
+    adjacency : (n, n) sparse, optional  :func:`adjacency_matrix` of F, if the caller has it
 
     Returns
     -------
@@ -91,7 +92,7 @@ def lowest_dirichlet_frequency(F, n, free):
     free = np.flatnonzero(np.asarray(free, bool))
     if len(free) == 0:
         return float("nan")
-    A = adjacency_matrix(F, n)
+    A = adjacency_matrix(F, n) if adjacency is None else adjacency
     deg = np.maximum(np.asarray(A.sum(axis=1)).ravel()[free], 1.0)
     scale = sp.diags(1.0 / np.sqrt(deg))
     S = (sp.identity(len(free)) - scale @ A[free][:, free] @ scale).tocsc()
