@@ -138,7 +138,8 @@ PARAMS = [
               "smoothing=curvature: weight w of the predicted positions in the smoothing of Sec. 4.7 (reading: "
               "the smoothing filters the prediction, it does not replace it): each pass solves towards "
               "(U^2 + w) x = w x_pred, which removes wavelengths below ~2 pi / (2 w^(1/4)) ~ 5 edges (the "
-              "section-plane jitter) and keeps the DE shape; 0 = free smoothing, which converges to the thin-plate fill of the loop on narrow holes.",
+              "section-plane jitter) and keeps the DE shape; 0 = free smoothing, which converges to the "
+              "thin-plate fill of the loop on narrow holes.",
               minimum=0.0, maximum=100.0),
     ParamSpec("arc_tangent", "enum", "secant",
               "Start angle of the arcs of Sec. 4.5: 'secant' = the direction TV = BP - AP as the tangent at BP "
