@@ -289,8 +289,10 @@ def report_blocks(comparison, pictures, command=None):
               ("p", f"{time.strftime('%Y-%m-%d %H:%M')}, {settings['cores']} cores, "
                     f"{comparison.wall_seconds:.1f} s wall time (runs and metrics). Meshes: {cases}. "
                     + (f"Command: `{command}`." if command else "")),
-              ("p", "Distances are in per mille (‰) of the mesh's bounding-box diagonal, measured with MeshLab's "
-                    "Hausdorff sampler between the patch and the removed ground-truth surface. Quality is Field's "
+              ("p", "Distances are in per mille (‰) of the mesh's bounding-box diagonal, between the patch and the "
+                    "removed ground-truth surface: 20,000 points spread by area over one surface (seeded, so a "
+                    "figure depends only on the two surfaces), each at its exact distance from the other surface "
+                    "(MeshLab's per-vertex distance filter). Quality is Field's "
                     "2r/R (1 = equilateral). Edge ratio = mean new edge length / mean edge length around the hole. "
                     "Border crease = angle between the normals of the mesh face and the patch face at each hole "
                     "border edge; 'crease − GT's' compares it with the ground truth's. Means are over the holes each "

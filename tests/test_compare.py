@@ -269,6 +269,38 @@ def test_patch_distance_does_not_depend_on_its_triangulation():
     assert 0.6 * 0.8 / np.pi ** 2 < coarse < 1.05 * 0.8 / np.pi ** 2
 
 
+def test_patch_distance_depends_only_on_the_two_surfaces():
+    """Same figures whatever was sampled before (MeshLab's sampler has one unseedable generator)."""
+    from meshlab_holefill.metrics import closest_faces, hausdorff_one_way, sample_surface
+
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=2)
+    V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    ms.create_sphere(subdiv=4)
+    W, G = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    first = hausdorff_one_way(V, F, W, G)
+    ms.get_hausdorff_distance(sampledmesh=0, targetmesh=1)  # advances MeshLab's generator
+    hausdorff_one_way(W, G, V, F, samples=777)
+    assert hausdorff_one_way(V, F, W, G) == first
+    assert hausdorff_one_way(V, F, W, G, seed=1) != first
+    # exact distances of the seeded samples (numpy closest points, nearest-centroid candidates)
+    d, _, _ = closest_faces(sample_surface(V, F, 20000), W, G)
+    assert first["mean"] == pytest.approx(d.mean(), rel=1e-5)
+    assert first["max"] == pytest.approx(d.max(), rel=1e-5)
+
+
+def test_surface_samples_are_spread_by_area():
+    from meshlab_holefill.metrics import sample_surface
+
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [3, 0, 0], [3, 1, 0]])
+    F = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])  # unit square, then a 2x1 rectangle
+    X = sample_surface(V, F, 30000, seed=3)
+    assert np.all((X[:, 0] >= 0) & (X[:, 0] <= 3) & (X[:, 1] >= 0) & (X[:, 1] <= 1) & (X[:, 2] == 0))
+    assert np.mean(X[:, 0] < 1) == pytest.approx(1 / 3, abs=0.01)
+    assert np.mean(X[:, 1] < 0.5) == pytest.approx(0.5, abs=0.01)  # uniform inside each triangle too
+    assert sample_surface(V, F[:0], 10).shape == (0, 3)
+
+
 def test_patch_info_becomes_info_columns():
     from meshlab_holefill.comparison import _patch_info
 
