@@ -89,6 +89,7 @@ import time
 
 import numpy as np
 
+from ..geometry.laplacian import tangential_umbrella_smoothing
 from ..geometry.quality import triangle_quality
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
@@ -328,7 +329,7 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
             Vr, Fr = P, F
             for _ in range(RELAX_ROUNDS):
                 Vr, Fr, s_ = optimisation.split_obtuse_edges(Vr, Fr, k)
-                Vr = optimisation.tangential_relax(Vr, Fr, np.arange(len(Vr)) < k, passes=relax)
+                Vr = tangential_umbrella_smoothing(Vr, Fr, np.arange(len(Vr)) < k, relax)
                 if s_ == 0:
                     break
             if not folds.local_folds(Vr, Fr, mesh_normals, max_angle=LAST_RESORT_ANGLE).any() and \

@@ -138,43 +138,6 @@ def compact_vertices(V, F, alive):
     return V[keep], index[F], keep
 
 
-def tangential_relax(V, F, fixed, passes=10, step=0.5):
-    """Move free vertices towards the mean of their neighbours within their tangent plane.
-
-    Beyond the paper (option ``relax``): evens out the triangles left by decimation and swaps
-    without changing the shape of the patch (the displacement is projected onto the plane
-    perpendicular to the area-weighted vertex normal).
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-    fixed : (n,) bool
-    passes : int
-    step : float  fraction of the tangential umbrella vector applied per pass
-
-    Returns
-    -------
-    (n, 3) float64
-    """
-    from ..geometry.quality import vertex_normals
-
-    V = np.array(V, np.float64)
-    free = ~np.asarray(fixed, bool)
-    if passes <= 0 or not free.any():
-        return V
-    _, A = adjacency(F, len(V))
-    A = A.astype(np.float64)
-    deg = np.maximum(np.asarray(A.sum(axis=1)).ravel(), 1)
-    Af = A[free]
-    for _ in range(passes):
-        N = vertex_normals(V, F, len(V))[free]
-        U = (Af @ V) / deg[free, None] - V[free]
-        U -= np.einsum("ij,ij->i", U, N)[:, None] * N
-        V[free] += step * U
-    return V
-
-
 def adjacency(F, n):
     """Unique edges (e, 2) and the symmetric (n, n) int8 CSR vertex adjacency of a face list."""
     E = unique_edges(F)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geometry.laplacian import tangential_umbrella_smoothing
 from . import hpde_folds as folds
 from . import hpde_mesh as mesh_steps
 from . import hpde_optimisation as optimisation
@@ -70,7 +71,7 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth, deci
         V, F, r3, keep = optimisation.remove_valence_three(V, F, k, ctx.forbidden_edges)
         ids = ids[keep[k:] - k]
         collapses += r3
-        V = optimisation.tangential_relax(V, F, np.arange(len(V)) < k, passes=relax)
+        V = tangential_umbrella_smoothing(V, F, np.arange(len(V)) < k, relax)
         F, more_swaps = optimisation.swap_edges_min_angle(V, F, ctx.forbidden_edges)
         swaps += more_swaps
         if s == 0 and c == 0:

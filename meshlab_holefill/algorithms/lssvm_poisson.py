@@ -22,12 +22,13 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from ..geometry.border_split import split_long_boundary_edges
+from ..geometry.laplacian import tangential_umbrella_smoothing
 from ..holes import boundary_halfedges
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
 from .lssvm import lssvm_fit
 from .lssvm_poisson_patch import (context_hits, folds, initial_patches, normalized_cotangent_laplacian, relax_patch,
-                                  repair_slivers, tangential_smoothing)
+                                  repair_slivers)
 
 MAX_LAYERS = 5
 RINGS = MAX_LAYERS + 1  # vertices of depth <= RINGS - 1 have complete 1-rings in the HoleContext
@@ -232,7 +233,7 @@ def poisson_reposition(X, F, fixed, regressors=None, iterations=1, update_rhs=Fa
 def reposition(ctx, X, F, regressors, iterations, relax):
     """Relax, Poisson reconstruction (Sec. 3.4), relax; checked against the surrounding mesh.
 
-    With ``relax`` (beyond the paper) the solve is followed by swaps, :func:`tangential_smoothing`,
+    With ``relax`` (beyond the paper) the solve is followed by swaps, :func:`geometry.laplacian.tangential_umbrella_smoothing`,
     swaps again and :func:`repair_slivers` around triangles still below ``SLIVER_QUALITY``
     (dropped again if only the repaired patch touches the surrounding mesh).
 
@@ -259,7 +260,7 @@ def reposition(ctx, X, F, regressors, iterations, relax):
     repaired = 0
     if relax:
         F, more = relax_patch(X, F, ctx)
-        X = tangential_smoothing(X, F, fixed, TANGENTIAL_ITERATIONS)
+        X = tangential_umbrella_smoothing(X, F, fixed, TANGENTIAL_ITERATIONS)
         F, again = relax_patch(X, F, ctx)
         swaps += more + again
         X_smooth, F_smooth = X, F

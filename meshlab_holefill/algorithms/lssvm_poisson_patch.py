@@ -16,7 +16,7 @@ import scipy.sparse.linalg as spla
 from ..geometry.advancing_front import advancing_front_triangulation
 from ..geometry.flips import relax_edges
 from ..geometry.intersections import faces_intersecting
-from ..geometry.laplacian import adjacency_matrix, cotangent_laplacian
+from ..geometry.laplacian import adjacency_matrix, cotangent_laplacian, tangential_umbrella_smoothing
 from ..geometry.quality import face_normals, triangle_quality, vertex_normals
 from ..geometry.topology import interior_edges
 from ..patch import HoleFillError
@@ -261,36 +261,6 @@ def folds(X, F):
     return bool(np.any(np.einsum("ij,ij->i", U[f1], U[f2]) < -0.5))
 
 
-def tangential_smoothing(X, F, fixed, iterations=3, step=0.5):
-    """Move inner vertices toward their neighbours' centroid within their tangent plane (beyond the paper).
-
-    The Poisson solve moves vertices along the surface as well as across it and can squeeze
-    triangles; this relaxation evens them out while leaving the shape (the normal component
-    of the positions) alone: x += step * (I - n n^T)(mean of neighbours - x), ``iterations``
-    times, n the area-weighted vertex normal.
-
-    Parameters
-    ----------
-    X : (n, 3) float64, F : (m, 3) int64, fixed : (n,) bool
-
-    Returns
-    -------
-    X : (n, 3) float64
-    """
-    X = np.array(X, np.float64)
-    free = ~np.asarray(fixed, bool)
-    if iterations <= 0 or not free.any():
-        return X
-    A = adjacency_matrix(F, len(X))
-    degree = np.asarray(A.sum(axis=1)).ravel()
-    for _ in range(iterations):
-        N = vertex_normals(X, F)
-        D = (A @ X) / np.maximum(degree, 1)[:, None] - X
-        D -= np.einsum("ij,ij->i", D, N)[:, None] * N
-        X[free] += step * D[free]
-    return X
-
-
 def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3):
     """Local tangential smoothing around the triangles of quality below ``floor`` (beyond the paper).
 
@@ -298,7 +268,8 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
     border: on face000's 227-edge hole it pulls inner vertices to within a fraction of an
     edge of the boundary edges and turns the patch back against the border faces there
     (angle up to 150 degrees at the inner vertex, quality 0.04-0.15). The global
-    :func:`tangential_smoothing` (3 steps) and the swaps lift them to 0.22 only, and a
+    tangential smoothing (:func:`geometry.laplacian.tangential_umbrella_smoothing`, 3 steps)
+    and the swaps lift them to 0.22 only, and a
     boundary edge cannot be swapped. Here the inner vertices of the triangles below
     ``floor``, with ``rings`` rings of neighbours, get ``iterations`` further tangential
     steps (the others stay put) and the patch is swapped again (:func:`relax_patch`); a round
@@ -332,7 +303,7 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
         region &= ~np.asarray(fixed, bool)
         if not region.any():
             break
-        Y = tangential_smoothing(X, F, ~region, iterations)
+        Y = tangential_umbrella_smoothing(X, F, ~region, iterations)
         G, _ = relax_patch(Y, F, ctx)
         qn = triangle_quality(Y, G)
         if qn.min() <= q.min() or folds(Y, G):

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .quality import corner_angles, unique_edges
+from .quality import corner_angles, unique_edges, vertex_normals
 
 
 def adjacency_matrix(F, n):
@@ -13,6 +13,38 @@ def adjacency_matrix(F, n):
     data = np.ones(2 * len(E))
     A = sp.coo_matrix((data, (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
     return A.tocsr()
+
+
+def tangential_umbrella_smoothing(V, F, fixed, iterations, step=0.5):
+    """Move the free vertices toward the mean of their neighbours within their tangent planes.
+
+    x += step * (I - n n^T) (mean of neighbours - x) for every free vertex, ``iterations``
+    times, n the area-weighted vertex normal of the current positions. Evens out triangles
+    while leaving the shape (the normal component of the positions) alone to first order.
+
+    Parameters
+    ----------
+    V : (n, 3) float64, F : (m, 3) int
+    fixed : (n,) bool  vertices that stay put
+    iterations : int
+    step : float  fraction of the tangential umbrella vector applied per iteration
+
+    Returns
+    -------
+    (n, 3) float64  a copy
+    """
+    V = np.array(V, np.float64)
+    free = ~np.asarray(fixed, bool)
+    if iterations <= 0 or not free.any():
+        return V
+    A = adjacency_matrix(F, len(V))
+    degree = np.maximum(np.asarray(A.sum(axis=1)).ravel(), 1)
+    for _ in range(iterations):
+        N = vertex_normals(V, F, len(V))
+        D = (A @ V) / degree[:, None] - V
+        D -= np.einsum("ij,ij->i", D, N)[:, None] * N
+        V[free] += step * D[free]
+    return V
 
 
 def uniform_laplacian(F, n):
