@@ -98,3 +98,27 @@ def random_planar_patch(k, points, seed):
     cw = (A[:, 1, 0] - A[:, 0, 0]) * (A[:, 2, 1] - A[:, 0, 1]) < (A[:, 1, 1] - A[:, 0, 1]) * (A[:, 2, 0] - A[:, 0, 0])
     F[cw] = F[cw][:, [0, 2, 1]]
     return np.column_stack([P, np.zeros(len(P))]), F
+
+
+def assert_filled_cleanly(V0, F0, V1, F1, faces_kept=True):
+    """The filled mesh: no border left, 2-manifold, consistently oriented, no new face crossing the mesh.
+
+    Original vertex positions stay bit-exact; with ``faces_kept`` the original faces too (the
+    LS-SVM filter splits long border edges, Sec. 3.1, and so replaces some border faces).
+    """
+    from meshlab_holefill.geometry.intersections import faces_intersecting
+    from meshlab_holefill.holes import boundary_loops, nonmanifold_edges
+
+    assert np.array_equal(V1[:len(V0)], V0)
+    if faces_kept:
+        assert np.array_equal(F1[:len(F0)], F0)
+    assert boundary_loops(F1) == []
+    assert len(nonmanifold_edges(F1)) == 0
+    directed = np.concatenate([F1[:, [0, 1]], F1[:, [1, 2]], F1[:, [2, 0]]])
+    assert len(np.unique(directed, axis=0)) == len(directed), "a directed edge twice: orientation flips"
+    if faces_kept:
+        new = np.arange(len(F0), len(F1))
+    else:
+        old = set(map(tuple, F0.tolist()))
+        new = np.array([i for i, f in enumerate(map(tuple, F1.tolist())) if f not in old], np.int64)
+    assert len(faces_intersecting(V1, F1, new, np.arange(len(F1)))) == 0

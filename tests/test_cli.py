@@ -21,7 +21,10 @@ def test_fill_with_a_builtin_filter(tmp_path):
     out = tmp_path / "filled.ply"
     assert main(["fill", sample("bunny10k_textured.obj"), str(out), "--filter", "meshing_close_holes",
                  "--maxholesize", "50"]) == 0
-    assert out.exists()
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(out))
+    topo = ms.get_topological_measures()
+    assert topo["boundary_edges"] == 0 and topo["non_two_manifold_edges"] == 0
 
 
 def test_holes_table_lists_every_loop(capsys):

@@ -24,4 +24,6 @@ def test_demo_fills_the_bunny_scan_with_every_filter(tmp_path, capsys):
         ms = pymeshlab.MeshSet()
         ms.load_new_mesh(str(tmp_path / f"{name}.ply"))
         assert ms.current_mesh().face_number() > 9999
+        topo = ms.get_topological_measures()  # the written file really is closed
+        assert topo["boundary_edges"] == 0 and topo["non_two_manifold_edges"] == 0, name
     assert float(rows["meshing_close_holes_lssvm_poisson"][7]) > 0  # Sec. 3.1 split some border edges

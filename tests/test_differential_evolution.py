@@ -17,6 +17,8 @@ from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.holes import boundary_loops, hole_context
 from meshlab_holefill.patch import validate_patch
 
+from conftest import assert_filled_cleanly
+
 FILTER = "meshing_close_holes_differential_evolution"
 SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
 
@@ -666,12 +668,11 @@ def test_filter_on_a_meshset_keeps_originals():
     res = getattr(ms, FILTER)(seed=0)
     m = ms.current_mesh()
     V1, F1 = m.vertex_matrix(), m.face_matrix()
-    assert np.array_equal(V1[:len(V0)], V0) and np.array_equal(F1[:len(F0)], F0)
-    assert res["closed_holes"] >= 4 and res["closed_holes"] + res["failed_holes"] == 5
-    from meshlab_holefill.holes import nonmanifold_edges
-
-    assert len(nonmanifold_edges(F1)) == 0
-    assert all(h["status"] in ("closed", "failed") for h in res["holes"])
+    assert res["closed_holes"] == 5 and res["failed_holes"] == 0
+    assert_filled_cleanly(np.asarray(V0, np.float64), np.asarray(F0, np.int64), np.asarray(V1, np.float64),
+                          np.asarray(F1, np.int64))
+    q = triangle_quality(V1, F1[len(F0):])
+    assert q.mean() >= 0.85 and q.min() >= 0.14  # hole 4's sharpest corner allows 0.147 at best
 
 
 def test_parameters_are_registered():
@@ -689,8 +690,8 @@ def test_sphere_experiment_eq17():
     res = hpde_experiment.sphere_experiment(seed=0)
     assert res["NP"] == 1522 and res["NOT"] == 3040 and abs(res["NHT"] - 1210) < 20
     assert len(res["holes"]) == 2
-    assert 0 < res["APE"] < res["MPE"] < 0.1
-    assert res["paper"]["APE"] == 7.35e-3
+    # The paper's Table 1 sphere row: MPE 1.77e-2, APE 7.35e-3 (ours: 2.91e-2, 9.05e-3).
+    assert 0 < res["APE"] < res["MPE"] and res["APE"] < 1.5 * 7.35e-3 and res["MPE"] < 2.0 * 1.77e-2
     # Eq. 17 is measured on the smoothed prediction points SP_i (Sec. 4.7), before decimation:
     # more points than the final patch keeps.
     assert res["K"] > res["final_vertices"]["K"]
@@ -795,13 +796,23 @@ def test_anchored_smoothing_keeps_the_prediction_and_removes_jitter():
     assert np.abs(anchored[k:, 2] - truth).max() < 0.2 * truth.max()
 
 
-def test_smoothing_anchor_parameter_defaults_and_zero_is_free_smoothing(sphere_hole):
+def test_smoothing_anchor_parameter_defaults_and_reaches_the_smoothing(sphere_hole, monkeypatch):
     names = {p.name: p for p in hpde.PARAMS}
     assert names["smoothing_anchor"].default == 0.15 and names["arc_tangent"].default == "secant"
     _, _, _, ctx = sphere_hole
-    a = hpde.fill(ctx, seed=0, smoothing="curvature", smoothing_anchor=0.0)
-    b = hpde.fill(ctx, seed=0, smoothing="curvature")
-    assert len(a.vertices) != len(b.vertices) or not np.allclose(a.vertices, b.vertices)
+    seen = []
+    real = hpde_smoothing.curvature_smooth
+
+    def recording(*args, **kwargs):
+        seen.append(kwargs.get("anchor"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(hpde_smoothing, "curvature_smooth", recording)
+    for anchor in (0.0, 0.4):
+        seen.clear()
+        patch = hpde.fill(ctx, seed=0, smoothing="curvature", smoothing_anchor=anchor)
+        assert seen and set(seen) == {anchor}
+        check_patch(ctx, patch)
 
 
 def test_circle_start_angle_is_the_tangent_of_the_circle_through_ap():

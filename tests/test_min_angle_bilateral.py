@@ -16,7 +16,7 @@ from meshlab_holefill.hole_guards import patch_guard
 from meshlab_holefill.holes import boundary_loops, hole_context, vertex_face_incidence
 from meshlab_holefill.patch import validate_patch
 
-from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, random_planar_patch, sample, sphere_with_holes
+from conftest import assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, random_planar_patch, sample, sphere_with_holes
 
 UP = np.array([0.0, 0.0, 1.0])
 # Counter-clockwise L shape seen from +z: the vertex (1, 1) is the concave one.
@@ -122,6 +122,7 @@ def test_filter_on_sphere_holes_gives_good_triangles_close_to_the_sphere():
     res = ms.meshing_close_holes_min_angle_bilateral()
     assert res["closed_holes"] == 2
     V1, F1 = mesh_arrays(ms)
+    assert_filled_cleanly(V, F, V1, F1)
     new = F1[len(F):]
     q = triangle_quality(V1, new)
     assert q.mean() > 0.8 and q.min() > 0.25
