@@ -150,7 +150,7 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
     selected_faces = arrays.face_attrs["selected"].ravel() > 0
     report, todo = [], []
     for i, loop in enumerate(loops):
-        entry = {"hole": i, "boundary_edges": len(loop), "pinched": bool(loop.pinched)}
+        entry = {"hole": i, "boundary_edges": loop.edge_count, "pinched": bool(loop.pinched)}
         if not loop.closed:
             entry.update(status="skipped", reason="open boundary chain (inconsistent face orientation)")
         elif len(loop) < 3:

@@ -91,7 +91,7 @@ class BoundaryLoop:
     ----------
     vertices : (k,) int64
         Vertex indices in patch orientation (see module docstring); no vertex repeats.
-    border_faces : (k,) int64
+    border_faces : (k,) int64  ((k - 1,) on an open chain)
         border_faces[i] is the face holding the edge (vertices[i], vertices[i+1]).
     pinched : bool
         True when a loop vertex carries more than two boundary edges (a non-manifold
@@ -107,6 +107,11 @@ class BoundaryLoop:
 
     def __len__(self):
         return len(self.vertices)
+
+    @property
+    def edge_count(self):
+        """Boundary edges of the loop: one per vertex when closed, one fewer on an open chain."""
+        return len(self.border_faces)
 
 
 def edge_summary(F):

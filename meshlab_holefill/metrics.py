@@ -210,7 +210,7 @@ def mesh_checks(V0, F0, V1, F1, return_hits=False):
     new = np.arange(m0, len(F1))
     hits = faces_intersecting(V1, F1, new, np.arange(len(F1))) if len(new) else np.zeros(0, np.int64)
     out = {"originals_changed": moved + changed, "nonmanifold_edges": int(len(nonmanifold_edges(F1))),
-           "boundary_edges_left": int(sum(len(lp) for lp in boundary_loops(F1))),
+           "boundary_edges_left": int(sum(lp.edge_count for lp in boundary_loops(F1))),
            "intersecting_new_faces": int(len(hits)), "new_faces": int(len(F1) - m0),
            "new_vertices": int(len(V1) - n0)}
     return (out, np.asarray(hits, np.int64)) if return_hits else out

@@ -16,6 +16,9 @@ from meshlab_holefill import compare as cmp
 from meshlab_holefill.comparison import (Filler, IsolatedRunner, MeshCase, parse_fillers, prepare_case,
                                          run_comparison)
 from meshlab_holefill.holes import boundary_halfedges, boundary_loops
+from meshlab_holefill.metrics import mesh_checks
+
+from conftest import cut_disks, grid as unit_grid
 
 SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
 
@@ -178,7 +181,7 @@ def test_parse_fillers():
     default = parse_fillers(None)
     assert {f.filter for f in default} == set(meshlab_holefill.filter_list()) | {"meshing_close_holes"}
     assert len(parse_fillers(None, refinehole=True)) == len(default) + 1
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="unknown filter 'no_such_filter'"):
         parse_fillers("no_such_filter")
 
 
@@ -229,11 +232,15 @@ def test_compare_report_end_to_end(tmp_path):
     assert md.count("| sphere |") == page.count("<td>sphere</td>") + page.count("<td class='best'>sphere</td>") == 2
     by = {(r["case"], r["hole"], r["filler"]): r for r in result.holes}
     hu = "meshing_close_holes_min_angle_bilateral"
-    for h in range(2):  # ground truth and analytic metrics on the cut holes
+    # Ground truth and analytic metrics on the cut holes. Measured: 1.81 and 7.47 per mille from
+    # the ground truth, 0.0117 and 0.0320 from the unit sphere; the bounds leave ~1.6x slack.
+    for h, (gt_permille, analytic) in enumerate([(3.0, 0.02), (12.0, 0.05)]):
         r = by[("sphere", h, hu)]
-        assert r["closed"] and r["dist_patch_to_gt_mean_permille"] < 20 and r["analytic_dist_mean"] < 0.05
+        assert r["closed"] and r["dist_patch_to_gt_mean_permille"] < gt_permille and r["analytic_dist_mean"] < analytic
+    # Measured 0.774 on the bunny's 38-edge hole (1.5x slack on the shortfall from 1); MeshLab's own
+    # Close Holes, an unrefined triangulation, reaches only 0.55 there.
     natural = by[("bunny10k_textured.obj", 0, hu)]
-    assert natural["closed"] and "dist_patch_to_gt_mean" not in natural and natural["quality_mean"] > 0.5
+    assert natural["closed"] and "dist_patch_to_gt_mean" not in natural and natural["quality_mean"] > 0.65
     default = [r for r in result.holes if r["filler"] == "meshing_close_holes (default)" and r["boundary_edges"] >= 30]
     assert default and all("maxholesize" in r["reason"] for r in default)
 
@@ -308,3 +315,65 @@ def test_patch_info_becomes_info_columns():
              "unfolding_seconds": 0.01, "method": "annealed", "history": [1, 2]}
     assert _patch_info(entry) == {"info_restarts": 2, "info_unfolding_seconds": 0.01, "info_method": "annealed"}
     assert _patch_info(None) == {}
+
+
+# ---------------------------------------------------------------------------- mesh_checks
+
+def _grid_with_two_cell_holes():
+    """7 x 7 vertices in the unit square (spacing 1/6) with two one-cell holes: loops of 24, 4 and 4 edges."""
+    V, F = unit_grid(7, 7)
+    _, F, _ = cut_disks(V, F, [(0.25, 0.25, 0), (0.75, 0.75, 0)], 0.05)
+    assert [lp.vertices.tolist() for lp in boundary_loops(F)][1:] == [[8, 9, 16, 15], [32, 33, 40, 39]]
+    return V, F
+
+
+def test_mesh_checks_of_a_clean_fill():
+    V0, F0 = _grid_with_two_cell_holes()
+    F1 = np.concatenate([F0, [[8, 9, 16], [8, 16, 15], [32, 33, 40], [32, 40, 39]]])
+    assert mesh_checks(V0, F0, V0, F0) == {
+        "originals_changed": 0, "nonmanifold_edges": 0, "boundary_edges_left": 32,
+        "intersecting_new_faces": 0, "new_faces": 0, "new_vertices": 0}
+    checks, hits = mesh_checks(V0, F0, V0.copy(), F1, return_hits=True)
+    assert checks == {"originals_changed": 0, "nonmanifold_edges": 0, "boundary_edges_left": 24,
+                      "intersecting_new_faces": 0, "new_faces": 4, "new_vertices": 0}
+    assert hits.dtype == np.int64 and len(hits) == 0
+
+
+def test_mesh_checks_counts_each_defect_exactly():
+    V0, F0 = _grid_with_two_cell_holes()
+    n, m = len(V0), len(F0)
+    V1, F1 = V0.copy(), F0.copy()
+    V1[46, 2] += 0.01  # one original vertex moved (on the outer border, away from the new faces)
+    corner = int(np.flatnonzero((F0 == 42).any(axis=1))[0])
+    F1[corner] = np.roll(F1[corner], 1)  # one original face rewritten: the same triangle, but a changed row
+    fill = [[8, 9, 16], [8, 16, 15]]  # the first hole closed, the second (4 edges) left open
+    # A closed tetrahedron on the interior edge 11-12 (x 4/6..5/6, y 1/6), new vertices n, n + 1
+    # up in the air: that edge gets 4 faces, every other tetrahedron edge 2, no new border.
+    tetra_V = [[0.75, 1 / 6 + 0.05, 0.15], [0.75, 1 / 6 - 0.05, 0.15]]
+    tetra = [[11, 12, n], [12, 11, n + 1], [11, n, n + 1], [12, n + 1, n]]
+    # A lone upright triangle through the middle of one face (cell x 4/6..5/6, y 2/6..3/6): 3 border edges.
+    pierce_V = [[0.77, 0.36, -0.05], [0.79, 0.36, -0.05], [0.78, 0.36, 0.05]]
+    pierce = [[n + 2, n + 3, n + 4]]
+    V1 = np.concatenate([V1, tetra_V, pierce_V])
+    F1 = np.concatenate([F1, fill, tetra, pierce])
+    checks, hits = mesh_checks(V0, F0, V1, F1, return_hits=True)
+    assert checks == {"originals_changed": 2,  # 1 moved vertex + 1 changed face
+                      "nonmanifold_edges": 1,  # 11-12
+                      "boundary_edges_left": 24 + 4 + 3,  # outer border, open hole, lone triangle
+                      "intersecting_new_faces": 1,  # only the upright triangle
+                      "new_faces": 2 + 4 + 1, "new_vertices": 2 + 3}
+    assert hits.tolist() == [m + 2 + 4]
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.sets(st.integers(0, 48), max_size=10), st.sets(st.integers(0, 67), max_size=10),
+       st.floats(1e-9, 0.5))
+def test_mesh_checks_counts_every_moved_vertex_and_changed_face(moved, rotated, shift):
+    V0, F0 = _grid_with_two_cell_holes()
+    assert (len(V0), len(F0)) == (49, 68)
+    V1, F1 = V0.copy(), F0.copy()
+    V1[sorted(moved), 2] += shift  # any move counts, however small
+    F1[sorted(rotated)] = np.roll(F1[sorted(rotated)], 1, axis=1)  # same triangles, rewritten rows
+    checks = mesh_checks(V0, F0, V1, F1)
+    assert checks["originals_changed"] == len(moved) + len(rotated)
+    assert checks["new_faces"] == checks["new_vertices"] == checks["nonmanifold_edges"] == 0

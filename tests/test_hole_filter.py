@@ -1,11 +1,13 @@
-"""The shared pipeline's self-intersection check (hole_filter.face_boxes_near / patch_intersections)."""
+"""The shared pipeline (hole_filter): self-intersection check, open chains, clashing patches."""
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
 import meshlab_holefill  # noqa: F401  (registers the filters)
-from meshlab_holefill.hole_filter import face_boxes_near
-from meshlab_holefill.holes import boundary_loops
+from meshlab_holefill.geometry.intersections import faces_intersecting
+from meshlab_holefill.hole_filter import close_holes, face_boxes_near, patch_intersections
+from meshlab_holefill.holes import boundary_halfedges, boundary_loops, nonmanifold_edges
+from meshlab_holefill.patch import Patch, validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays
 
@@ -82,3 +84,168 @@ def test_island_outline_is_reported_as_not_a_hole():
     assert "intersect" in entry["reason"] and "island" in entry["reason"]
     V2, F2 = mesh_arrays(ms)
     assert len(F2) == len(F)
+
+
+# ------------------------------------------------------------- open chains (inconsistent orientation)
+
+def _grid_with_flipped_hole_border():
+    """A 6 x 6 grid with a 10-edge hole whose border face of one loop edge is flipped.
+
+    The hole's border then breaks into two open chains (9 edges and 1 edge), see
+    test_holes.test_flipped_border_face_turns_the_hole_into_open_chains.
+    """
+    V, F = grid(6, 6)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.25)
+    inner = boundary_loops(F)[1]
+    F = F.copy()
+    F[inner.border_faces[0]] = F[inner.border_faces[0]][::-1]
+    return V, F, inner
+
+
+def test_open_boundary_chain_is_skipped_and_the_mesh_left_unchanged():
+    V, F, inner = _grid_with_flipped_hole_border()
+    ms = meshset_from_arrays(V, F)
+    # maxholesize 12 skips the 20-edge outer border and would admit the 10-vertex chain
+    res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=12)
+    chains = [h for h in res["holes"] if h["boundary_edges"] <= 12]
+    assert len(chains) == 2
+    for h in chains:
+        assert h["status"] == "skipped" and "open boundary chain" in h["reason"], h
+    assert (res["closed_holes"], res["failed_holes"], res["skipped_holes"]) == (0, 0, 3)
+    assert res["new_faces"] == 0 and res["new_vertices"] == 0
+    V2, F2 = mesh_arrays(ms)
+    np.testing.assert_array_equal(V2, V)
+    np.testing.assert_array_equal(F2, F)
+
+
+def test_reported_boundary_edges_add_up_to_the_mesh_boundary_on_open_chains():
+    V, F, inner = _grid_with_flipped_hole_border()
+    res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral(maxholesize=12)
+    # 20 outer edges + the hole's 10 edges (in chains of 9 and 1)
+    assert sum(h["boundary_edges"] for h in res["holes"]) == len(boundary_halfedges(F)[0]) == 30
+
+
+# ------------------------------------------------------------------ patch folding over itself
+
+def _one_cell_hole():
+    """A 4 x 4-cell grid with one cell removed: a square 4-edge hole in z = 0, side 0.25."""
+    V, F = grid(5, 5)
+    _, F, _ = cut_disks(V, F, [(0.375, 0.375, 0)], 0.1)
+    outer, inner = boundary_loops(F)
+    return V, F, inner.vertices
+
+
+# Two new vertices p = 4, q = 5 over a square loop 0..3: gables (1, 2, q) and (3, 0, p),
+# slopes (0, 1, q) + (0, q, p) and (2, 3, p) + (2, p, q). A valid patch either way.
+ROOF_FACES = np.array([[0, 1, 5], [0, 5, 4], [2, 3, 4], [2, 4, 5], [1, 2, 5], [3, 0, 4]])
+
+
+def _roof(P, folded):
+    """Roof patch over the square loop P (patch orientation, normal up).
+
+    Unfolded: the ridge p-q runs parallel to edge 0-1 above the hole. Folded: p is pushed out
+    beyond edge 0-1 and q beyond edge 2-3, so slope (0, 1, q) climbs over the hole to the back
+    while (2, 3, p) climbs to the front: the two cross in mid-air, well above the mesh.
+    """
+    c = P.mean(axis=0)
+    side = np.linalg.norm(P[1] - P[0])
+    up = np.cross(P[1] - P[0], P[3] - P[0])
+    up /= np.linalg.norm(up)
+    if folded:
+        # p 0.1 in front of edge 0-1, q 0.1 behind edge 2-3, both 0.2 up (side 0.25)
+        p = c + 1.8 * ((P[0] + P[1]) / 2 - c) + 0.8 * side * up
+        q = c + 1.8 * ((P[2] + P[3]) / 2 - c) + 0.8 * side * up
+    else:
+        p = c + 0.25 * (P[0] - P[1]) + 0.4 * side * up
+        q = c + 0.25 * (P[1] - P[0]) + 0.4 * side * up
+    return Patch(np.stack([p, q]), ROOF_FACES.copy())
+
+
+def _patch_hits(V, F, loop, patch):
+    points = patch.all_points(V[loop])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    candidates = face_boxes_near(V, F, np.stack([lo - 1e-9, hi + 1e-9])[None])
+    return patch_intersections(points, patch.faces, V, F, candidates, loop)
+
+
+def test_patch_folding_over_itself_is_reported_though_clear_of_the_mesh():
+    V, F, loop = _one_cell_hole()
+    P = V[loop]
+    roof, folded = _roof(P, folded=False), _roof(P, folded=True)
+    for patch in (roof, folded):
+        validate_patch(patch, P)  # both are topologically sound: only geometry tells them apart
+        assert patch.vertices[:, 2].min() == pytest.approx(0.1 if patch is roof else 0.2)  # above the mesh (z = 0)
+    assert len(_patch_hits(V, F, loop, roof)) == 0
+    # The folded patch meets no mesh face (tested against the mesh faces alone) ...
+    to_global = np.concatenate([loop, len(V) + np.arange(len(folded.vertices))])
+    allF = np.concatenate([to_global[folded.faces], F])
+    q = len(folded.faces)
+    assert len(faces_intersecting(np.concatenate([V, folded.vertices]), allF, np.arange(q), np.arange(q, len(allF)))) == 0
+    hits = _patch_hits(V, F, loop, folded)
+    # ... but its slopes (0, 1, q) and (2, 3, p) cross each other in mid-air
+    assert {0, 2} <= set(hits.tolist()), hits
+
+
+COMMON = dict(maxholesize=4, selected=False, newfaceselected=True, selfintersection=True)
+
+
+def test_pipeline_rejects_a_patch_folding_over_itself():
+    V, F, loop = _one_cell_hole()
+    ms = meshset_from_arrays(V, F)
+    res = close_holes(ms, lambda ctx: _roof(ctx.points, folded=True), COMMON)  # maxholesize 4: the border is skipped
+    (hole,) = [h for h in res["holes"] if h["boundary_edges"] == 4]
+    assert hole["status"] == "failed" and "intersect" in hole["reason"], hole
+    assert res["closed_holes"] == 0 and res["new_faces"] == 0
+    V2, F2 = mesh_arrays(ms)
+    np.testing.assert_array_equal(V2, V)
+    np.testing.assert_array_equal(F2, F)
+    # the same hole with the unfolded roof is closed
+    res = close_holes(meshset_from_arrays(V, F), lambda ctx: _roof(ctx.points, folded=False), COMMON)
+    assert res["closed_holes"] == 1 and res["new_faces"] == 6 and res["new_vertices"] == 2
+
+
+# ------------------------------------------------------------------ patches clashing with each other
+
+def _two_wedges_and_a_square_hole():
+    """Two holes sharing two pinched vertices, plus an unrelated hole.
+
+    Of an octahedron (0: +x, 1: -x, 2: +y, 3: -y, 4: +z, 5: -z) only the wedges (+x, -y, +-z) and
+    (-x, +y, +-z) are kept: the wedges meet at +z and -z only, and their 8 border edges form two
+    4-edge holes through both poles, with no mesh edge between the poles. Beside it lies a grid
+    with a one-cell hole.
+    """
+    V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    F = np.array([[4, 3, 0], [0, 3, 5], [4, 2, 1], [1, 2, 5]])
+    Vg, Fg, square = _one_cell_hole()
+    return np.concatenate([V, Vg + [5, 0, 0]]), np.concatenate([F, Fg + len(V)]), square + len(V)
+
+
+def _split_at_the_poles(ctx):
+    """Two triangles per 4-edge hole, split by the chord between the poles 4 and 5 where the loop has both."""
+    loop = ctx.loop.tolist()
+    i = loop.index(4) if {4, 5} <= set(loop) else 0
+    j = (i + 2) % 4
+    return Patch(np.zeros((0, 3)), np.array([[i, (i + 1) % 4, j], [j, (j + 1) % 4, i]]))
+
+
+def test_patches_sharing_a_chord_are_both_withdrawn_and_the_rest_kept():
+    V, F, square = _two_wedges_and_a_square_hole()
+    loops = boundary_loops(F)
+    assert sorted((len(lp), bool(lp.pinched)) for lp in loops) == [(4, False), (4, True), (4, True), (16, False)]
+    ms = meshset_from_arrays(V, F)
+    res = close_holes(ms, _split_at_the_poles, COMMON)
+    # Alone, each pole hole's patch is valid; together they put 4 faces on the chord 4-5.
+    # Both are withdrawn (no hole is left half-filled), the unrelated square hole is closed.
+    outcome = sorted((h["boundary_edges"], h["pinched"], h["status"]) for h in res["holes"])
+    assert outcome == [(4, False, "closed"), (4, True, "failed"), (4, True, "failed"), (16, False, "skipped")]
+    failed = [h for h in res["holes"] if h["status"] == "failed"]
+    assert all("clashes with another patch" in h["reason"] and "new_faces" not in h for h in failed), failed
+    assert (res["closed_holes"], res["failed_holes"], res["skipped_holes"]) == (1, 2, 1)
+    assert res["new_faces"] == 2 and res["new_vertices"] == 0
+    V2, F2 = mesh_arrays(ms)
+    np.testing.assert_array_equal(V2, V)
+    np.testing.assert_array_equal(F2[:len(F)], F)
+    assert len(nonmanifold_edges(F2)) == 0
+    assert set(F2[len(F):].ravel().tolist()) == set(square.tolist())  # the 2 new faces close the square hole
+    # the pole holes stay open, the square hole is gone
+    assert sorted(len(lp) for lp in boundary_loops(F2)) == [4, 4, 16]

@@ -122,3 +122,61 @@ def test_hole_sector_on_a_square_corner():
     apex, prev, nxt = np.array([1.0, 0, 0]), np.array([0.0, 0, 0]), np.array([1.0, 1, 0])
     inside = inside_hole_sector(apex, z, prev, nxt, np.array([[0.5, 0.5, 0], [1.5, -0.5, 0], [2, 0.1, 0]]))
     assert inside.tolist() == [True, False, False]
+
+
+def _grid_hole_with_flipped_border_face(which=0, nx=6, radius=0.25):
+    """A grid with one hole whose border face of loop edge ``which`` is flipped (inconsistent orientation)."""
+    V, F = grid(nx, nx)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], radius)
+    outer, inner = boundary_loops(F)
+    F_flipped = F.copy()
+    f = inner.border_faces[which]
+    F_flipped[f] = F_flipped[f][::-1]
+    return V, F, F_flipped, outer, inner
+
+
+def _chain_edges(lp):
+    """Directed edges (patch orientation) a loop or chain walks: k for a closed loop, k - 1 for an open chain."""
+    v = lp.vertices.tolist()
+    pairs = list(zip(v, v[1:] + v[:1]))
+    return pairs if lp.closed else pairs[:-1]
+
+
+def test_flipped_border_face_turns_the_hole_into_open_chains():
+    # Flipping the face that holds loop edge (l0, l1) reverses that boundary half-edge, so the
+    # walk l1 -> l2 -> ... -> l0 dead-ends at l0 and the reversed edge is a chain of its own.
+    V, F, F_flipped, outer, inner = _grid_hole_with_flipped_border_face(0)
+    l, bf = inner.vertices.tolist(), inner.border_faces.tolist()
+    assert len(l) == 10 and len(set(bf)) == 10  # each border face holds one loop edge
+    loops = boundary_loops(F_flipped)
+    closed = [lp for lp in loops if lp.closed]
+    chains = sorted((lp for lp in loops if not lp.closed), key=len, reverse=True)
+    # the outer border is untouched: still one closed, unpinched loop
+    assert len(closed) == 1 and closed[0].vertices.tolist() == outer.vertices.tolist() and not closed[0].pinched
+    assert [c.vertices.tolist() for c in chains] == [l[1:] + l[:1], [l[1], l[0]]]
+    assert [c.border_faces.tolist() for c in chains] == [bf[1:], bf[:1]]
+    assert all(c.pinched for c in chains)  # open chains are flagged pinched too (never a simple hole)
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 11))
+def test_any_flipped_border_face_leaves_only_open_chains_that_cover_the_hole(which):
+    V, F, F_flipped, outer, inner = _grid_hole_with_flipped_border_face(which, nx=10, radius=0.2)
+    assert len(inner) == 12
+    loops = boundary_loops(F_flipped)
+    hole = set(inner.vertices.tolist())
+    for lp in loops:
+        if set(lp.vertices.tolist()) <= hole:
+            # no closed loop can run through a reversed half-edge
+            assert not lp.closed and lp.pinched
+            assert len(lp.border_faces) == len(lp.vertices) - 1
+        else:
+            assert lp.closed and lp.vertices.tolist() == outer.vertices.tolist()
+    # the chains together walk every border edge of the hole exactly once, each against its border face
+    edges = [e for lp in loops if not lp.closed for e in _chain_edges(lp)]
+    assert len(edges) == len(inner)
+    assert sorted(map(sorted, edges)) == sorted(map(sorted, _chain_edges(inner)))
+    for lp in loops:
+        for (a, b), f in zip(_chain_edges(lp), lp.border_faces):
+            face = F_flipped[f].tolist()
+            assert face[(face.index(b) + 1) % 3] == a  # the border face holds (b, a)

@@ -1,17 +1,50 @@
 import numpy as np
 import pytest
 
+from meshlab_holefill.holes import boundary_loops, nonmanifold_edges
 from meshlab_holefill.patch import HoleFillError, Patch, merge_patches, validate_patch
 
 SQUARE = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
 
 
-def test_valid_two_triangle_patch_passes():
-    validate_patch(Patch(np.zeros((0, 3)), np.array([[0, 1, 2], [0, 2, 3]])), SQUARE)
+def _square_hole_mesh():
+    """A 3 x 3-cell grid over [-1, 2]^2 (counter-clockwise faces, normal +z) without its middle cell.
+
+    The middle cell is SQUARE; returns V, F and the hole's loop in patch orientation (SQUARE's order).
+    """
+    xs = np.arange(-1.0, 3.0)
+    V = np.array([[x, y, 0.0] for y in xs for x in xs])
+    idx = np.arange(16).reshape(4, 4)
+    F = [[idx[r, c], idx[r, c + 1], idx[r + 1, c + 1]] for r in range(3) for c in range(3) if (r, c) != (1, 1)]
+    F += [[idx[r, c], idx[r + 1, c + 1], idx[r + 1, c]] for r in range(3) for c in range(3) if (r, c) != (1, 1)]
+    loop = np.array([idx[1, 1], idx[1, 2], idx[2, 2], idx[2, 1]])
+    assert np.array_equal(V[loop], SQUARE)
+    return V, np.array(F), loop
 
 
-def test_patch_with_a_centre_vertex_passes():
-    validate_patch(Patch(np.array([[0.5, 0.5, 0.0]]), np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])), SQUARE)
+@pytest.mark.parametrize("vertices, faces", [
+    ([], [[0, 1, 2], [0, 2, 3]]),
+    ([[0.5, 0.5, 0.0]], [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]),
+], ids=["two triangles", "centre vertex"])
+def test_valid_patch_passes_and_closes_its_hole_watertight(vertices, faces):
+    patch = Patch(np.array(vertices, float).reshape(-1, 3), np.array(faces))
+    before = (patch.vertices.copy(), patch.faces.copy())
+    assert validate_patch(patch, SQUARE) is None  # it only raises; a valid patch is left as it is
+    assert np.array_equal(patch.vertices, before[0]) and np.array_equal(patch.faces, before[1])
+    # What validation promises, checked on the merged mesh: the hole is gone (only the outer
+    # border is left), every edge has at most two faces, and every directed edge is used once
+    # (the patch is oriented like the surrounding faces).
+    V, F, loop = _square_hole_mesh()
+    assert sorted(len(lp) for lp in boundary_loops(F)) == [4, 12]
+    V2, F2 = merge_patches(V, F, [loop], [patch])
+    assert [len(lp) for lp in boundary_loops(F2)] == [12]
+    assert len(nonmanifold_edges(F2)) == 0
+    directed = np.concatenate([F2[:, [0, 1]], F2[:, [1, 2]], F2[:, [2, 0]]])
+    assert len(np.unique(directed, axis=0)) == len(directed)
+    # the patch faces up like the mesh, and covers the unit square exactly once
+    T = V2[F2[len(F):]]
+    normals = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    assert np.all(normals[:, 2] > 0) and normals[:, 2].sum() / 2 == pytest.approx(1.0)
 
 
 @pytest.mark.parametrize("faces, vertices, message", [
@@ -35,7 +68,7 @@ def test_forbidden_edge_is_rejected():
     patch = Patch(np.zeros((0, 3)), np.array([[0, 1, 2], [0, 2, 3]]))
     with pytest.raises(HoleFillError, match="existing mesh edge"):
         validate_patch(patch, SQUARE, forbidden_edges=[[2, 0]])
-    validate_patch(patch, SQUARE, forbidden_edges=[[1, 3]])
+    assert validate_patch(patch, SQUARE, forbidden_edges=[[1, 3]]) is None  # the unused diagonal is allowed
 
 
 def test_merge_keeps_originals_and_maps_loop_indices():
