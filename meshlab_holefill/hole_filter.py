@@ -237,8 +237,11 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
 def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):
     """Patches validated alone can still clash where two holes share a pinched vertex.
 
-    Any patch owning a face on a non-manifold edge of the merged mesh is withdrawn and its
-    hole reported failed, so no hole is ever left half-filled.
+    When the merged mesh F2 has non-manifold edges, the patches are taken back in hole
+    order and each is kept only if its faces, with the original faces and the patches kept
+    so far, leave every such edge with at most two faces; the others are withdrawn and their
+    holes reported failed. The first of two clashing patches is kept, and no hole is ever
+    left half-filled.
     """
     from .holes import nonmanifold_edges
 
@@ -248,18 +251,32 @@ def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):
     bad = nonmanifold_edges(F2)
     if len(bad) == 0:
         return done_loops, patches, closed_ids
+    n = int(F2.max()) + 1
+    E = np.sort(np.stack([F2[:, [0, 1]], F2[:, [1, 2]], F2[:, [2, 0]]], axis=1).reshape(-1, 2), axis=1)
+    key = E[:, 0] * n + E[:, 1]
+    face = np.repeat(np.arange(len(F2)), 3)
+    on_bad = np.isin(key, bad[:, 0] * n + bad[:, 1])
+    key, face = key[on_bad], face[on_bad]
+    used = {}
+    for k in key[face < len(F)].tolist():
+        used[k] = used.get(k, 0) + 1
     owner = np.repeat(np.arange(len(patches)), [len(p.faces) for p in patches])
-    new = np.sort(F2[len(F):], axis=1)
-    bad_set = {tuple(e) for e in bad.tolist()}
-    drop = set()
-    for f, (a, b, c) in enumerate(new.tolist()):
-        if (a, b) in bad_set or (b, c) in bad_set or (a, c) in bad_set:
-            drop.add(int(owner[f]))
-    keep = [j for j in range(len(patches)) if j not in drop]
-    for j in drop:
-        report[closed_ids[j]].update(status="failed", reason="patch clashes with another patch at a shared vertex")
-        for key in ("new_vertices", "new_faces"):
-            report[closed_ids[j]].pop(key, None)
+    patch_of = owner[face[face >= len(F)] - len(F)]
+    patch_keys = key[face >= len(F)]
+    keep = []
+    for j in range(len(patches)):
+        mine = {}
+        for k in patch_keys[patch_of == j].tolist():
+            mine[k] = mine.get(k, 0) + 1
+        if all(used.get(k, 0) + c <= 2 for k, c in mine.items()):
+            keep.append(j)
+            for k, c in mine.items():
+                used[k] = used.get(k, 0) + c
+        else:
+            report[closed_ids[j]].update(status="failed",
+                                         reason="patch clashes with another patch at a shared vertex")
+            for name in ("new_vertices", "new_faces"):
+                report[closed_ids[j]].pop(name, None)
     return [done_loops[j] for j in keep], [patches[j] for j in keep], [closed_ids[j] for j in keep]
 
 

@@ -100,11 +100,14 @@ def segments_cross(a0, a1, b0, b1):
     if (o3 > eps and o4 > eps) or (o3 < -eps and o4 < -eps):
         return False
     if abs(o1) <= eps and abs(o2) <= eps:
-        # Collinear: overlap of the projections on the longer axis.
+        # Collinear: overlap of the projections on the longer axis, and (within the tolerance)
+        # on the other, which two zero-length segments on one vertical line need.
         axis = 0 if abs(a1[0] - a0[0]) + abs(b1[0] - b0[0]) >= abs(a1[1] - a0[1]) + abs(b1[1] - b0[1]) else 1
         lo_a, hi_a = sorted((a0[axis], a1[axis]))
         lo_b, hi_b = sorted((b0[axis], b1[axis]))
-        return hi_a >= lo_b and hi_b >= lo_a
+        other, tol = 1 - axis, 1e-9 * scale
+        return (hi_a >= lo_b and hi_b >= lo_a and max(a0[other], a1[other]) + tol >= min(b0[other], b1[other])
+                and max(b0[other], b1[other]) + tol >= min(a0[other], a1[other]))
     return True
 
 
