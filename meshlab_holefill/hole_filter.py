@@ -131,7 +131,8 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
         (originals first, split faces' second children after the m original rows),
         ``loops`` (the refined loops, in the order given), ``edge_vertices``,
         ``edge_weights``, ``face_parents`` (see :func:`meshset_io.refine_mesh_arrays`) and
-        ``split_counts``. Refined borders stay refined if their hole then fails.
+        ``split_counts``. When a hole with a refined border fails, the holes are filled
+        again without it, so its border is left as it was.
 
     Returns
     -------
@@ -162,6 +163,51 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
         else:
             todo.append(i)
         report.append(entry)
+    fill_kwargs = {name: params[name] for name in algorithm_params}
+    base = (arrays, list(loops), [dict(entry) for entry in report])
+    while True:
+        arrays, V, F, V2, F2, done_loops, patches, refinement, report = _fill_holes(
+            base, todo, params, fill, fill_kwargs, rings, prepare)
+        # A hole whose border was refined and which then failed would leave its split border
+        # faces behind: fill again with that hole left out, so nothing of it is changed.
+        undo = [i for i in todo if report[i]["status"] == "failed" and report[i].get("split_boundary_edges")]
+        if not undo:
+            break
+        for i in undo:
+            base[2][i] = dict(report[i], split_boundary_edges=0)
+        todo = [i for i in todo if i not in undo]
+    n_new_faces = len(F2) - len(F)
+    if n_new_faces or refinement is not None:
+        if n_new_faces:
+            vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops,
+                                                      [len(p.vertices) for p in patches])
+        else:  # borders refined, no hole closed
+            vattrs, fattrs, wedge = arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords
+        select = np.arange(len(F), len(F2)) if params["newfaceselected"] else None
+        replace_current_mesh(ms, arrays, V2, F2, vattrs, fattrs, wedge, select_faces=select)
+    statuses = [h["status"] for h in report]
+    result = {
+        "closed_holes": statuses.count("closed"),
+        "new_faces": int(n_new_faces),
+        "new_vertices": int(len(V2) - len(V)),
+        "skipped_holes": statuses.count("skipped"),
+        "failed_holes": statuses.count("failed"),
+        "holes": report,
+        "seconds": time.perf_counter() - t_start,
+    }
+    if prepare is not None:
+        result["split_boundary_edges"] = int(len(refinement.edge_weights)) if refinement is not None else 0
+    return result
+
+
+def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare):
+    """One pass of :func:`close_holes` over the holes ``todo``: refine, fill, check, merge.
+
+    ``base`` is (arrays, loops, report entries) of the mesh as given; nothing is written to
+    the MeshSet here.
+    """
+    arrays, loops, report = base[0], list(base[1]), [dict(entry) for entry in base[2]]
+    V, F = arrays.V, arrays.F
     refinement = prepare(V, F, [loops[i] for i in todo], params) if prepare is not None and todo else None
     if refinement is not None:
         arrays = refine_mesh_arrays(arrays, refinement)
@@ -169,8 +215,10 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
         for i, loop, count in zip(todo, refinement.loops, refinement.split_counts):
             loops[i] = loop
             report[i]["split_boundary_edges"] = int(count)
+    elif prepare is not None:
+        for i in todo:
+            report[i]["split_boundary_edges"] = 0
     incidence = vertex_face_incidence(F, len(V)) if todo else None
-    fill_kwargs = {name: params[name] for name in algorithm_params}
     filled = []  # (hole id, context, patch, seconds) of patches that passed validation
     for i in todo:
         entry = report[i]
@@ -210,28 +258,7 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
     V2, F2 = merge_patches(V, F, done_loops, patches)
     done_loops, patches, closed_ids = _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids)
     V2, F2 = merge_patches(V, F, done_loops, patches)
-    n_new_faces = len(F2) - len(F)
-    if n_new_faces or refinement is not None:
-        if n_new_faces:
-            vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops,
-                                                      [len(p.vertices) for p in patches])
-        else:  # borders refined, no hole closed
-            vattrs, fattrs, wedge = arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords
-        select = np.arange(len(F), len(F2)) if params["newfaceselected"] else None
-        replace_current_mesh(ms, arrays, V2, F2, vattrs, fattrs, wedge, select_faces=select)
-    statuses = [h["status"] for h in report]
-    result = {
-        "closed_holes": statuses.count("closed"),
-        "new_faces": int(n_new_faces),
-        "new_vertices": int(len(V2) - len(V)),
-        "skipped_holes": statuses.count("skipped"),
-        "failed_holes": statuses.count("failed"),
-        "holes": report,
-        "seconds": time.perf_counter() - t_start,
-    }
-    if prepare is not None:
-        result["split_boundary_edges"] = int(len(refinement.edge_weights)) if refinement is not None else 0
-    return result
+    return arrays, V, F, V2, F2, done_loops, patches, refinement, report
 
 
 def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):

@@ -9,6 +9,7 @@ import meshlab_holefill
 from meshlab_holefill import FilterParameterError, MeshTopologyError, apply_filter, filter_list
 from meshlab_holefill.geometry.quality import triangle_quality
 from meshlab_holefill.holes import boundary_loops
+from meshlab_holefill.holes import nonmanifold_edges as nonmanifold_edges_of
 
 from conftest import (assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample,
                       sphere_with_holes)
@@ -209,3 +210,24 @@ def test_random_sphere_holes_close_cleanly_near_the_sphere(name, theta, phi, rad
     # (its sagitta, about radius^2 / 2; the loop reaches a little beyond the cut radius).
     r = np.linalg.norm(V1[len(V):], axis=1)
     assert np.abs(r - 1).max() < 0.6 * radius ** 2
+
+
+@pytest.mark.parametrize("name", filter_list())
+def test_an_unwelded_border_vertex_fails_its_hole_cleanly(name):
+    """Two border vertices at one position (a scan's unwelded seam): reported, never a crash."""
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = mesh_arrays(ms)
+    F = F[~np.isin(F, np.unique(F[(F == 0).any(axis=1)])).any(axis=1)]  # a 12-edge hole around vertex 0
+    v = boundary_loops(F)[0].vertices[0]
+    twin = np.flatnonzero((F == v).any(axis=1))[:2]
+    V = np.vstack([V, V[v]])
+    F[twin] = np.where(F[twin] == v, len(V) - 1, F[twin])
+    ms = meshset_from_arrays(V, F)
+    res = getattr(ms, name)()
+    V1, F1 = mesh_arrays(ms)
+    assert res["closed_holes"] + res["failed_holes"] + res["skipped_holes"] == len(res["holes"])
+    assert np.array_equal(V1[:len(V)], V)
+    assert len(nonmanifold_edges_of(F1)) == 0
+    for h in res["holes"]:
+        assert h["status"] == "closed" or h["reason"]

@@ -503,3 +503,28 @@ def test_constrained_triangulation_rejects_a_self_intersecting_polygon():
     bowtie = np.array([[0, 0], [2, 2], [2, 0], [0, 2]], float)  # edges (0,1) and (2,3) cross at (1,1)
     with pytest.raises(HoleFillError, match="polygon is not simple"):
         triangulate_polygon(bowtie)
+
+
+def test_constrained_triangulation_rejects_coincident_vertices_before_triangle_crashes():
+    # A polygon through the same point twice (an unwelded border vertex); Triangle segfaults on it.
+    pinched = np.array([[0, 0], [2, 0], [1, 1], [2, 2], [0, 2], [1, 1]], float)
+    with pytest.raises(HoleFillError, match="two vertices at the same position"):
+        triangulate_polygon(pinched)
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+    with pytest.raises(HoleFillError, match="two vertices at the same position"):
+        triangulate_polygon(square, extra_points=np.array([[0.5, 0.5], [0.5, 0.5]]))
+
+
+@pytest.mark.parametrize("scale", [1e-9, 1e-4, 1.0, 1e4, 1e9])
+def test_area_bounded_refinement_does_not_depend_on_the_unit(scale):
+    """The area bound reaches Triangle whatever its exponent (it reads digits and '.' only)."""
+    t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    circle = np.stack([np.cos(t), np.sin(t)], axis=1)
+    edge = np.linalg.norm(circle[1] - circle[0])
+    P, T = triangulate_polygon(circle * scale, max_area=np.sqrt(3) / 4 * (edge * scale) ** 2, min_angle=30)
+    # about pi / (sqrt(3)/4 edge^2) = 1170 triangles at unit scale; rounding of the scaled input moves it a little
+    assert 1100 < len(T) < 1250
+    u, w = P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]
+    area = 0.5 * np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
+    assert area.max() <= np.sqrt(3) / 4 * (edge * scale) ** 2 * (1 + 1e-9)
+    assert area.sum() == pytest.approx(0.5 * 64 * np.sin(2 * np.pi / 64) * scale ** 2, rel=1e-9)

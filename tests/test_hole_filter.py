@@ -1,5 +1,6 @@
 """The shared pipeline (hole_filter): self-intersection check, open chains, clashing patches."""
 import numpy as np
+import pymeshlab
 import pytest
 from hypothesis import given, settings, strategies as st
 
@@ -253,3 +254,30 @@ def test_of_two_patches_sharing_a_chord_the_first_is_kept_and_the_rest_closed():
     assert sorted(len(lp) for lp in left) == [4, 16]
     assert {tuple(sorted(lp.vertices.tolist())) for lp in left if len(lp) == 4} == {
         tuple(sorted(loops[2].vertices.tolist()))}
+
+
+def test_a_hole_that_fails_after_its_border_was_refined_is_left_as_it_was():
+    """LS-SVM refines long border edges before filling (Sec. 3.1); a hole that then fails is
+    left exactly as it was (the filter fills again without it), and the other hole closes."""
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = mesh_arrays(ms)
+    C = V[F].mean(axis=1)
+    top = np.unique(F[(F == 0).any(axis=1)])
+    F = F[~np.isin(F, top).any(axis=1) & (C[:, 2] > -0.8)]  # a 12-edge hole on top, a wide one below
+    loops = boundary_loops(F)
+    assert sorted(len(lp) for lp in loops) == [12, 36]
+    small = next(lp.vertices for lp in loops if len(lp) == 12)
+    V = V.copy()
+    V[small[1]] = V[small[0]]  # a zero-length border edge: the small hole cannot be filled
+    ms = meshset_from_arrays(V, F)
+    res = ms.meshing_close_holes_lssvm_poisson()
+    status = {h["boundary_edges"]: h for h in res["holes"]}
+    assert status[12]["status"] == "failed" and status[12]["split_boundary_edges"] == 0
+    assert status[36]["status"] == "closed"
+    V1, F1 = mesh_arrays(ms)
+    np.testing.assert_array_equal(V1[:len(V)], V)
+    assert res["split_boundary_edges"] == status[36]["split_boundary_edges"]
+    # the failed hole's loop is still there, unchanged
+    left = boundary_loops(F1)
+    assert [sorted(lp.vertices.tolist()) for lp in left] == [sorted(small.tolist())]

@@ -43,7 +43,8 @@ def triangulate_polygon(Q, max_area=None, min_angle=None, extra_points=None, ste
     Raises
     ------
     HoleFillError
-        When Triangle fails or changes the boundary (self-intersecting polygon).
+        When two input points coincide (Triangle would crash), or Triangle fails or changes
+        the boundary (self-intersecting polygon).
     """
     Q = np.asarray(Q, np.float64)
     k = len(Q)
@@ -55,7 +56,13 @@ def triangulate_polygon(Q, max_area=None, min_angle=None, extra_points=None, ste
     if min_angle is not None:
         opts += f"q{float(min_angle):.6f}"
     if max_area is not None:
-        opts += f"a{float(max_area):.12g}"
+        # Triangle reads the switch's digits and '.' only: an exponent ("1e-06") would be cut
+        # to its mantissa, so the bound is written positionally.
+        opts += "a" + np.format_float_positional(float(max_area), trim="-")
+    if len(np.unique(pts, axis=0)) < len(pts):
+        # Triangle crashes (segmentation fault) on repeated input points.
+        raise HoleFillError("constrained triangulation: the polygon has two vertices at the same position "
+                            "(an unwelded border vertex? try meshing_remove_duplicate_vertices)")
     try:
         out = triangle.triangulate({"vertices": pts, "segments": segments}, opts)
     except Exception as exc:  # Triangle reports problems as generic errors
