@@ -23,6 +23,15 @@ class FilterParameterError(ValueError):
     """A filter was called with an unknown, mistyped or out-of-range parameter."""
 
 
+def _shown(value):
+    """A parameter value as a user wrote it (pymeshlab's value types have no readable repr)."""
+    if isinstance(value, pymeshlab.PercentageValue):
+        return f"PercentageValue({value.value()})"
+    if isinstance(value, pymeshlab.PureValue):
+        return f"PureValue({value.value()})"
+    return repr(value)
+
+
 @dataclass(frozen=True)
 class ParamSpec:
     """One filter parameter.
@@ -97,6 +106,13 @@ class FilterSpec:
 FILTERS: dict[str, FilterSpec] = {}
 
 
+def _current_mesh_exists(ms):
+    try:
+        return bool(ms.mesh_id_exists(ms.current_mesh_id()))
+    except pymeshlab.PyMeshLabException:  # "MeshSet has no current Mesh."
+        return False
+
+
 def _bbox_diagonal(ms):
     if ms.mesh_number() == 0 or not ms.mesh_id_exists(ms.current_mesh_id()):
         return 0.0
@@ -110,17 +126,17 @@ def convert_param(spec: ParamSpec, value, filter_name, ms):
     if kind == "bool":
         if isinstance(value, (bool, np.bool_)):
             return bool(value)
-        raise FilterParameterError(f"{where}: expected a bool, got {value!r}")
+        raise FilterParameterError(f"{where}: expected a bool, got {_shown(value)}")
     if kind == "int":
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
-            raise FilterParameterError(f"{where}: expected an int, got {value!r}")
+            raise FilterParameterError(f"{where}: expected an int, got {_shown(value)}")
         value = int(value)
     elif kind == "float":
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-            raise FilterParameterError(f"{where}: expected a number, got {value!r}")
+            raise FilterParameterError(f"{where}: expected a number, got {_shown(value)}")
         value = float(value)
         if not np.isfinite(value):
-            raise FilterParameterError(f"{where}: must be finite, got {value!r}")
+            raise FilterParameterError(f"{where}: must be finite, got {_shown(value)}")
     elif kind == "length":
         if isinstance(value, pymeshlab.PercentageValue):
             value = value.value() / 100.0 * _bbox_diagonal(ms)
@@ -130,18 +146,18 @@ def convert_param(spec: ParamSpec, value, filter_name, ms):
             value = float(value)
         else:
             raise FilterParameterError(
-                f"{where}: expected a number, pymeshlab.PureValue or pymeshlab.PercentageValue, got {value!r}")
+                f"{where}: expected a number, pymeshlab.PureValue or pymeshlab.PercentageValue, got {_shown(value)}")
         if not np.isfinite(value):
-            raise FilterParameterError(f"{where}: must be finite, got {value!r}")
+            raise FilterParameterError(f"{where}: must be finite, got {_shown(value)}")
     elif kind == "enum":
         if isinstance(value, numbers.Integral) and not isinstance(value, bool) and 0 <= value < len(spec.choices):
             return spec.choices[int(value)]
         if value not in spec.choices:
-            raise FilterParameterError(f"{where}: expected one of {list(spec.choices)}, got {value!r}")
+            raise FilterParameterError(f"{where}: expected one of {list(spec.choices)}, got {_shown(value)}")
         return value
     elif kind == "string":
         if not isinstance(value, str):
-            raise FilterParameterError(f"{where}: expected a string, got {value!r}")
+            raise FilterParameterError(f"{where}: expected a string, got {_shown(value)}")
         return value
     if spec.minimum is not None and value < spec.minimum:
         raise FilterParameterError(f"{where}: {value!r} is below the minimum {spec.minimum}")
@@ -257,6 +273,12 @@ def apply_filter(ms, name, **kwargs):
         The filter's result dictionary (built-in filters that return nothing give {}).
     """
     global _DEPTH
+    if not isinstance(ms, pymeshlab.MeshSet):
+        raise TypeError(f"apply_filter: expected a pymeshlab.MeshSet, got {type(ms).__name__}")
+    if ms.mesh_number() > 0 and not _current_mesh_exists(ms):
+        # pymeshlab's own filters crash the process on a dangling current mesh id (DESIGN.md)
+        raise ValueError(f"filter '{name}': the MeshSet's current mesh does not exist; call set_current_mesh "
+                         "with an existing id")
     if name in FILTERS:
         spec = FILTERS[name]
         params = resolve_params(spec, kwargs, ms)
@@ -268,6 +290,7 @@ def apply_filter(ms, name, **kwargs):
             _DEPTH -= 1
     elif is_builtin_filter(name):
         defaults = _parameter_values(ms, name) if _DEPTH == 0 else None
+        _check_builtin_values(name, kwargs, defaults)
         result = getattr(pymeshlab.MeshSet, name)(ms, **kwargs)
         result = {} if result is None else result
         call = FilterCall(name, dict(kwargs), defaults=defaults)
@@ -310,6 +333,20 @@ class FilterCall:
     bbox_diagonal: float = 0.0
     meshlab_record: Any = None
     defaults: dict | None = None
+
+
+def _check_builtin_values(name, kwargs, defaults):
+    """Refuse what pymeshlab would answer with an unreadable C++ cast error (a string for a number)."""
+    if not defaults:
+        return
+    for key, value in kwargs.items():
+        if key not in defaults:
+            raise FilterParameterError(f"filter '{name}': unknown parameter '{key}' (known: {', '.join(defaults)})")
+        default = defaults[key]
+        numeric = isinstance(value, (bool, int, float, np.number, pymeshlab.PercentageValue, pymeshlab.PureValue))
+        if isinstance(default, (bool, int, float)) and not numeric:
+            kind = "a bool" if isinstance(default, bool) else "a number"
+            raise FilterParameterError(f"filter '{name}', parameter '{key}': expected {kind}, got {_shown(value)}")
 
 
 def _parameter_values(ms, name):

@@ -61,3 +61,13 @@ def test_holes_table_marks_island_outlines(capsys):
     inner = [int(r.split()[1]) for r in rows if "outline" not in r]
     assert {256, 64, 53} <= outline
     assert 227 in inner and 142 in inner
+
+
+def test_fill_with_a_builtin_filter_reports_a_bad_value_or_name_clearly(tmp_path, capsys):
+    out = tmp_path / "filled.ply"
+    for args, message in ((["--maxholesize", "abc"], "parameter 'maxholesize': expected a number, got 'abc'"),
+                          (["--maxholesiz", "30"], "unknown parameter 'maxholesiz' (known: maxholesize,")):
+        assert main(["fill", sample("bunny10k_textured.obj"), str(out), "--filter", "meshing_close_holes"]
+                    + args) == 2
+        assert message in capsys.readouterr().err
+    assert not out.exists()

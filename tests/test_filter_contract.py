@@ -231,3 +231,19 @@ def test_an_unwelded_border_vertex_fails_its_hole_cleanly(name):
     assert len(nonmanifold_edges_of(F1)) == 0
     for h in res["holes"]:
         assert h["status"] == "closed" or h["reason"]
+
+
+@pytest.mark.parametrize("name", ["meshing_close_holes", NAME])
+def test_a_dangling_current_mesh_id_is_refused_before_pymeshlab_crashes(name):
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere()
+    ms.create_cube()
+    ms.set_current_mesh(7)  # accepted by pymeshlab; its built-in filters then crash the process
+    with pytest.raises(ValueError, match="current mesh does not exist"):
+        apply_filter(ms, name)
+
+
+@pytest.mark.parametrize("thing", [None, "bunny.obj", pymeshlab.Mesh(np.zeros((1, 3)))])
+def test_apply_filter_wants_a_meshset(thing):
+    with pytest.raises(TypeError, match="expected a pymeshlab.MeshSet, got"):
+        apply_filter(thing, NAME)
