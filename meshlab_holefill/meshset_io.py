@@ -27,6 +27,11 @@ class MeshArrays:
     wedge_texcoords : (3m, 2) float64 or None
     label : str
     mesh_id : int
+    textures : dict name -> pymeshlab.Image
+    transform : (4, 4) float64  the layer's transformation matrix (not applied to V)
+    vertex_selected : (n,) bool
+
+    Custom per-vertex and per-face attributes are not read: pymeshlab cannot list their names.
     """
 
     V: np.ndarray
@@ -37,6 +42,8 @@ class MeshArrays:
     label: str = ""
     mesh_id: int = 0
     textures: dict = field(default_factory=dict)
+    transform: np.ndarray = field(default_factory=lambda: np.eye(4))
+    vertex_selected: np.ndarray | None = None
 
 
 def current_mesh_arrays(ms):
@@ -76,6 +83,8 @@ def current_mesh_arrays(ms):
     if m.has_wedge_tex_coord():
         arrays.wedge_texcoords = m.wedge_tex_coord_matrix()
     arrays.textures = dict(m.textures())
+    arrays.transform = np.array(m.transform_matrix(), np.float64)
+    arrays.vertex_selected = np.asarray(m.vertex_selection_array(), bool)
     return arrays
 
 
@@ -240,6 +249,13 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
     ms.delete_current_mesh()
     ms.add_mesh(mesh, arrays.label, set_as_current=True)
     _restore_textures(ms, arrays.textures)
+    if not np.array_equal(arrays.transform, np.eye(4)):
+        # the layer's placement in the scene (V is in the layer's own frame)
+        ms.set_matrix(transformmatrix=arrays.transform, compose=False, freeze=False)
+    if arrays.vertex_selected is not None and arrays.vertex_selected.any():
+        keep = np.zeros(len(V2), bool)
+        keep[:len(arrays.vertex_selected)] = arrays.vertex_selected  # new vertices unselected
+        set_vertex_selection(ms, keep)
     selected = face_attrs.get("selected", np.zeros((len(F2), 1))).ravel() > 0
     if select_faces is not None and len(select_faces):
         selected = selected.copy()
@@ -247,6 +263,13 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
     if selected.any():
         set_face_selection(ms, selected)
     return ms.current_mesh_id()
+
+
+def set_vertex_selection(ms, selected):
+    """Select exactly the vertices where ``selected`` is True on the current mesh."""
+    m = ms.current_mesh()
+    m.add_vertex_custom_scalar_attribute(np.asarray(selected, np.float64), "holefill_select")
+    ms.compute_selection_by_condition_per_vertex(condselect="holefill_select > 0")
 
 
 def set_face_selection(ms, selected):

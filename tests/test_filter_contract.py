@@ -247,3 +247,22 @@ def test_a_dangling_current_mesh_id_is_refused_before_pymeshlab_crashes(name):
 def test_apply_filter_wants_a_meshset(thing):
     with pytest.raises(TypeError, match="expected a pymeshlab.MeshSet, got"):
         apply_filter(thing, NAME)
+
+
+@pytest.mark.parametrize("name", filter_list())
+def test_layer_transform_and_vertex_selection_survive_the_fill(name):
+    V, F, _ = sphere_with_holes(subdiv=3, centers=[(0, 0, 1)], radius=0.3)
+    ms = meshset_from_arrays(V, F)
+    ms.compute_matrix_from_translation(axisx=5.0, axisy=-2.0, freeze=False)  # placed, not frozen
+    ms.compute_selection_by_condition_per_vertex(condselect="x > 0.5")
+    before = ms.current_mesh().vertex_selection_array().copy()
+    transform = ms.current_mesh().transform_matrix().copy()
+    assert before.sum() > 0 and transform[0, 3] == 5.0
+    res = getattr(ms, name)()
+    assert res["closed_holes"] == 1
+    m = ms.current_mesh()
+    np.testing.assert_array_equal(m.transform_matrix(), transform)
+    np.testing.assert_array_equal(m.vertex_matrix()[:len(V)], V)  # the frame stays the layer's own
+    selected = m.vertex_selection_array()
+    np.testing.assert_array_equal(selected[:len(V)], before)
+    assert not selected[len(V):].any()
