@@ -560,3 +560,159 @@ def test_repair_prefers_a_domain_whose_patch_clears_a_folded_border_to_a_sliver_
     assert q.min() >= 0.3
     assert len(cu.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
     validate_patch(patch, ctx.points, ctx.forbidden_edges)
+
+
+# ----------------------------------------------------------------------------- direct tests of building blocks
+
+def flat_disk_hole(n=9, radius=0.3):
+    """HoleContext of a disk cut from the middle of a flat n x n grid (a 20-vertex staircase for n = 9)."""
+    V, F = grid(n, n)
+    V, F, _ = cut_disks(V, F, [(0.5, 0.5, 0.0)], radius)
+    return hole_context(V, F, min(boundary_loops(F), key=len), rings=cu.RINGS)
+
+
+def fill_rest(ctx, Q, keep, ears):
+    """Ears plus a plain triangulation of the sub-loop ``keep``: a loop-only patch (Patch numbering)."""
+    from meshlab_holefill.geometry.triangulate import triangulate_polygon
+
+    _, T = triangulate_polygon(Q[keep])
+    return np.concatenate([np.asarray(ears, np.int64).reshape(-1, 3), np.asarray(keep)[T]])
+
+
+def test_clip_ears_cuts_exactly_the_convex_corners_of_a_staircase_hole():
+    from meshlab_holefill.geometry.triangulate import polygon_signed_area
+    from meshlab_holefill.patch import Patch
+
+    ctx = flat_disk_hole()
+    k, Q = ctx.size, ctx.points[:, :2]
+    assert k == 20 and polygon_signed_area(Q) > 0
+    # Turn of each corner (counter-clockwise loop): > 0 convex, < 0 reflex, 0 straight.
+    d_in, d_out = Q - np.roll(Q, 1, axis=0), np.roll(Q, -1, axis=0) - Q
+    turn = np.round(d_in[:, 0] * d_out[:, 1] - d_in[:, 1] * d_out[:, 0], 12)
+    keep, ears, clipped = cu.clip_ears(ctx, Q, np.arange(k), [], list(range(k)))
+    # Every vertex offends, yet a reflex ear would lie on the mesh and a straight one has no area:
+    # exactly the 8 convex corners go, and never two neighbours in one round.
+    assert clipped == len(ears) == 8
+    assert sorted(e[1] for e in ears) == np.flatnonzero(turn > 0).tolist()
+    assert keep.tolist() == np.flatnonzero(turn <= 0).tolist()
+    assert all((e[0], e[2]) == ((e[1] - 1) % k, (e[1] + 1) % k) for e in ears)  # (prev, v, next) of the loop
+    # The ears and the rest of the loop close the hole once, oriented like the loop.
+    validate_patch(Patch(np.zeros((0, 3)), fill_rest(ctx, Q, keep, ears)), ctx.points, ctx.forbidden_edges)
+    # Nothing offending, nothing clipped.
+    keep, ears, clipped = cu.clip_ears(ctx, Q, np.arange(k), [], [])
+    assert clipped == 0 and ears == [] and keep.tolist() == list(range(k))
+
+
+def test_clip_ears_never_uses_a_chord_the_mesh_already_has():
+    from meshlab_holefill.patch import Patch
+
+    # A 2 x 2 block of squares cut from a 6 x 6 grid except the triangle (14, 15, 21) of its
+    # lower-left square: the loop runs 14 -> 21 -> 15, and the chord (14, 15) is a mesh edge.
+    V, F = grid(6, 6)
+    cells = [2 * 5 + 2, 2 * 5 + 3, 3 * 5 + 2, 3 * 5 + 3]  # grid() puts the (a, b, c) halves first, then (a, c, d)
+    removed = [c for c in cells if c != 12] + [25 + c for c in cells]
+    F = np.delete(F, removed, axis=0)
+    ctx = hole_context(V, F, min(boundary_loops(F), key=len), rings=cu.RINGS)
+    assert ctx.loop[:3].tolist() == [14, 21, 15] and ctx.forbidden_edges.tolist() == [[0, 2]]
+    Q = ctx.points[:, :2]
+    keep, ears, clipped = cu.clip_ears(ctx, Q, np.arange(ctx.size), [], [1])
+    assert clipped == 0 and ears == [] and keep.tolist() == list(range(ctx.size))
+    # With every vertex offending, the corner at 21 still stays; what is clipped closes cleanly.
+    keep, ears, clipped = cu.clip_ears(ctx, Q, np.arange(ctx.size), [], list(range(ctx.size)))
+    assert clipped > 0 and 1 in keep.tolist() and all(e[1] != 1 for e in ears)
+    validate_patch(Patch(np.zeros((0, 3)), fill_rest(ctx, Q, keep, ears)), ctx.points, ctx.forbidden_edges)
+    # The rule on its own (that ear above also lies on the mesh face): on the staircase hole the
+    # convex corner 0 is clipped unless its chord (19, 1) is declared a mesh edge (as across a
+    # thin wall); the other seven convex corners go as before.
+    import dataclasses
+
+    ctx = flat_disk_hole()
+    walled = dataclasses.replace(ctx, forbidden_edges=np.array([[1, 19]]))
+    _, ears, clipped = cu.clip_ears(ctx, ctx.points[:, :2], np.arange(20), [], list(range(20)))
+    assert 0 in [e[1] for e in ears] and clipped == 8
+    keep, ears, clipped = cu.clip_ears(walled, ctx.points[:, :2], np.arange(20), [], list(range(20)))
+    assert clipped == 7 and 0 in keep.tolist() and all(e[1] != 0 for e in ears)
+
+
+def test_improve_by_swaps_undoes_a_bad_swap_and_keeps_the_energy_solved():
+    from meshlab_holefill.geometry.quality import face_normals
+    from meshlab_holefill.geometry.topology import interior_edges
+    from meshlab_holefill.patch import Patch
+
+    ctx = flat_disk_hole()
+    k = ctx.size
+    vertices, faces = tri.triangulate_and_embed(ctx, ctx.points[:, :2], np.arange(k), [], "area", True)
+    s, X = len(vertices), np.concatenate([ctx.points, vertices])
+    # Degrade the refined patch by its worst legal swap, then solve E_AREA on that connectivity.
+    E, f1, c1, f2, c2 = interior_edges(faces, len(X))
+    worst = None
+    for i in range(len(E)):
+        u, v, c = faces[f1[i], c1[i]], faces[f1[i], (c1[i] + 1) % 3], faces[f1[i], (c1[i] + 2) % 3]
+        d = faces[f2[i], (c2[i] + 2) % 3]
+        G = faces.copy()
+        G[f1[i]], G[f2[i]] = (u, d, c), (d, v, c)
+        try:
+            validate_patch(Patch(vertices, G), ctx.points, ctx.forbidden_edges)
+        except HoleFillError:
+            continue
+        if np.all(face_normals(X, G)[:, 2] > 0):
+            q = triangle_quality(X, G).min()
+            worst = (q, G) if worst is None or q < worst[0] else worst
+    bad_faces = worst[1]
+    bad_vertices = embed_patch(ctx, s, bad_faces, energy="area")
+    q0 = triangle_quality(np.concatenate([ctx.points, bad_vertices]), bad_faces)
+    out_vertices, out_faces, swaps = cu.improve_by_swaps(ctx, bad_vertices, bad_faces, "area")
+    q1 = triangle_quality(np.concatenate([ctx.points, out_vertices]), out_faces)
+    assert swaps > 0 and q1.min() > q0.min() + 0.1  # measured: 0.49 -> 0.82
+    assert len(out_faces) == len(bad_faces) and len(out_vertices) == s
+    validate_patch(Patch(out_vertices, out_faces), ctx.points, ctx.forbidden_edges)
+    assert len(cu.crossing_faces(ctx, out_vertices, out_faces)) == 0
+    assert np.abs(out_vertices[:, 2]).max() < 1e-12  # flat context, flat patch
+    # The kept vertices minimise E_AREA on the kept connectivity, not on the one they came from.
+    assert np.allclose(out_vertices, embed_patch(ctx, s, out_faces, energy="area"), atol=1e-12)
+    # No new vertex, nothing to swap.
+    assert cu.improve_by_swaps(ctx, np.zeros((0, 3)), bad_faces, "area")[2] == 0
+
+
+@settings(max_examples=30, deadline=None)
+@given(n=st.integers(4, 6), order=st.sampled_from([1, 2]), anchors=st.booleans(), seed=st.integers(0, 10_000))
+def test_minimise_embedding_energy_matches_a_dense_least_squares_solve(n, order, anchors, seed):
+    from meshlab_holefill.algorithms.embedding import minimise_embedding_energy
+
+    V, F = grid(n, n)
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=V.shape)  # arbitrary fixed positions: the solve does not rely on a flat border
+    free = np.ones(n * n, bool)
+    ij = np.arange(n * n).reshape(n, n)
+    free[np.r_[ij[0], ij[-1], ij[:, 0], ij[:, -1]]] = False
+    R = energy_rows(F, n * n, free, order, anchors=anchors)
+    assert R.shape[0] > free.sum() if anchors else R.shape[0] == free.sum()
+    start = X.copy()
+    start[free] = np.nan  # free rows of the input are ignored
+    Y = minimise_embedding_energy(start, R, free)
+    D = R.toarray()
+    expected = np.linalg.lstsq(D[:, free], -D[:, ~free] @ X[~free], rcond=None)[0]
+    assert np.array_equal(Y[~free], X[~free])
+    assert np.allclose(Y[free], expected, atol=1e-10)
+    assert np.abs(embedding_energy(Y, R, free)[1]).max() < 1e-9  # the gradient vanishes
+
+
+def test_minimise_embedding_energy_without_free_rows_or_with_a_free_island():
+    from meshlab_holefill.algorithms.embedding import minimise_embedding_energy
+
+    V, F = grid(4, 4)
+    R = energy_rows(F, 16, np.zeros(16, bool), 1)
+    assert np.array_equal(minimise_embedding_energy(V, R, np.zeros(16, bool)), V)
+    # A free triangle joined to nothing fixed makes R_f singular: the least-squares fallback is
+    # still a minimiser (the island collapses to a point, the rest solved as usual).
+    F2 = np.concatenate([F, [[16, 17, 18]]])
+    free = np.zeros(19, bool)
+    free[[5, 6, 9, 10, 16, 17, 18]] = True
+    X = np.random.default_rng(0).normal(size=(19, 3))
+    R = energy_rows(F2, 19, free, 1)
+    Y = minimise_embedding_energy(X, R, free)
+    D = R.toarray()
+    best = np.linalg.lstsq(D[:, free], -D[:, ~free] @ X[~free], rcond=None)[0]
+    assert np.allclose(Y[[5, 6, 9, 10]], best[:4], atol=1e-9)
+    assert np.allclose(Y[16:], Y[16], atol=1e-9)
+    assert embedding_energy(Y, R, free)[0] == pytest.approx(0.0, abs=1e-15)

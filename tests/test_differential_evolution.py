@@ -979,3 +979,175 @@ def test_quality_pass_never_lowers_the_minimum_and_keeps_the_disc(k, points, see
     assert triangle_quality(V2, F2).min() >= q0 - 1e-12
     assert np.abs(V2[:, 2]).max() < 1e-12 and np.all(face_normals(V2, F2)[:, 2] > 0)  # no fold, no flip
     assert face_areas(V2, F2).sum() == pytest.approx(face_areas(X, F).sum())  # the same disc, no tear
+
+
+# ----------------------------------------------------------------- direct tests of building blocks
+
+def _cyclic(face):
+    """A face as a tuple starting at its smallest index (same cyclic order, same orientation)."""
+    f = [int(x) for x in face]
+    i = f.index(min(f))
+    return tuple(f[i:] + f[:i])
+
+
+@settings(max_examples=30, deadline=None)
+@given(k=st.integers(4, 12), data=st.data())
+def test_loop_triangulation_of_a_planar_polygon_is_flat_valid_and_avoids_forbidden_chords(k, data):
+    from meshlab_holefill.geometry.quality import face_areas
+    from meshlab_holefill.patch import Patch
+
+    t = 2 * np.pi * np.arange(k) / k
+    P = np.stack([np.cos(t), np.sin(t), np.zeros(k)], axis=1)  # counter-clockwise: patch normal +z
+    i = data.draw(st.integers(0, k - 3))
+    j = data.draw(st.integers(i + 2, k - 1 if i > 0 else k - 2))  # a chord, not a loop edge
+    up = np.tile([0.0, 0.0, 1.0], (k, 1))
+    F, worst = hpde_folds.loop_triangulation(P, up, forbidden_edges=[[i, j]])
+    # k - 2 triangles on the loop alone, each loop edge once in loop direction, the chord unused.
+    assert F.shape == (k - 2, 3)
+    validate_patch(Patch(np.zeros((0, 3)), F), P, forbidden_edges=[[i, j]])
+    assert worst == pytest.approx(0.0, abs=1e-6)  # a flat fill bends nowhere, not even against the mesh
+    assert face_areas(P, F).sum() == pytest.approx(0.5 * k * np.sin(2 * np.pi / k))  # covers the polygon once
+
+
+def test_loop_triangulation_minimises_the_largest_dihedral_angle_exactly():
+    # Unit square with corner 2 lifted by h. Diagonal (1, 3) bends by arccos(1 / sqrt(1 + 2h^2)),
+    # diagonal (0, 2) by arccos(1 / (1 + h^2)), which is larger: Liepa's weight takes (1, 3).
+    h = 0.5
+    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, h], [0, 1, 0.0]])
+    unknown = np.zeros((4, 3))  # no mesh face across the loop edges: only the inner dihedral counts
+    F, worst = hpde_folds.loop_triangulation(P, unknown)
+    assert {_cyclic(f) for f in F} == {(0, 1, 3), (1, 2, 3)}
+    assert worst == pytest.approx(np.arccos(1 / np.sqrt(1 + 2 * h * h)), rel=1e-12)
+    # The closing loop edge (3, 0) counts too: a mesh face there facing -z makes face (0, 1, 3)
+    # fold by pi, so (0, 2) is taken and its worst angle is the one against that mesh face.
+    across = unknown.copy()
+    across[3] = [0.0, 0.0, -1.0]
+    F, worst = hpde_folds.loop_triangulation(P, across)
+    assert {_cyclic(f) for f in F} == {(0, 1, 2), (0, 2, 3)}
+    assert worst == pytest.approx(np.arccos(-1 / np.sqrt(1 + h * h)), rel=1e-12)
+    # A blocked triangle is never used, whatever its weight.
+    F, _ = hpde_folds.loop_triangulation(P, unknown, blocked={(0, 1, 3)})
+    assert {_cyclic(f) for f in F} == {(0, 1, 2), (0, 2, 3)}
+    # Both diagonals blocked: impossible.
+    F, worst = hpde_folds.loop_triangulation(P, unknown, blocked={(0, 1, 3), (0, 1, 2)})
+    assert F is None and worst == np.inf
+
+
+@settings(max_examples=20, deadline=None)
+@given(k=st.integers(6, 14), points=st.integers(4, 24), seed=st.integers(0, 10_000), drag=st.floats(1.2, 2.5))
+def test_repair_folds_unfolds_a_dragged_vertex_and_keeps_the_loop(k, points, seed, drag):
+    from meshlab_holefill.geometry.quality import face_areas, face_normals
+    from meshlab_holefill.patch import Patch
+
+    from conftest import random_planar_patch
+
+    X, F = random_planar_patch(k, points, seed)
+    # Drag the free vertex of highest valence past its farthest neighbour, within the plane:
+    # its star turns over (faces facing -z next to faces facing +z).
+    deg = np.bincount(F.ravel(), minlength=len(X))
+    v = k + int(np.argmax(deg[k:]))
+    ring = np.setdiff1d(np.unique(F[np.any(F == v, axis=1)]), [v])
+    far = ring[np.argmax(np.linalg.norm(X[ring] - X[v], axis=1))]
+    W = X.copy()
+    W[v] += drag * (X[far] - X[v])
+    assert hpde_folds.local_folds(W, F).any()
+    V2, F2, repairs = hpde_folds.repair_folds(W, F, k)
+    assert repairs > 0
+    assert np.array_equal(V2[:k], X[:k])  # loop vertices are fixed, bit-exact
+    assert not hpde_folds.local_folds(V2, F2).any()
+    assert np.all(face_normals(V2, F2)[:, 2] > 0) and np.abs(V2[:, 2]).max() == 0.0
+    validate_patch(Patch(V2[k:], F2), X[:k])
+    assert face_areas(V2, F2).sum() == pytest.approx(face_areas(X, F).sum())  # the disc covered once
+    # Nothing folded: nothing to do, the input comes back unchanged.
+    V3, F3, repairs = hpde_folds.repair_folds(X, F, k)
+    assert repairs == 0 and np.array_equal(V3, X) and np.array_equal(F3, F)
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_triangulate_planar_drops_outside_near_and_duplicate_points_and_keeps_the_loop_orientation(reverse):
+    from meshlab_holefill.patch import Patch
+
+    # Square [0, 2]^2 with its edge midpoints (k = 8), lifted onto the plane z = 0.1 x.
+    Q = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [2, 2], [1, 2], [0, 2], [0, 1.0]])
+    X = np.array([[0.7, 0.8],    # 0 inside: kept
+                  [3.0, 1.0],    # 1 outside the polygon
+                  [1.0, 0.05],   # 2 within the clearance 0.2 of edge (0, 1)
+                  [1.3, 1.2],    # 3 inside: kept
+                  [0.7, 0.8],    # 4 exact duplicate of 0: the later one goes
+                  [1.0, 1.9]])   # 5 within the clearance of edge (4, 5)
+    if reverse:  # a clockwise polygon: faces must still follow the loop
+        Q = Q[::-1].copy()
+    P = np.column_stack([Q, 0.1 * Q[:, 0]])
+    predicted = np.column_stack([X, 0.1 * X[:, 0] + 1.0])
+    V, F, orientation, kept = hpde_mesh.triangulate_planar(P, predicted, Q, X, clearance=0.2)
+    assert orientation == (-1 if reverse else 1)
+    assert kept.tolist() == [0, 3]
+    assert np.array_equal(V, np.concatenate([P, predicted[[0, 3]]]))
+    assert len(F) == 8 + 2 * 2 - 2  # convex polygon, k boundary and q inner points: k + 2q - 2 triangles
+    validate_patch(Patch(V[8:], F), P)  # every loop edge once, in loop direction
+
+
+def test_split_obtuse_edges_splits_the_long_interior_edge_at_the_quad_centroid():
+    from meshlab_holefill.geometry.quality import face_areas, face_normals
+
+    # (0, 1, 2) is flat (157 degrees at 2) on the interior edge (0, 1) shared with (1, 0, 3).
+    V = np.array([[0, 0, 0], [2, 0, 0], [1, 0.2, 0], [1, -1, 0.0]])
+    F = np.array([[0, 1, 2], [1, 0, 3]])
+    assert np.degrees(corner_angles(V, F).max()) > 150
+    V2, F2, splits = hpde_optimisation.split_obtuse_edges(V, F, 4)
+    assert splits == 1
+    assert np.array_equal(V2[:4], V) and np.allclose(V2[4], [1.0, -0.2, 0.0])  # (a + b + c + d) / 4
+    assert {_cyclic(f) for f in F2} == {(0, 4, 2), (1, 4, 3), (1, 2, 4), (0, 3, 4)}
+    assert np.all(face_normals(V2, F2)[:, 2] > 0)  # same orientation, no fold
+    assert face_areas(V2, F2).sum() == pytest.approx(face_areas(V, F).sum())  # the same quad
+    assert np.degrees(corner_angles(V2, F2).max()) < 120
+    # A loop edge (one face only) is never split, however flat its triangle.
+    V3, F3, splits = hpde_optimisation.split_obtuse_edges(V, F[:1], 3)
+    assert splits == 0 and np.array_equal(V3, V) and np.array_equal(F3, F[:1])
+
+
+def test_remove_valence_three_merges_the_star_and_renumbers():
+    # Square 0..3 around centre 5 (valence 4); free vertex 4 splits the face (0, 1, 5) in three.
+    V = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0], [1, 0.3, 0], [1, 1, 0.0]])
+    F = np.array([[1, 2, 5], [2, 3, 5], [3, 0, 5], [0, 1, 4], [1, 5, 4], [5, 0, 4]])
+    V2, F2, removed, keep = hpde_optimisation.remove_valence_three(V, F, 4)
+    assert removed == 1 and keep.tolist() == [0, 1, 2, 3, 5]
+    assert np.array_equal(V2, V[[0, 1, 2, 3, 5]])
+    # The centre is renumbered 5 -> 4; its star is the three old faces and the merged (0, 1, 4).
+    assert sorted(_cyclic(f) for f in F2) == [(0, 1, 4), (0, 4, 3), (1, 2, 4), (2, 3, 4)]
+    # Fixed vertices stay, whatever their valence; a forbidden edge in the new triangle refuses too.
+    for args in ((V, F, 5), (V, F, 4, [[1, 5]])):
+        V3, F3, removed, keep = hpde_optimisation.remove_valence_three(*args)
+        assert removed == 0 and np.array_equal(V3, V) and np.array_equal(F3, F) and keep.tolist() == list(range(6))
+
+
+def _circle_frames(n):
+    t = 2 * np.pi * np.arange(n) / n
+    BP = np.stack([np.cos(t), np.sin(t), np.zeros(n)], axis=1)  # counter-clockwise, hole inside
+    tangent, inward = hpde_sections.boundary_frames(BP, np.tile([0.0, 0.0, 1.0], (n, 1)))
+    return BP, tangent, inward
+
+
+def test_pair_chain_on_a_circle_skips_only_the_grazing_end_pairs():
+    # On a circle the chord from a to b meets the boundary at half the arc a -> b (tangent-chord
+    # angle): with n = 16 the adjacent pairs at both ends of the axis graze at 11.25 or 168.75
+    # degrees, outside [12, 168] (I_c = pi / 15), so both ends are skipped; the rest pair up.
+    BP, tangent, inward = _circle_frames(16)
+    pairs, skipped = hpde_sections.pair_chain(BP, tangent, inward, 0, 15)
+    assert pairs.tolist() == [[i, 15 - i] for i in range(1, 7)] and skipped == 4
+    # Indices wrap around the loop.
+    pairs, skipped = hpde_sections.pair_chain(BP, tangent, inward, 5, 4)
+    assert pairs.tolist() == [[6, 3], [7, 2], [8, 1], [9, 0], [10, 15], [11, 14]] and skipped == 4
+
+
+@pytest.mark.parametrize("flipped, expected", [
+    (3, [[1, 14], [2, 13], [4, 12], [5, 11], [6, 10], [7, 9]]),    # a's pointer advances alone
+    (12, [[1, 14], [2, 13], [3, 11], [4, 10], [5, 9], [6, 8]]),    # b's pointer advances alone
+])
+def test_pair_chain_skips_one_failing_end_and_shifts_the_following_pairs(flipped, expected):
+    # Turning one base point's into-hole direction outwards makes every line from it fail I_c at
+    # that end only (Fig. 2): that point is skipped and the pairing after it shifts by one.
+    BP, tangent, inward = _circle_frames(16)
+    inward[flipped] *= -1
+    pairs, skipped = hpde_sections.pair_chain(BP, tangent, inward, 0, 15)
+    assert pairs.tolist() == expected and skipped == 3

@@ -624,3 +624,130 @@ def test_parameters_are_exposed_and_validated(bunny_scan):
         getattr(bunny_scan, NAME)(laplacian_prediction="cubic")
     with pytest.raises(FilterParameterError, match="'layers': 9 is above the maximum 5"):
         getattr(bunny_scan, NAME)(layers=9)
+
+
+# ------------------------------------------------------------------ direct tests of building blocks
+
+def tilted_plane_hole(n=13, radius=0.3):
+    """HoleContext of a disk cut from a grid on the plane z = 0.3 x + 0.2 y (a staircase loop)."""
+    V, F = grid(n, n, z=lambda x, y: 0.3 * x + 0.2 * y)
+    V, F, _ = cut_disks(V, F, [(0.5, 0.5, 0.25)], radius)
+    return context_of(V, F, inside=lambda P: np.linalg.norm(P[:, :2] - 0.5, axis=1) < 0.45)  # not the outer border
+
+
+def tilted_polar_hole(m=24, rings=10, hole=0.42):
+    """HoleContext of a polar disc mesh on the plane z = 0.3 x + 0.2 y, the rings inside r = 0.4 cut:
+    the loop is a regular m-gon (no collinear edges)."""
+    t = 2 * np.pi * np.arange(m) / m
+    r = np.linspace(0, 1, rings + 1)[1:]
+    P = np.concatenate([[[0.0, 0.0]], (r[:, None, None] * np.stack([np.cos(t), np.sin(t)], 1)).reshape(-1, 2)])
+    V = np.column_stack([P, 0.3 * P[:, 0] + 0.2 * P[:, 1]])
+    ring = 1 + np.arange(rings * m).reshape(rings, m)
+    nxt = np.roll(ring, -1, axis=1)
+    F = np.concatenate([np.stack([np.zeros(m, np.int64), ring[0], nxt[0]], 1),
+                        np.stack([ring[:-1], ring[1:], nxt[1:]], 2).reshape(-1, 3),
+                        np.stack([ring[:-1], nxt[1:], nxt[:-1]], 2).reshape(-1, 3)])
+    V, F, _ = cut_disks(V, F, [(0.0, 0.0, 0.0)], hole)
+    return context_of(V, F, inside=lambda Q: np.linalg.norm(Q[:, :2], axis=1) < 0.5)
+
+
+def off_plane(X):
+    return np.abs(X[:, 2] - 0.3 * X[:, 0] - 0.2 * X[:, 1]).max()
+
+
+def test_initial_patches_yield_every_domain_in_order_each_closing_the_hole_on_its_plane():
+    from meshlab_holefill.algorithms.lssvm_poisson_patch import initial_patches
+
+    ctx = tilted_polar_hole()
+    k = ctx.size
+    assert k == 24
+    failures = []
+    domains = []
+    for X, F, stats in initial_patches(ctx, 0.75, failures):
+        domains.append(stats["domain"])
+        # Loop first and bit-exact: the planar domains are lifted back onto the loop, not left in z = 0.
+        assert np.array_equal(X[:k], ctx.points)
+        validate_patch(Patch(X[k:], F), ctx.points, ctx.forbidden_edges)
+        assert len(X) > k and off_plane(X) < 1e-12  # a planar hole gives a planar patch in every domain
+    assert domains == ["3d", "developed", "projected", "ears"] and failures == []
+
+
+def test_initial_patches_fall_back_lazily_and_record_why(monkeypatch):
+    from meshlab_holefill.algorithms import lssvm_poisson_patch as patch_module
+
+    ctx = tilted_polar_hole()
+    calls = []
+    real = patch_module.advancing_front_triangulation
+
+    def front(P, *args, **kwargs):
+        calls.append(kwargs.get("obstacles") is not None)
+        if len(calls) == 1:
+            raise HoleFillError("front ran out of the hole")
+        return real(P, *args, **kwargs)
+
+    monkeypatch.setattr(patch_module, "advancing_front_triangulation", front)
+    failures = []
+    patches = patch_module.initial_patches(ctx, 0.75, failures)
+    assert calls == [] and failures == []  # a generator: nothing runs before it is asked
+    X, F, stats = next(patches)
+    assert stats["domain"] == "developed" and calls == [True, False]  # only the 3D front and one planar front ran
+    assert failures == ["3d advancing front: front ran out of the hole"]
+    assert np.array_equal(X[:ctx.size], ctx.points) and off_plane(X) < 1e-12
+    validate_patch(Patch(X[ctx.size:], F), ctx.points, ctx.forbidden_edges)
+
+
+def test_planar_boundaries_offer_the_projection_of_a_planar_hole_with_collinear_edges():
+    from meshlab_holefill.algorithms.lssvm_poisson_patch import planar_boundaries
+    from meshlab_holefill.geometry.segments import polygon_edges_touch
+
+    # Minimal: a U whose two top edges lie on y = 2, far apart; the polygon is simple.
+    U = np.array([[0, 0], [3, 0], [3, 2], [2, 2], [2, 1], [1, 1], [1, 2], [0, 2.0]])
+    assert not polygon_edges_touch(U)
+    U[6] = [2, 2]  # the right top edge now overlaps the left one's end: they touch
+    assert polygon_edges_touch(U)
+    # A disk cut from a tilted grid: its loop is a staircase with many collinear edges, and its
+    # projection onto its own plane is congruent to it, hence simple.
+    ctx = tilted_plane_hole()
+    assert [name for name, _ in planar_boundaries(ctx)] == ["developed", "projected"]
+
+
+def patch_of_removed_faces(V, F_kept, F_removed, rings=2):
+    """HoleContext of the cut hole and the removed faces as its patch: (ctx, true new vertices, patch faces)."""
+    ctx = hole_context(V, F_kept, min(boundary_loops(F_kept), key=len), rings=rings)
+    k = ctx.size
+    new = np.setdiff1d(np.unique(F_removed), ctx.loop)
+    index = np.full(len(V), -1)
+    index[ctx.loop], index[new] = np.arange(k), k + np.arange(len(new))
+    return ctx, V[new], index[F_removed]
+
+
+def test_fair_patch_in_context_restores_a_flat_grid_exactly():
+    from meshlab_holefill.geometry.fairing import fair_patch_in_context
+
+    # On a regular flat grid every vertex is the mean of its 1-ring, so L x = 0 and L^2 x = 0 hold
+    # at the true positions: fairing any start must give them back, flat.
+    V, F, removed = cut_disks(*grid(11, 11), [(0.5, 0.5, 0.0)], 0.3)
+    ctx, truth, Fp = patch_of_removed_faces(V, F, removed)
+    start = truth + np.random.default_rng(0).normal(scale=0.05, size=truth.shape)
+    for order in (1, 2):
+        out = fair_patch_in_context(ctx.vertices, ctx.faces, ctx.size, start, Fp, order=order)
+        assert out.shape == truth.shape and np.abs(out - truth).max() < 1e-12
+
+
+def test_fair_patch_in_context_bulges_a_flat_patch_onto_the_sphere():
+    from meshlab_holefill.geometry.fairing import fair_patch_in_context
+
+    V, F, removed = sphere_hole(radius=0.5)
+    ctx, truth, Fp = patch_of_removed_faces(V, F, removed)
+    plane_z = ctx.points[:, 2].mean()
+    flat = truth.copy()
+    flat[:, 2] = plane_z  # the cap pressed into the loop's plane: up to 0.125 inside the sphere
+    assert np.abs(np.linalg.norm(flat, axis=1) - 1).max() > 0.1
+    # Thin plate (default order 2): the fixed ring outside the loop carries the sphere's slope in,
+    # the patch rises above the loop plane to within 0.01 of the sphere.
+    out = fair_patch_in_context(ctx.vertices, ctx.faces, ctx.size, flat, Fp)
+    assert np.abs(np.linalg.norm(out, axis=1) - 1).max() < 0.01
+    assert out[:, 2].min() > ctx.points[:, 2].max()
+    # The membrane (order 1) only spans the loop: it stays near the plane, far from the sphere.
+    membrane = fair_patch_in_context(ctx.vertices, ctx.faces, ctx.size, flat, Fp, order=1)
+    assert np.abs(np.linalg.norm(membrane, axis=1) - 1).max() > 0.1

@@ -287,3 +287,18 @@ def test_is_simple_polygon_compares_the_clearance_with_eps(polar, star, eps):
     assume(abs(d - eps) > 1e-9)
     assert is_simple_polygon(Q, eps) is bool(d > eps)
     assert is_simple_polygon(Q, eps, near=eps + 0.1) is bool(d > eps)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(small_grid_point, min_size=4, max_size=8))
+def test_polygon_edges_touch_is_any_pairwise_touch_of_non_adjacent_edges(points):
+    """The vectorised test against the exact scalar one (segments_cross, checked above) pair by pair."""
+    from meshlab_holefill.geometry.segments import polygon_edges_touch
+
+    Q = np.array(points, np.float64)
+    k = len(Q)
+    expected = any(segments_cross(Q[i], Q[(i + 1) % k], Q[j], Q[(j + 1) % k])
+                   for i in range(k) for j in range(i + 2, k) if not (i == 0 and j == k - 1))
+    assert polygon_edges_touch(Q) is expected
+    assert polygon_edges_touch(Q[::-1]) is expected
+    assert polygon_edges_touch(Q, chunk=3) is expected

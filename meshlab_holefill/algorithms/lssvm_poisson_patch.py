@@ -18,6 +18,7 @@ from ..geometry.flips import relax_edges
 from ..geometry.intersections import faces_intersecting
 from ..geometry.laplacian import adjacency_matrix, cotangent_laplacian, tangential_umbrella_smoothing
 from ..geometry.quality import face_normals, triangle_quality, vertex_normals
+from ..geometry.segments import polygon_edges_touch
 from ..geometry.topology import interior_edges
 from ..patch import HoleFillError
 
@@ -74,25 +75,6 @@ def reference_normals(ctx):
     return np.where(length > 1e-12, N / np.maximum(length, 1e-300), ctx.loop_normals)
 
 
-def _polygon_is_simple(Q):
-    """No two non-adjacent edges of the closed 2D polygon Q (k, 2) touch."""
-    k = len(Q)
-    A, B = Q, np.roll(Q, -1, axis=0)
-    i, j = np.triu_indices(k, 2)
-    keep = ~((i == 0) & (j == k - 1))
-    i, j = i[keep], j[keep]
-
-    def orient(P, R, S):
-        return (R[:, 0] - P[:, 0]) * (S[:, 1] - P[:, 1]) - (R[:, 1] - P[:, 1]) * (S[:, 0] - P[:, 0])
-    for lo in range(0, len(i), 200_000):
-        a, b = i[lo:lo + 200_000], j[lo:lo + 200_000]
-        o1, o2 = orient(A[a], B[a], A[b]), orient(A[a], B[a], B[b])
-        o3, o4 = orient(A[b], B[b], A[a]), orient(A[b], B[b], B[a])
-        if np.any((o1 * o2 <= 0) & (o3 * o4 <= 0)):
-            return False
-    return True
-
-
 def planar_boundaries(ctx):
     """Simple planar polygons for the boundary, for holes the 3D advancing front cannot cover.
 
@@ -115,7 +97,7 @@ def planar_boundaries(ctx):
                   ("projected", project_to_plane(ctx.points, c, n if n @ vector_area >= 0 else -n))]
     out = []
     for name, Q in candidates:
-        if np.all(np.isfinite(Q)) and _polygon_is_simple(Q):
+        if np.all(np.isfinite(Q)) and not polygon_edges_touch(Q):
             area = 0.5 * float(Q[:, 0] @ np.roll(Q[:, 1], -1) - Q[:, 1] @ np.roll(Q[:, 0], -1))
             if area > 0:
                 out.append((name, np.column_stack([Q, np.zeros(k)])))

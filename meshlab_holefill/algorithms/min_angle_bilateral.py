@@ -52,6 +52,7 @@ from ..geometry.bilateral import bilateral_filter
 from ..geometry.fairing import fair_patch_in_context
 from ..geometry.flips import relax_edges
 from ..geometry.refine import refine_patch
+from ..geometry.segments import polygon_edges_touch
 from ..hole_guards import patch_crossings, patch_guard, swaps_crossing
 from ..patch import Patch
 from ..registry import ParamSpec
@@ -197,33 +198,6 @@ def _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations,
     return V, F
 
 
-def _segments_cross_2d(P):
-    """Do two non-adjacent edges of the closed 2D polygon P (k, 2) touch or cross?
-
-    Orientation tests on all pairs of edges at once (k is a hole boundary: a few hundred);
-    touching, and overlap of collinear edges, count as crossing.
-    """
-    k = len(P)
-    A, B = P, np.roll(P, -1, axis=0)
-    i, j = np.triu_indices(k, 2)
-    keep = (j - i) != k - 1  # edges 0 and k-1 share vertex 0
-    i, j = i[keep], j[keep]
-
-    def orient(p, q, r):
-        return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
-
-    def on_segment(p, q, r):
-        # r, collinear with p-q, lies within the segment's box
-        return np.all((np.minimum(p, q) <= r) & (r <= np.maximum(p, q)), axis=1)
-
-    a, b, c, d = A[i], B[i], A[j], B[j]
-    d1, d2, d3, d4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
-    proper = (d1 * d2 < 0) & (d3 * d4 < 0)
-    touch = (((d1 == 0) & on_segment(a, b, c)) | ((d2 == 0) & on_segment(a, b, d))
-             | ((d3 == 0) & on_segment(c, d, a)) | ((d4 == 0) & on_segment(c, d, b)))
-    return bool(np.any(proper | touch))
-
-
 def embeds_in_projection(V, F, k, min_sine=1e-6):
     """True when projecting the patch onto its mean plane is one-to-one (so it cannot self-intersect).
 
@@ -262,7 +236,7 @@ def embeds_in_projection(V, F, k, min_sine=1e-6):
     u = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
     u /= np.linalg.norm(u)
     Q = V @ np.stack([u, np.cross(n, u)], axis=1)
-    if _segments_cross_2d(Q[:k]):
+    if polygon_edges_touch(Q[:k]):
         return False
     # Projected corner angles summed per vertex (every face is counter-clockwise now).
     total = np.zeros(len(V))

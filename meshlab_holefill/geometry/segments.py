@@ -156,3 +156,36 @@ def is_simple_polygon(Q, eps, near=None):
         a, b, c = Q[:, :2]
         return abs(float((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))) > eps * eps
     return min_segment_distance(Q, near) > eps
+
+
+def polygon_edges_touch(P, chunk=200_000):
+    """Do two non-adjacent edges of the closed 2D polygon P (k, 2) touch or cross?
+
+    Exact orientation tests on all pairs of edges (in chunks of ``chunk`` pairs, k being a
+    hole boundary of up to a few thousand vertices); touching, and overlap of collinear
+    edges, count as crossing, collinear edges apart do not. ``not polygon_edges_touch(P)``
+    is the simplicity test without a clearance (:func:`is_simple_polygon` asks for one).
+    """
+    P = np.asarray(P, np.float64)
+    k = len(P)
+    A, B = P, np.roll(P, -1, axis=0)
+    i, j = np.triu_indices(k, 2)
+    keep = (j - i) != k - 1  # edges 0 and k-1 share vertex 0
+    i, j = i[keep], j[keep]
+
+    def orient(p, q, r):
+        return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
+
+    def on_segment(p, q, r):
+        # r, collinear with p-q, lies within the segment's box
+        return np.all((np.minimum(p, q) <= r) & (r <= np.maximum(p, q)), axis=1)
+
+    for lo in range(0, len(i), chunk):
+        a, b, c, d = A[i[lo:lo + chunk]], B[i[lo:lo + chunk]], A[j[lo:lo + chunk]], B[j[lo:lo + chunk]]
+        d1, d2, d3, d4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+        proper = (d1 * d2 < 0) & (d3 * d4 < 0)
+        touch = (((d1 == 0) & on_segment(a, b, c)) | ((d2 == 0) & on_segment(a, b, d))
+                 | ((d3 == 0) & on_segment(c, d, a)) | ((d4 == 0) & on_segment(c, d, b)))
+        if np.any(proper | touch):
+            return True
+    return False
