@@ -14,8 +14,8 @@ it (Sorkine and Cohen-Or 2004), which keeps the Laplacian rows of the loop verti
 as those of P_Int; the sum over P_Int alone, as printed (``area_rows='interior'``), is a
 membrane spanning the loop that cannot beat a flat ear-clipping fill on curved surfaces
 (benchmark cut holes, mean patch-to-ground-truth distance per mille of the diagonal, small /
-medium / large: least-squares mesh 0.190 / 1.857 / 5.242, interior rows 0.70 / 6.69 / 19.4,
-E_DF 0.202 / 1.995 / 5.452, MeshLab 0.296 / 5.85 / 21.4; :mod:`.embedding`).
+medium / large: least-squares mesh 0.174 / 1.688 / 1.883, interior rows 0.706 / 6.775 / 19.55,
+E_DF 0.181 / 1.807 / 2.059, MeshLab 0.296 / 5.905 / 21.43; :mod:`.embedding`).
 
 Beyond the paper (options, on by default because the benchmark targets need them):
 ``fallback`` unfolds loops that annealing does not (loops wrapped around a tube or a knob) by

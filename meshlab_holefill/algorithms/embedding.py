@@ -16,8 +16,8 @@ rows of the loop vertices, whose 1-rings reach into the surrounding surface (the
 only ones that involve the unknowns besides P_Int's), so the patch leaves the loop along the
 surrounding surface's slope. ``energy='area'`` is the least-squares mesh; ``'area_interior'``
 the sum over P_Int as printed (measured on the benchmark's cut holes, small / medium / large,
-per mille of the diagonal: 0.19 / 1.86 / 5.24 against 0.70 / 6.69 / 19.4, MeshLab 0.30 / 5.89 /
-21.3).
+per mille of the diagonal: 0.174 / 1.688 / 1.883 against 0.706 / 6.775 / 19.55, MeshLab 0.296 /
+5.905 / 21.43).
 
 Beyond the paper, :func:`tangential_relaxation` (option ``tangential`` of the filter) keeps the
 shape E_DF gives and moves the interior vertices within their tangent planes to where the
