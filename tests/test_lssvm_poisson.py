@@ -751,3 +751,15 @@ def test_fair_patch_in_context_bulges_a_flat_patch_onto_the_sphere():
     # The membrane (order 1) only spans the loop: it stays near the plane, far from the sphere.
     membrane = fair_patch_in_context(ctx.vertices, ctx.faces, ctx.size, flat, Fp, order=1)
     assert np.abs(np.linalg.norm(membrane, axis=1) - 1).max() > 0.1
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e-3, 1e3, 1e9])
+def test_the_patch_does_not_depend_on_the_unit(scale):
+    """Every tolerance of the front is relative: the same hole in other units gets the same patch."""
+    from conftest import sphere_with_holes
+
+    V, F, _ = sphere_with_holes(subdiv=3, centers=[(0, 0, 1)], radius=0.3)
+    ref = xu.fill(hole_context(V, F, boundary_loops(F)[0], rings=xu.RINGS))
+    patch = xu.fill(hole_context(V * scale, F, boundary_loops(F)[0], rings=xu.RINGS))
+    assert np.array_equal(patch.faces, ref.faces) and patch.info["afm_rejected"] == ref.info["afm_rejected"]
+    np.testing.assert_allclose(patch.vertices / scale, ref.vertices, rtol=0, atol=1e-9)

@@ -155,6 +155,7 @@ def segments_hit_triangles(P0, P1, T, tol):
         return dot_rows(cross_rows(U - P0, W - P0), d)
 
     e1, e2, e3 = side(A, B), side(B, C), side(C, A)
-    lim = tol * scale * np.linalg.norm(d, axis=1)
+    # side() is a triple product (length^3): tol (a length) times |d| times the triangle's size
+    lim = tol * np.sqrt(scale) * np.linalg.norm(d, axis=1)
     inside = ((e1 >= -lim) & (e2 >= -lim) & (e3 >= -lim)) | ((e1 <= lim) & (e2 <= lim) & (e3 <= lim))
     return crosses_plane & inside
