@@ -209,7 +209,7 @@ def triangulate_planar(loop_points, predicted, Q, X, clearance, edge_clearance=0
         keep = points_in_polygon(Q, X) & (distance_to_polygon(Q, X) > clearance)
         if keep.sum() > 1:
             idx = np.flatnonzero(keep)
-            for i, j in cKDTree(X[idx]).query_pairs(1e-9 * clearance + 1e-12):
+            for i, j in cKDTree(X[idx]).query_pairs(1e-9 * clearance):  # relative: any unit
                 keep[idx[max(i, j)]] = False
     L = np.linalg.norm(np.roll(Q, -1, axis=0) - Q, axis=1)
     unused_rounds = cleared = 0
