@@ -266,3 +266,17 @@ def test_layer_transform_and_vertex_selection_survive_the_fill(name):
     selected = m.vertex_selection_array()
     np.testing.assert_array_equal(selected[:len(V)], before)
     assert not selected[len(V):].any()
+
+
+@pytest.mark.parametrize("name", filter_list())
+@pytest.mark.parametrize("scale", [1e-6, 1e6])
+def test_the_unit_does_not_change_the_patch(name, scale):
+    """Millimetres or kilometres: every tolerance is relative, so a hole gets the same patch."""
+    V, F, _ = sphere_with_holes(subdiv=3, centers=[(0, 0, 1)], radius=0.3)
+    ref = getattr(meshset_from_arrays(V, F), name)()
+    res = getattr(meshset_from_arrays(V * scale, F), name)()
+    assert res["closed_holes"] == ref["closed_holes"] == 1
+    if name == "meshing_close_holes_differential_evolution":  # its search rounds differently in other units
+        assert abs(res["new_faces"] - ref["new_faces"]) <= 0.25 * ref["new_faces"]
+    else:
+        assert res["new_faces"] == ref["new_faces"] and res["new_vertices"] == ref["new_vertices"]
