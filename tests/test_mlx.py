@@ -369,9 +369,17 @@ def require_filter(python_name):
         pytest.skip(f"{python_name} is not registered yet (add it to filter_specs.ALGORITHMS)")
 
 
+# Presets: an algorithm's workflow with some of its options (beyond the paper) switched on.
+PRESET_WORKFLOWS = {
+    "close_holes_min_angle_bilateral_faired.mlx": ("meshing_close_holes_min_angle_bilateral",
+                                                   {"iterations": 0, "fairing": "thinplate", "smoothing": 10}),
+}
+
+
 def test_every_workflow_is_documented_and_every_filter_has_one():
     files = sorted(f for f in os.listdir(WORKFLOWS) if f.endswith(".mlx"))
-    assert set(ALGORITHM_WORKFLOWS) | {"scan_repair.mlx", "meshlab_close_holes.mlx"} == set(files)
+    assert (set(ALGORITHM_WORKFLOWS) | set(PRESET_WORKFLOWS) | {"scan_repair.mlx", "meshlab_close_holes.mlx"}
+            == set(files))
     for name in files:
         with open(os.path.join(WORKFLOWS, name)) as f:
             text = f.read()
@@ -384,9 +392,9 @@ def test_every_workflow_is_documented_and_every_filter_has_one():
         assert (step.mlx_name, step.filter) == (display_name, python_name)
 
 
-@pytest.mark.parametrize("workflow", list(ALGORITHM_WORKFLOWS))
+@pytest.mark.parametrize("workflow", list(ALGORITHM_WORKFLOWS) + list(PRESET_WORKFLOWS))
 def test_algorithm_workflow_cleans_closes_every_hole_and_selects_the_new_faces(workflow):
-    python_name = ALGORITHM_WORKFLOWS[workflow]
+    python_name = ALGORITHM_WORKFLOWS.get(workflow) or PRESET_WORKFLOWS[workflow][0]
     require_filter(python_name)
     path = os.path.join(WORKFLOWS, workflow)
     steps = read_filter_script(path).steps
@@ -409,6 +417,22 @@ def test_algorithm_workflow_cleans_closes_every_hole_and_selects_the_new_faces(w
     changed = np.flatnonzero(np.any(F[:len(F0)] != F0, axis=1))
     assert len(changed) <= split
     assert len(F) - len(F0) == closing["new_faces"] + split
+
+
+def test_preset_workflow_is_the_filter_with_its_options():
+    """The preset runs the same filter call as the Python options it names, to the same mesh."""
+    for workflow, (python_name, options) in PRESET_WORKFLOWS.items():
+        path = os.path.join(WORKFLOWS, workflow)
+        step = read_filter_script(path).steps[-1]
+        assert step.filter == python_name
+        assert {name: step.kwargs[name] for name in options} == options
+        scripted = load(BUNNY)
+        run_filter_script(scripted, path)
+        direct = load(BUNNY)
+        run_filter_script(direct, without_last_filters(path, 1))
+        getattr(direct, python_name)(maxholesize=1000, **options)
+        for a, b in zip(mesh_arrays(scripted), mesh_arrays(direct)):
+            np.testing.assert_array_equal(a, b)
 
 
 def check_scan_repair(text_or_path, base_path):
