@@ -176,7 +176,7 @@ def refine_mesh_arrays(arrays, refinement):
 
     Returns
     -------
-    MeshArrays  (same label, mesh id and textures)
+    MeshArrays  (same label, mesh id, textures, transform and vertex selection; split points unselected)
     """
     n, m = len(arrays.V), len(arrays.F)
     E = np.asarray(refinement.edge_vertices, np.int64).reshape(-1, 2)
@@ -208,7 +208,8 @@ def refine_mesh_arrays(arrays, refinement):
         wedge = W2.reshape(-1, 2)
     return MeshArrays(V=np.ascontiguousarray(refinement.V, np.float64), F=F2, vertex_attrs=vertex_attrs,
                       face_attrs=face_attrs, wedge_texcoords=wedge, label=arrays.label,
-                      mesh_id=arrays.mesh_id, textures=arrays.textures)
+                      mesh_id=arrays.mesh_id, textures=arrays.textures, transform=arrays.transform,
+                      vertex_selected=arrays.vertex_selected)
 
 
 def _border_faces_per_loop(F, loops):

@@ -280,3 +280,19 @@ def test_the_unit_does_not_change_the_patch(name, scale):
         assert abs(res["new_faces"] - ref["new_faces"]) <= 0.25 * ref["new_faces"]
     else:
         assert res["new_faces"] == ref["new_faces"] and res["new_vertices"] == ref["new_vertices"]
+
+
+def test_transform_and_vertex_selection_survive_a_border_refinement(bunny_scan):
+    """LS-SVM's split border edges (Sec. 3.1) rebuild the arrays before the fill: the layer state must follow."""
+    ms = bunny_scan
+    ms.compute_matrix_from_translation(axisx=3.0, freeze=False)
+    ms.compute_selection_by_condition_per_vertex(condselect="y > 0")
+    before = ms.current_mesh().vertex_selection_array().copy()
+    transform = ms.current_mesh().transform_matrix().copy()
+    res = ms.meshing_close_holes_lssvm_poisson()
+    assert res["closed_holes"] == 5 and res["split_boundary_edges"] > 0
+    m = ms.current_mesh()
+    np.testing.assert_array_equal(m.transform_matrix(), transform)
+    selected = m.vertex_selection_array()
+    np.testing.assert_array_equal(selected[:len(before)], before)
+    assert not selected[len(before):].any()
