@@ -256,9 +256,54 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare):
     if crossing:
         _explain_outlines(V, F, crossing, report)
     V2, F2 = merge_patches(V, F, done_loops, patches)
+    if params["selfintersection"]:
+        kept = _drop_crossing_patches(V2, F, F2, patches, report, closed_ids)
+        if len(kept) < len(patches):
+            done_loops, patches, closed_ids = ([done_loops[j] for j in kept], [patches[j] for j in kept],
+                                               [closed_ids[j] for j in kept])
+            V2, F2 = merge_patches(V, F, done_loops, patches)
     done_loops, patches, closed_ids = _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids)
     V2, F2 = merge_patches(V, F, done_loops, patches)
     return arrays, V, F, V2, F2, done_loops, patches, refinement, report
+
+
+def _drop_crossing_patches(V2, F, F2, patches, report, closed_ids):
+    """Patches each clear of the mesh can still cross one another (two holes close together).
+
+    Only patches whose bounding boxes overlap are tested, face against face. Taken in hole
+    order, a patch crossing one already kept is withdrawn and its hole reported failed.
+
+    Returns
+    -------
+    list of int  positions in ``patches`` of the patches kept
+    """
+    from .geometry.intersections import intersecting_pairs
+
+    if len(patches) < 2:
+        return list(range(len(patches)))
+    sizes = [len(p.faces) for p in patches]
+    start = len(F) + np.concatenate([[0], np.cumsum(sizes)])
+    boxes = np.stack([_patch_box(V2[np.unique(F2[start[j]:start[j + 1]])]) for j in range(len(patches))])
+    overlap = np.all((boxes[:, None, 0] <= boxes[None, :, 1]) & (boxes[None, :, 0] <= boxes[:, None, 1]), axis=2)
+    np.fill_diagonal(overlap, False)
+    near = np.flatnonzero(overlap.any(axis=1))
+    if len(near) == 0:
+        return list(range(len(patches)))
+    faces = np.concatenate([np.arange(start[j], start[j + 1]) for j in near])
+    pairs = intersecting_pairs(V2, F2, faces, faces)
+    owner = np.searchsorted(start, pairs, side="right") - 1
+    crossing = {tuple(sorted(p)) for p in owner[owner[:, 0] != owner[:, 1]].tolist()}
+    kept = []
+    for j in range(len(patches)):
+        other = next((i for i in kept if (min(i, j), max(i, j)) in crossing), None)
+        if other is None:
+            kept.append(j)
+            continue
+        report[closed_ids[j]].update(status="failed",
+                                     reason=f"patch would intersect the patch of hole {closed_ids[other]}")
+        for name in ("new_vertices", "new_faces"):
+            report[closed_ids[j]].pop(name, None)
+    return kept
 
 
 def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):

@@ -281,3 +281,33 @@ def test_a_hole_that_fails_after_its_border_was_refined_is_left_as_it_was():
     # the failed hole's loop is still there, unchanged
     left = boundary_loops(F1)
     assert [sorted(lp.vertices.tolist()) for lp in left] == [sorted(small.tolist())]
+
+
+def _tent_over_the_other_hole(ctx):
+    """A fan from the 4-edge loop to one apex 0.3 above the centre of the other hole (x mirrored about 0.5)."""
+    c = ctx.points.mean(axis=0)
+    apex = np.array([[1.0 - c[0], c[1], 0.3]])
+    k = ctx.size
+    return Patch(apex, np.array([[i, (i + 1) % k, k] for i in range(k)]))
+
+
+def test_of_two_patches_crossing_in_mid_air_the_first_is_kept():
+    """Each tent alone is clear of the mesh; together they cross above the strip between the holes."""
+    V, F = grid(9, 9)
+    _, F, _ = cut_disks(V, F, [(0.3125, 0.4375, 0), (0.6875, 0.4375, 0)], 0.05)
+    loops = boundary_loops(F)
+    assert sorted(len(lp) for lp in loops) == [4, 4, 32]
+    ms = meshset_from_arrays(V, F)
+    res = close_holes(ms, _tent_over_the_other_hole, COMMON)
+    holes = [h for h in res["holes"] if h["boundary_edges"] == 4]
+    assert [h["status"] for h in holes] == ["closed", "failed"]
+    assert holes[1]["reason"] == f"patch would intersect the patch of hole {holes[0]['hole']}"
+    V2, F2 = mesh_arrays(ms)
+    assert len(F2) == len(F) + 4 and len(V2) == len(V) + 1
+    assert len(faces_intersecting(V2, F2, np.arange(len(F), len(F2)), np.arange(len(F2)))) == 0
+    # without the check (selfintersection=False) both tents go in, crossing each other
+    ms = meshset_from_arrays(V, F)
+    res = close_holes(ms, _tent_over_the_other_hole, dict(COMMON, selfintersection=False))
+    V3, F3 = mesh_arrays(ms)
+    assert res["closed_holes"] == 2
+    assert len(faces_intersecting(V3, F3, np.arange(len(F), len(F3)), np.arange(len(F3)))) > 0
