@@ -256,18 +256,25 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare):
     if crossing:
         _explain_outlines(V, F, crossing, report)
     V2, F2 = merge_patches(V, F, done_loops, patches)
-    if params["selfintersection"]:
-        kept = _drop_crossing_patches(V2, F, F2, patches, report, closed_ids)
+    # Patches checked one by one can still meet one another: withdraw the later ones.
+    checks = ([_crossing_patches] if params["selfintersection"] else []) + [_clashing_patches]
+    for check in checks:
+        kept = check(V2, F, F2, done_loops, patches, report, closed_ids)
         if len(kept) < len(patches):
             done_loops, patches, closed_ids = ([done_loops[j] for j in kept], [patches[j] for j in kept],
                                                [closed_ids[j] for j in kept])
             V2, F2 = merge_patches(V, F, done_loops, patches)
-    done_loops, patches, closed_ids = _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids)
-    V2, F2 = merge_patches(V, F, done_loops, patches)
     return arrays, V, F, V2, F2, done_loops, patches, refinement, report
 
 
-def _drop_crossing_patches(V2, F, F2, patches, report, closed_ids):
+def _withdraw(entry, reason):
+    """Report a hole whose validated patch is taken back as failed."""
+    entry.update(status="failed", reason=reason)
+    for name in ("new_vertices", "new_faces"):
+        entry.pop(name, None)
+
+
+def _crossing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
     """Patches each clear of the mesh can still cross one another (two holes close together).
 
     Only patches whose bounding boxes overlap are tested, face against face. Taken in hole
@@ -299,14 +306,11 @@ def _drop_crossing_patches(V2, F, F2, patches, report, closed_ids):
         if other is None:
             kept.append(j)
             continue
-        report[closed_ids[j]].update(status="failed",
-                                     reason=f"patch would intersect the patch of hole {closed_ids[other]}")
-        for name in ("new_vertices", "new_faces"):
-            report[closed_ids[j]].pop(name, None)
+        _withdraw(report[closed_ids[j]], f"patch would intersect the patch of hole {closed_ids[other]}")
     return kept
 
 
-def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):
+def _clashing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
     """Patches validated alone can still clash where two holes share a pinched vertex.
 
     When the merged mesh F2 has non-manifold edges, the patches are taken back in hole
@@ -314,15 +318,19 @@ def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):
     so far, leave every such edge with at most two faces; the others are withdrawn and their
     holes reported failed. The first of two clashing patches is kept, and no hole is ever
     left half-filled.
+
+    Returns
+    -------
+    list of int  positions in ``patches`` of the patches kept
     """
     from .holes import nonmanifold_edges
 
     shared = np.concatenate(done_loops) if done_loops else np.zeros(0, np.int64)
     if len(F2) == len(F) or len(np.unique(shared)) == len(shared):
-        return done_loops, patches, closed_ids  # no two patches meet: nothing can clash
+        return list(range(len(patches)))  # no two patches meet: nothing can clash
     bad = nonmanifold_edges(F2)
     if len(bad) == 0:
-        return done_loops, patches, closed_ids
+        return list(range(len(patches)))
     n = int(F2.max()) + 1
     E = np.sort(np.stack([F2[:, [0, 1]], F2[:, [1, 2]], F2[:, [2, 0]]], axis=1).reshape(-1, 2), axis=1)
     key = E[:, 0] * n + E[:, 1]
@@ -345,11 +353,8 @@ def _drop_clashing_patches(F, F2, done_loops, patches, report, closed_ids):
             for k, c in mine.items():
                 used[k] = used.get(k, 0) + c
         else:
-            report[closed_ids[j]].update(status="failed",
-                                         reason="patch clashes with another patch at a shared vertex")
-            for name in ("new_vertices", "new_faces"):
-                report[closed_ids[j]].pop(name, None)
-    return [done_loops[j] for j in keep], [patches[j] for j in keep], [closed_ids[j] for j in keep]
+            _withdraw(report[closed_ids[j]], "patch clashes with another patch at a shared vertex")
+    return keep
 
 
 def _explain_outlines(V, F, crossing, report):

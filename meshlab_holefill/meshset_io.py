@@ -256,28 +256,25 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
     if arrays.vertex_selected is not None and arrays.vertex_selected.any():
         keep = np.zeros(len(V2), bool)
         keep[:len(arrays.vertex_selected)] = arrays.vertex_selected  # new vertices unselected
-        set_vertex_selection(ms, keep)
+        set_selection(ms, keep, "vertex")
     selected = face_attrs.get("selected", np.zeros((len(F2), 1))).ravel() > 0
     if select_faces is not None and len(select_faces):
         selected = selected.copy()
         selected[np.asarray(select_faces)] = True
     if selected.any():
-        set_face_selection(ms, selected)
+        set_selection(ms, selected)
     return ms.current_mesh_id()
 
 
-def set_vertex_selection(ms, selected):
-    """Select exactly the vertices where ``selected`` is True on the current mesh."""
-    m = ms.current_mesh()
-    m.add_vertex_custom_scalar_attribute(np.asarray(selected, np.float64), "holefill_select")
-    ms.compute_selection_by_condition_per_vertex(condselect="holefill_select > 0")
+def set_selection(ms, selected, element="face"):
+    """Select exactly the faces (or vertices, ``element="vertex"``) where ``selected`` is True.
 
-
-def set_face_selection(ms, selected):
-    """Select exactly the faces where ``selected`` is True on the current mesh."""
+    pymeshlab's selections are read-only arrays: the mask goes in as a custom scalar
+    attribute and a conditional selection reads it back.
+    """
     m = ms.current_mesh()
-    m.add_face_custom_scalar_attribute(np.asarray(selected, np.float64), "holefill_select")
-    ms.compute_selection_by_condition_per_face(condselect="holefill_select > 0")
+    getattr(m, f"add_{element}_custom_scalar_attribute")(np.asarray(selected, np.float64), "holefill_select")
+    getattr(ms, f"compute_selection_by_condition_per_{element}")(condselect="holefill_select > 0")
 
 
 def _restore_textures(ms, textures):
