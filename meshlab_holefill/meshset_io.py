@@ -46,6 +46,14 @@ class MeshArrays:
     vertex_selected: np.ndarray | None = None
 
 
+def current_mesh_exists(ms):
+    """Does the MeshSet's current mesh id name a mesh? (pymeshlab's filters crash when it does not.)"""
+    try:
+        return bool(ms.mesh_id_exists(ms.current_mesh_id()))
+    except pymeshlab.PyMeshLabException:  # "MeshSet has no current Mesh."
+        return False
+
+
 def current_mesh_arrays(ms):
     """Read the current mesh of ``ms`` into a MeshArrays, checking it can be hole-filled.
 
@@ -58,7 +66,7 @@ def current_mesh_arrays(ms):
         raise TypeError(f"expected a pymeshlab.MeshSet, got {type(ms).__name__}")
     if ms.mesh_number() == 0:
         raise ValueError("the MeshSet is empty: load a mesh first")
-    if not ms.mesh_id_exists(ms.current_mesh_id()):
+    if not current_mesh_exists(ms):
         raise ValueError("the MeshSet has no valid current mesh")
     m = ms.current_mesh()
     if m.face_number() == 0 or m.is_point_cloud():

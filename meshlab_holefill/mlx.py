@@ -44,6 +44,7 @@ from xml.parsers import expat
 
 from . import mlx_names, registry
 from .mlx_values import ParamValueError, builtin_param_value, our_param_value
+from .meshset_io import current_mesh_exists
 from .mlx_write import filter_script_xml, save_filter_script
 
 __all__ = [
@@ -358,7 +359,7 @@ def run_filter_script(ms, path_or_xml):
 
 def _runtime_problem(ms, step):
     """What would crash pymeshlab instead of raising (DESIGN.md: missing current mesh id)."""
-    if ms.mesh_number() > 0 and not ms.mesh_id_exists(ms.current_mesh_id()):
+    if ms.mesh_number() > 0 and not current_mesh_exists(ms):
         return "the MeshSet's current mesh does not exist"
     for p in step.params:
         if p.mlx_type == "RichMesh" and not ms.mesh_id_exists(p.value):

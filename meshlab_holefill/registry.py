@@ -14,6 +14,8 @@ from typing import Any, Callable
 import numpy as np
 import pymeshlab
 
+from .meshset_io import current_mesh_exists
+
 # MeshLab's RichParameter type for each kind of parameter (used when writing .mlx files).
 MLX_TYPES = {"int": "RichInt", "float": "RichFloat", "bool": "RichBool", "enum": "RichEnum",
              "length": "RichAbsPerc", "string": "RichString"}
@@ -106,15 +108,8 @@ class FilterSpec:
 FILTERS: dict[str, FilterSpec] = {}
 
 
-def _current_mesh_exists(ms):
-    try:
-        return bool(ms.mesh_id_exists(ms.current_mesh_id()))
-    except pymeshlab.PyMeshLabException:  # "MeshSet has no current Mesh."
-        return False
-
-
 def _bbox_diagonal(ms):
-    if ms.mesh_number() == 0 or not ms.mesh_id_exists(ms.current_mesh_id()):
+    if ms.mesh_number() == 0 or not current_mesh_exists(ms):
         return 0.0
     return float(ms.current_mesh().bounding_box().diagonal())
 
@@ -275,7 +270,7 @@ def apply_filter(ms, name, **kwargs):
     global _DEPTH
     if not isinstance(ms, pymeshlab.MeshSet):
         raise TypeError(f"apply_filter: expected a pymeshlab.MeshSet, got {type(ms).__name__}")
-    if ms.mesh_number() > 0 and not _current_mesh_exists(ms):
+    if ms.mesh_number() > 0 and not current_mesh_exists(ms):
         # pymeshlab's own filters crash the process on a dangling current mesh id (DESIGN.md)
         raise ValueError(f"filter '{name}': the MeshSet's current mesh does not exist; call set_current_mesh "
                          "with an existing id")
