@@ -16,17 +16,18 @@ from meshlab_holefill.algorithms.embedding import (embed_patch, embedding_energy
 from meshlab_holefill.algorithms.unfolding import (anneal_loop, colour_classes, linear_motion_is_simple,
                                                    planarity_energy, planarity_terms, project_to_best_plane,
                                                    unfold_loop)
-from meshlab_holefill.geometry.development import (MIN_CLOSURE_RATIO, boundary_gap_angles, close_lengths, develop_loop,
-                                                   simple_development)
+from meshlab_holefill.geometry.development import (MIN_CLOSURE_RATIO, boundary_gap_angles, close_lengths, developed_area,
+                                                   develop_loop, simple_development)
 from meshlab_holefill.comparison import MeshCase, prepare_case
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.geometry.segments import min_segment_distance, segment_distances
+from meshlab_holefill.geometry.triangulate import polygon_signed_area
 from meshlab_holefill.holes import boundary_loops, hole_context, nonmanifold_edges, outline_ratios
 from meshlab_holefill.metrics import corner_quality_bound
 from meshlab_holefill.patch import validate_patch
 
-from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sphere_with_holes
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
 
 
 # ----------------------------------------------------------------------------- shapes
@@ -716,3 +717,90 @@ def test_minimise_embedding_energy_without_free_rows_or_with_a_free_island():
     assert np.allclose(Y[[5, 6, 9, 10]], best[:4], atol=1e-9)
     assert np.allclose(Y[16:], Y[16], atol=1e-9)
     assert embedding_energy(Y, R, free)[0] == pytest.approx(0.0, abs=1e-15)
+
+
+# ----------------------------------------------------------------------------- domain area guard (beyond the paper)
+
+def flat_strip_hole():
+    """A flat grid with a strip one cell high and 0.8 long removed: a 66-edge loop around area 0.04."""
+    V, F = grid(41, 21)
+    C = V[F].mean(axis=1)
+    remove = (C[:, 1] > 0.45) & (C[:, 1] < 0.5) & (np.abs(C[:, 0] - 0.5) < 0.4)
+    return V, F[~remove]
+
+
+def test_developed_area_of_a_planar_hole_is_its_area():
+    V, F = flat_strip_hole()
+    (loop,) = [lp for lp in boundary_loops(F) if len(lp) < 100]
+    ctx = hole_context(V, F, loop, rings=2)
+    area = developed_area(ctx.points, boundary_gap_angles(ctx.vertices, ctx.faces, ctx.size))
+    assert len(loop) == 66
+    assert area == pytest.approx(0.8 * 0.05, rel=1e-9)
+
+
+def test_developed_area_of_a_degenerate_development_is_the_vector_area():
+    # A skew quad of four equal edges whose surface leaves angles 0.05 and pi - 0.05 open
+    # develops to a rhombus of area 1.25 sin(0.05) = 0.06; any surface spanning the loop has at
+    # least its vector area, 1, which is then the estimate.
+    P = np.array([[0, 0, 0], [1, 0, 0.5], [1, 1, 0], [0, 1, 0.5]], float)
+    gaps = np.array([0.05, np.pi - 0.05, 0.05, np.pi - 0.05])
+    Q = develop_loop(P, gaps)
+    assert abs(polygon_signed_area(Q)) == pytest.approx(1.25 * np.sin(0.05), rel=1e-9)
+    vector_area = 0.5 * np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0))
+    assert vector_area == pytest.approx(1.0)
+    assert developed_area(P, gaps) == pytest.approx(1.0, rel=1e-12)
+    assert developed_area(P, np.full(4, np.pi / 2)) == pytest.approx(1.25, rel=1e-12)  # the square
+
+
+def test_domains_much_larger_than_the_missing_surface_are_refused():
+    V, F = flat_strip_hole()
+    (loop,) = [lp for lp in boundary_loops(F) if len(lp) < 100]
+    ctx = hole_context(V, F, loop, rings=2)
+    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, ctx.size)
+    strip = (develop_loop(ctx.points, gaps), "development", 0.0)
+    round_polygon = (develop_loop(ctx.points, gaps, relax=1.0), "development", 1.0)  # same edges, convex
+    # the convex polygon of a 1.7-long perimeter encloses ~0.22, 5.7 times the strip's 0.04
+    assert cu.domains_within_area(ctx.points, gaps, [round_polygon, strip], 6.0) == [round_polygon, strip]
+    assert cu.domains_within_area(ctx.points, gaps, [round_polygon, strip], 5.0) == [strip]
+    with pytest.raises(HoleFillError, match=r"at least 5\.\d times the area of the missing surface"):
+        cu.domains_within_area(ctx.points, gaps, [round_polygon], 5.0)
+
+
+def test_max_domain_area_reaches_the_filter_and_fails_the_hole_cleanly():
+    V, F = flat_strip_hole()
+    ms = meshset_from_arrays(V, F)
+    res = ms.meshing_close_holes_curve_unfolding(max_domain_area=0.5)
+    (hole,) = [h for h in res["holes"] if h["boundary_edges"] == 66]
+    assert hole["status"] == "failed" and "1.0 times the area of the missing surface" in hole["reason"]
+    V2, F2 = mesh_arrays(ms)
+    assert np.array_equal(V2, V) and np.array_equal(F2, F)  # untouched (the grid's outer border is not filled)
+    ms = meshset_from_arrays(V, F)
+    res = ms.meshing_close_holes_curve_unfolding()
+    assert [h["status"] for h in res["holes"] if h["boundary_edges"] == 66] == ["closed"]
+
+
+def test_a_long_strip_hole_of_the_bunny_fails_fast_instead_of_bulging():
+    """Fuzzing found it: 697 border edges around a strip 1.6 edges wide across bunny.obj.
+
+    The annealing and every simple development unfold it to round polygons 15 to 27 times the
+    strip's area, whose patches (50k and 88k faces) crossed the mesh; the repair then clipped
+    ears for 158 s before the hole failed. Now it fails at once and names the reason.
+    """
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("bunny.obj"))
+    V, F = mesh_arrays(ms)
+    rng = np.random.default_rng(4)
+    C = V[F].mean(axis=1)
+    d = rng.normal(size=3); d /= np.linalg.norm(d)
+    e = np.cross(d, rng.normal(size=3)); e /= np.linalg.norm(e)
+    p0 = V[rng.integers(len(V))]
+    diag = np.linalg.norm(V.max(0) - V.min(0))
+    edge = np.linalg.norm(V[F[:, 0]] - V[F[:, 1]], axis=1).mean()
+    strip = ((np.abs((C - p0) @ d) < 0.8 * edge) & (np.abs((C - p0) @ e) < 0.5 * diag)
+             & ((C - p0) @ np.cross(d, e) > -0.1 * diag) & (np.linalg.norm(C - p0, axis=1) < 0.6 * diag))
+    ms = meshset_from_arrays(V, F[~strip])
+    res = ms.meshing_close_holes_curve_unfolding()
+    (hole,) = res["holes"]
+    assert hole["boundary_edges"] == 697 and hole["status"] == "failed"
+    assert "times the area of the missing surface" in hole["reason"] and "strip-shaped" in hole["reason"]
+    assert np.array_equal(mesh_arrays(ms)[1], F[~strip])

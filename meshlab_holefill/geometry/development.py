@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .segments import is_simple_polygon
+from .triangulate import polygon_signed_area
 
 
 def boundary_gap_angles(vertices, faces, k):
@@ -72,6 +73,36 @@ def develop_loop(P, gap_angles, relax=0.0):
     directions = np.stack([np.cos(theta), np.sin(theta)], axis=1)
     edges = close_lengths(lengths, directions)[:, None] * directions
     return np.concatenate([[[0.0, 0.0]], np.cumsum(edges, axis=0)[:-1]])
+
+
+def developed_area(P, gap_angles):
+    """Area of the missing surface, estimated from the loop and the surface around it.
+
+    The area the plain development (:func:`develop_loop`, relax 0) encloses at the loop's
+    perimeter, or the loop's vector area |sum p_i x p_(i+1)| / 2 when that is larger: every
+    surface spanning the loop has at least the vector area, which is the estimate when the
+    development is degenerate (a loop of four vertices folded about a diagonal develops to
+    almost nothing).
+    The curve-unfolding filter compares its planar domains with it: a domain enclosing many
+    times this area embeds as a patch bulging far out of the surface.
+
+    Parameters
+    ----------
+    P : (m, 3) float64  loop
+    gap_angles : (m,) float64  from :func:`boundary_gap_angles`
+
+    Returns
+    -------
+    float
+    """
+    P = np.asarray(P, np.float64)
+    vector_area = 0.5 * float(np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)))
+    D = develop_loop(P, gap_angles)
+    if not np.all(np.isfinite(D)):
+        return vector_area
+    # at the loop's perimeter, as the unfolded domains are measured (the closure may shorten edges)
+    scale = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).sum() / np.linalg.norm(np.roll(D, -1, axis=0) - D, axis=1).sum()
+    return max(vector_area, abs(polygon_signed_area(D)) * scale ** 2)
 
 
 # develop_loop's closure keeps every edge at least this share of its length: only a margin
