@@ -9,6 +9,7 @@ import meshlab_holefill
 from meshlab_holefill import FilterParameterError, MeshTopologyError, apply_filter, filter_list
 from meshlab_holefill.geometry.quality import triangle_quality
 from meshlab_holefill.holes import boundary_loops
+from meshlab_holefill.meshset_io import index_ranges, set_selection
 from meshlab_holefill.holes import nonmanifold_edges as nonmanifold_edges_of
 
 from conftest import (assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample,
@@ -296,3 +297,34 @@ def test_transform_and_vertex_selection_survive_a_border_refinement(bunny_scan):
     selected = m.vertex_selection_array()
     np.testing.assert_array_equal(selected[:len(before)], before)
     assert not selected[len(before):].any()
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(density=st.floats(0.0, 1.0), seed=st.integers(0, 2**16), element=st.sampled_from(["face", "vertex"]))
+def test_set_selection_writes_exactly_the_mask(density, seed, element):
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)  # 1280 faces, 642 vertices: dense masks take the attribute path
+    m = ms.current_mesh()
+    n = m.face_number() if element == "face" else m.vertex_number()
+    mask = np.random.default_rng(seed).random(n) < density
+    set_selection(ms, mask, element)
+    assert np.array_equal(getattr(m, f"{element}_selection_array")(), mask)
+
+
+def test_index_ranges_are_the_runs_of_the_mask():
+    assert index_ranges([False, True, True, False, True]) == [(1, 3), (4, 5)]
+    assert index_ranges([True, True]) == [(0, 2)]
+    assert index_ranges([]) == [] and index_ranges([False]) == []
+
+
+@pytest.mark.parametrize("name", filter_list())
+def test_the_new_face_selection_leaves_no_attribute_on_the_layer(name, bunny_scan):
+    bunny_scan.compute_selection_by_condition_per_face(condselect="fi < 100")  # a block selected before
+    res = getattr(bunny_scan, name)()
+    m = bunny_scan.current_mesh()
+    selected = np.flatnonzero(m.face_selection_array())
+    n_new = res["new_faces"]
+    assert selected.tolist() == list(range(100)) + list(range(m.face_number() - n_new, m.face_number()))
+    for element in ("face", "vertex"):
+        with pytest.raises(pymeshlab.PyMeshLabException, match="No valid per .* attribute named holefill_select"):
+            getattr(m, f"{element}_custom_scalar_attribute_array")("holefill_select")
