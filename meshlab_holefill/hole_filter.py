@@ -40,9 +40,11 @@ def face_boxes_near(V, F, boxes):
     """Mesh faces whose bounding box overlaps at least one of ``boxes``, found in one pass.
 
     The self-intersection check needs, per patch, the mesh faces near it. Scanning every
-    face's box per hole costs O(m) per hole (0.2 s per hole at 3.6M faces); instead the
-    face boxes are built once, axis by axis (no (m, 3, 3) temporary), filtered against the
-    union of all patch boxes, and only those few candidates are tested per patch.
+    face's box per hole costs O(m) per hole (0.2 s per hole at 3.6M faces); instead every
+    vertex gets an outcode (Cohen-Sutherland: one bit per side of the union of the patch
+    boxes it lies beyond), a face misses the union box exactly when its three vertices share
+    a bit, and only the few faces left get their boxes for the per-patch test. The outcodes
+    cost one byte per vertex and one gather of bytes per face (no (m, 3, 3) float temporary).
 
     Parameters
     ----------
@@ -59,11 +61,11 @@ def face_boxes_near(V, F, boxes):
         Their boxes, for the per-patch test.
     """
     union_lo, union_hi = boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)
-    near = np.arange(len(F))
+    code = np.zeros(len(V), np.uint8)
     for axis in range(3):
-        coord = V[:, axis][F[near]]
-        keep = (coord.max(axis=1) >= union_lo[axis]) & (coord.min(axis=1) <= union_hi[axis])
-        near = near[keep]
+        code |= (V[:, axis] < union_lo[axis]).astype(np.uint8) << (2 * axis)
+        code |= (V[:, axis] > union_hi[axis]).astype(np.uint8) << (2 * axis + 1)
+    near = np.flatnonzero((code[F[:, 0]] & code[F[:, 1]] & code[F[:, 2]]) == 0)
     corners = V[F[near]]
     lo, hi = corners.min(axis=1), corners.max(axis=1)
     return near, lo, hi

@@ -119,8 +119,8 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
     """Per-element attributes for the filled mesh: originals unchanged, new ones interpolated.
 
     A new vertex gets the inverse-distance interpolation of its hole's loop-vertex values;
-    a new face gets the mean value of its hole's border faces (colours, quality) and is
-    unselected; wedge texture coordinates of new corners come from the loop vertex's
+    a new face gets the mean value of its hole's border faces, each counted once (colours,
+    quality), and is unselected; wedge texture coordinates of new corners come from the loop vertex's
     coordinate in a border face, or the interpolation above for new vertices.
 
     Returns
@@ -221,14 +221,26 @@ def refine_mesh_arrays(arrays, refinement):
 
 
 def _border_faces_per_loop(F, loops):
-    """For each loop, the original faces holding one of its edges."""
-    from .holes import boundary_halfedges
+    """For each loop, the faces holding one of its edges.
 
-    he, faces = boundary_halfedges(F)
+    Only faces with two vertices on some loop can hold a loop edge; those few are found with
+    one gather over F, so no mesh-wide edge sort is needed here (1.9 s at 3.6M faces).
+    """
+    F = np.asarray(F, np.int64)
+    on_loop = np.zeros(int(F.max()) + 1 if F.size else 0, bool)
+    for loop in loops:
+        on_loop[loop] = True
+    candidates = np.flatnonzero(on_loop[F].sum(axis=1) >= 2)
+    C = F[candidates]
+    n = len(on_loop)
+    face_keys = np.stack([np.minimum(C, np.roll(C, -1, axis=1)), np.maximum(C, np.roll(C, -1, axis=1))], -1)
+    face_keys = face_keys[..., 0] * n + face_keys[..., 1]  # (c, 3) undirected edge keys
     out = []
     for loop in loops:
-        on_loop = np.isin(he[:, 0], loop) & np.isin(he[:, 1], loop)
-        out.append(faces[on_loop])
+        loop = np.asarray(loop, np.int64)
+        nxt = np.roll(loop, -1)
+        loop_keys = np.minimum(loop, nxt) * n + np.maximum(loop, nxt)
+        out.append(candidates[np.isin(face_keys, loop_keys).any(axis=1)])
     return out
 
 

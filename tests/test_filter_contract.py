@@ -115,6 +115,28 @@ def test_vertex_colours_and_quality_are_interpolated_on_new_vertices():
     assert np.allclose(q[len(V):], new[:, 1], atol=0.15)  # quality ~ y, interpolated from the border
 
 
+def test_new_faces_get_the_mean_quality_of_their_holes_border_faces():
+    # A square hole in a grid with one triangle of its lower-left cell left in: that face holds
+    # two loop edges and counts once.
+    V, F = grid(8, 8)
+    C = V[F].mean(axis=1)
+    hole = (np.abs(C[:, 0] - 0.5) < 0.2) & (np.abs(C[:, 1] - 0.5) < 0.2)
+    lower_right_halves = np.flatnonzero(hole[: len(F) // 2])  # grid() lists the (a, b, c) halves first
+    hole[lower_right_halves[np.argmin(C[lower_right_halves].sum(axis=1))]] = False
+    F = F[~hole]
+    quality = np.arange(len(F), dtype=np.float64) ** 2
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=F.astype(np.int32), f_scalar_array=quality))
+    (loop,) = [lp for lp in boundary_loops(F) if len(lp) < 20]
+    edges = {frozenset(e) for e in zip(loop.vertices, np.roll(loop.vertices, -1))}
+    border = [f for f in range(len(F)) if any(frozenset(e) in edges for e in zip(F[f], np.roll(F[f], -1)))]
+    assert len(border) < len(loop)  # some border faces hold two loop edges
+    getattr(ms, NAME)()
+    q = ms.current_mesh().face_scalar_array()
+    assert np.array_equal(q[:len(F)], quality)
+    assert np.allclose(q[len(F):], quality[border].mean(), rtol=1e-6)
+
+
 def test_maxholesize_skips_large_holes_and_selected_limits_to_selection():
     V, F, _ = sphere_with_holes(subdiv=4, centers=[(1, 0, 0)], radius=0.3)
     _, F, _ = cut_disks(V, F, [(0, 0, 1)], 0.5)
