@@ -1,11 +1,13 @@
+import collections
+
 import numpy as np
 import pymeshlab
 import pytest
 from hypothesis import given, settings, strategies as st
 
 from meshlab_holefill.hole_guards import inside_hole_sector
-from meshlab_holefill.holes import (boundary_halfedges, boundary_loops, hole_context, loop_measures, nonmanifold_edges,
-                                    vertex_face_incidence)
+from meshlab_holefill.holes import (boundary_halfedges, boundary_loops, edge_face_counts, edge_summary, hole_context,
+                                    loop_measures, nonmanifold_edges, vertex_face_incidence)
 
 from conftest import cut_disks, grid, mesh_arrays, sample, sphere_with_holes
 
@@ -180,3 +182,27 @@ def test_any_flipped_border_face_leaves_only_open_chains_that_cover_the_hole(whi
         for (a, b), f in zip(_chain_edges(lp), lp.border_faces):
             face = F_flipped[f].tolist()
             assert face[(face.index(b) + 1) % 3] == a  # the border face holds (b, a)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n_vertices=st.integers(3, 12), n_faces=st.integers(1, 40))
+def test_edge_tables_match_counting_every_half_edge(seed, n_vertices, n_faces):
+    # Random triangle soups: repeated faces, both orientations, edges with 1 to many faces.
+    rng = np.random.default_rng(seed)
+    F = np.array([rng.choice(n_vertices, 3, replace=False) for _ in range(n_faces)], np.int64)
+    halfedges = collections.defaultdict(list)
+    for f, face in enumerate(F):
+        for corner in range(3):
+            a, b = int(face[corner]), int(face[(corner + 1) % 3])
+            halfedges[(min(a, b), max(a, b))].append((a, b, f))
+    edges = sorted(halfedges)
+    got_edges, got_counts = edge_face_counts(F)
+    assert got_edges.tolist() == [list(e) for e in edges]
+    assert got_counts.tolist() == [len(halfedges[e]) for e in edges]
+    border = [halfedges[e][0] for e in edges if len(halfedges[e]) == 1]
+    he, faces = boundary_halfedges(F)
+    assert np.column_stack([he, faces]).tolist() == [list(x) for x in border]
+    he2, faces2, bad = edge_summary(F)
+    assert np.array_equal(he2, he) and np.array_equal(faces2, faces)
+    assert bad.tolist() == [list(e) for e in edges if len(halfedges[e]) > 2]
+    assert nonmanifold_edges(F).tolist() == bad.tolist()
