@@ -16,10 +16,12 @@ from .mlx import (MlxRunError, MlxScriptError, filter_script_xml, read_filter_sc
                   save_filter_script)
 
 from . import compare  # a callable module: meshlab_holefill.compare(meshes, report="dir")
+from . import pymeshlab_doors as _pymeshlab_doors
 
 __version__ = "0.1.0"
 
 _register_all()
+_pymeshlab_doors.extend()  # ms.apply_filter(name), load/apply_filter_script and the parameter listing know ours
 
 __all__ = [
     "FILTERS", "FilterParameterError", "HoleContext", "HoleFillError", "MeshTopologyError", "Patch",

@@ -4,7 +4,8 @@ pymeshlab's ``load_filter_script`` / ``apply_filter_script`` run in C++: they ca
 Python filter, and a filter name they do not know fails only when it is reached, after the
 filters before it have changed the meshes. This module reads the same XML, checks all of it
 first, and runs each step through :func:`meshlab_holefill.apply_filter`, the door that knows
-both kinds of filter.
+both kinds of filter (:mod:`.pymeshlab_doors` sends pymeshlab's two calls here for scripts
+that name our filters).
 
 Reading (:func:`read_filter_script`, :func:`run_filter_script`)
     ``<filter name="...">`` names a filter by its MeshLab display name ("Close Holes",

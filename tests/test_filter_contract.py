@@ -350,3 +350,28 @@ def test_the_new_face_selection_leaves_no_attribute_on_the_layer(name, bunny_sca
     for element in ("face", "vertex"):
         with pytest.raises(pymeshlab.PyMeshLabException, match="No valid per .* attribute named holefill_select"):
             getattr(m, f"{element}_custom_scalar_attribute_array")("holefill_select")
+
+
+def test_meshset_apply_filter_takes_our_names_like_meshlabs_own(bunny_scan):
+    by_method = pymeshlab.MeshSet()
+    by_method.load_new_mesh(sample("bunny10k_textured.obj"))
+    expected = getattr(by_method, NAME)()
+    res = bunny_scan.apply_filter(NAME)  # pymeshlab's generic, by-name door
+    assert res["closed_holes"] == expected["closed_holes"] == 5
+    assert np.array_equal(bunny_scan.current_mesh().face_matrix(), by_method.current_mesh().face_matrix())
+    assert np.array_equal(bunny_scan.current_mesh().vertex_matrix(), by_method.current_mesh().vertex_matrix())
+    with pytest.raises(FilterParameterError, match="has no parameter 'sigma'"):
+        bunny_scan.apply_filter(NAME, sigma=1.0)
+    # built-in names still go to pymeshlab, results and errors unchanged
+    assert bunny_scan.apply_filter("meshing_close_holes", maxholesize=30) == {"closed_holes": 0, "new_faces": 0}
+    with pytest.raises(pymeshlab.PyMeshLabException, match="Filter does not exists"):
+        bunny_scan.apply_filter("no_such_filter")
+
+
+def test_pymeshlab_print_filter_parameter_list_knows_our_filters(capfd):
+    pymeshlab.print_filter_parameter_list(NAME)
+    ours = capfd.readouterr().out
+    assert "Close Holes: Minimum Angle" in ours and "sigma_c : float, default 0.1" in ours
+    pymeshlab.print_filter_parameter_list("meshing_close_holes")
+    builtin = capfd.readouterr().out
+    assert "maxholesize" in builtin and "sigma_c" not in builtin

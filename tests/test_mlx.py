@@ -556,3 +556,27 @@ def test_cli_run_check_record_and_error(tmp_path, capsys):
     bad.write_text(script(LAPLACIAN, '<filter name="Close Holez"/>'))
     assert main(["run", str(bad), BUNNY, out]) == 2
     assert f"{bad}:4: filter 'Close Holez': unknown filter" in capsys.readouterr().err
+
+
+def test_pymeshlab_load_and_apply_filter_script_run_our_filters(tmp_path):
+    """pymeshlab's own script door: load_filter_script + apply_filter_script, our filter among MeshLab's."""
+    direct = pymeshlab.MeshSet()
+    direct.load_new_mesh(sample("bunny10k_textured.obj"))
+    faired = os.path.join(WORKFLOWS, "close_holes_min_angle_bilateral_faired.mlx")
+    run_filter_script(direct, faired)
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("bunny10k_textured.obj"))
+    ms.load_filter_script(faired)
+    ms.apply_filter_script()
+    assert np.array_equal(ms.current_mesh().face_matrix(), direct.current_mesh().face_matrix())
+    assert np.array_equal(ms.current_mesh().vertex_matrix(), direct.current_mesh().vertex_matrix())
+    assert len(boundary_loops(ms.current_mesh().face_matrix())) == 0
+    # an invalid script naming our filter is refused when loaded, naming the problem
+    bad = tmp_path / "bad.mlx"
+    bad.write_text(open(faired).read().replace('name="smoothing"', 'name="smoothness"'))
+    with pytest.raises(MlxScriptError, match="smoothness"):
+        ms.load_filter_script(str(bad))
+    # scripts of MeshLab's filters only are pymeshlab's business, as before
+    ms.clear_filter_script()
+    ms.load_filter_script(os.path.join(WORKFLOWS, "meshlab_close_holes.mlx"))
+    ms.apply_filter_script()
