@@ -377,9 +377,10 @@ def loop_measures(points):
     best-fitting plane divided by the diameter; 0 for a planar loop).
     """
     from .geometry.pca import fit_plane
+    from .geometry.triangulate import polygon_perimeter
 
     P = np.asarray(points, dtype=np.float64)
-    perimeter = float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).sum())
+    perimeter = polygon_perimeter(P)
     if len(P) <= 2000:
         D = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=2)
         diameter = float(D.max())

@@ -120,8 +120,8 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
 
     A new vertex gets the inverse-distance interpolation of its hole's loop-vertex values;
     a new face gets the mean value of its hole's border faces, each counted once (colours,
-    quality), and is unselected; wedge texture coordinates of new corners come from the loop vertex's
-    coordinate in a border face, or the interpolation above for new vertices.
+    quality), and is unselected; wedge texture coordinates of new corners come from the loop
+    vertex's coordinate in a border face, or the interpolation above for new vertices.
 
     Returns
     -------

@@ -43,10 +43,10 @@ from ..geometry.topology import edge_pair_set
 from ..patch import HoleFillError, Patch
 from ..registry import ParamSpec
 from .embedding import embed_patch
-from .unfolded_triangulation import polygon_perimeter, triangulate_and_embed
+from .unfolded_triangulation import triangulate_and_embed
 from ..geometry.development import (boundary_gap_angles, develop_loop, developed_area, simple_development,
                                     simple_developments)
-from ..geometry.triangulate import polygon_signed_area
+from ..geometry.triangulate import polygon_perimeter, polygon_signed_area
 from .unfolding import linear_motion_is_simple, unfold_loop
 
 RINGS = 2

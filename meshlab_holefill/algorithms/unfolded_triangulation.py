@@ -10,18 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..geometry.triangulate import triangulate_polygon
+from ..geometry.triangulate import polygon_perimeter, triangulate_polygon
 from ..patch import HoleFillError
 from .embedding import embed_patch
 
 MIN_ANGLE_DEGREES = 30.0  # Sec. 3.3 after Chew: every angle in [30, 120] degrees
 MAX_CHORD_ROUNDS = 8  # re-triangulations that break chords duplicating mesh edges
-
-
-def polygon_perimeter(P):
-    """Length of a closed polygon, P : (m, d)."""
-    P = np.asarray(P, np.float64)
-    return float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).sum())
 
 
 def constrained_delaunay(Q, forbidden_chords=()):

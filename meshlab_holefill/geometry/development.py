@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .segments import is_simple_polygon
-from .triangulate import polygon_signed_area
+from .triangulate import polygon_perimeter, polygon_signed_area
 
 
 def boundary_gap_angles(vertices, faces, k):
@@ -82,8 +82,7 @@ def developed_area(P, gap_angles):
     perimeter, or the loop's vector area |sum p_i x p_(i+1)| / 2 when that is larger: every
     surface spanning the loop has at least the vector area, which is the estimate when the
     development is degenerate (a loop of four vertices folded about a diagonal develops to
-    almost nothing).
-    The curve-unfolding filter compares its planar domains with it: a domain enclosing many
+    almost nothing). The curve-unfolding filter compares its planar domains with it: a domain enclosing many
     times this area embeds as a patch bulging far out of the surface.
 
     Parameters
@@ -101,7 +100,7 @@ def developed_area(P, gap_angles):
     if not np.all(np.isfinite(D)):
         return vector_area
     # at the loop's perimeter, as the unfolded domains are measured (the closure may shorten edges)
-    scale = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).sum() / np.linalg.norm(np.roll(D, -1, axis=0) - D, axis=1).sum()
+    scale = polygon_perimeter(P) / polygon_perimeter(D)
     return max(vector_area, abs(polygon_signed_area(D)) * scale ** 2)
 
 

@@ -13,6 +13,12 @@ def polygon_signed_area(Q):
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
+def polygon_perimeter(P):
+    """Length of a closed polygon, P : (m, d)."""
+    P = np.asarray(P, np.float64)
+    return float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).sum())
+
+
 def triangulate_polygon(Q, max_area=None, min_angle=None, extra_points=None, steiner_on_boundary=False):
     """Constrained Delaunay triangulation of the simple polygon Q, every polygon edge kept.
 
