@@ -373,7 +373,7 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
     V0, F0 = case.V0, case.F0
     run = {"case": case.name, "filler": filler.label, "filter": filler.filter,
            "params": _json_safe(resolved_params), "status": reply["status"], "error": reply.get("error"),
-           "seconds": reply.get("seconds")}
+           "seconds": reply.get("seconds"), "memory_mb": reply.get("memory_mb")}
     pictures = {}
     base = [{"case": case.name, "filler": filler.label, "filter": filler.filter, "hole": h.index,
              "size_class": h.size_class, "shape": h.shape, "boundary_edges": h.boundary_edges,

@@ -39,13 +39,47 @@ def _worker_params(params):
     return out
 
 
+def _rss_mb(field):
+    """A memory figure of this process from /proc/self/status in MB (None where there is no /proc)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def reset_peak_memory():
+    """Start a new peak-memory window (Linux: writing 5 to clear_refs resets VmHWM to the current RSS).
+
+    Returns the resident memory at the start of the window in MB, or None when peaks cannot
+    be reset here (then no memory figure is reported).
+    """
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")
+    except OSError:
+        return None
+    return _rss_mb("VmRSS")
+
+
+def peak_memory_since(start_mb):
+    """Peak resident memory above ``start_mb`` since :func:`reset_peak_memory`, in MB (None if unknown)."""
+    peak = _rss_mb("VmHWM")
+    return None if start_mb is None or peak is None else max(peak - start_mb, 0.0)
+
+
 def execute_task(task):
     """Run one task (in the worker): a filter on arrays, or a named function.
 
     Returns
     -------
-    dict with ``status`` ("ok" or "error"), ``error``, ``seconds`` and, for a filter, ``result``
-    and the mesh: ``V_new``/``F_new`` (appended elements, originals untouched) or ``V``/``F``.
+    dict with ``status`` ("ok" or "error"), ``error``, ``seconds`` and, for a filter, ``result``,
+    ``memory_mb`` (peak resident memory of building the MeshSet and running the filter, above
+    the worker's memory before; None off Linux) and the mesh: ``V_new``/``F_new`` (appended
+    elements, originals untouched) or ``V``/``F``.
     """
     import pymeshlab
 
@@ -59,6 +93,7 @@ def execute_task(task):
         value = getattr(importlib.import_module(module), name)(*task.get("args", []), **task.get("kwargs", {}))
         return {"status": "ok", "value": _json_safe(value), "seconds": time.perf_counter() - t0}
     V0, F0 = task["V"], task["F"]
+    start_mb = reset_peak_memory()
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V0, face_matrix=F0.astype(np.int32)), task.get("label", "mesh"))
     t0 = time.perf_counter()
@@ -67,11 +102,13 @@ def execute_task(task):
     except Exception as exc:  # a comparison reports a failing filter and goes on
         tb = traceback.format_exc(limit=-3)
         return {"status": "error", "error": f"{type(exc).__name__}: {exc}", "traceback": tb,
-                "seconds": time.perf_counter() - t0}
+                "seconds": time.perf_counter() - t0, "memory_mb": peak_memory_since(start_mb)}
     seconds = time.perf_counter() - t0
+    memory_mb = peak_memory_since(start_mb)
     m = ms.current_mesh()
     V1, F1 = np.asarray(m.vertex_matrix(), np.float64), np.asarray(m.face_matrix(), np.int64)
-    reply = {"status": "ok", "error": None, "seconds": seconds, "result": _json_safe(result or {})}
+    reply = {"status": "ok", "error": None, "seconds": seconds, "memory_mb": memory_mb,
+             "result": _json_safe(result or {})}
     n0, m0 = len(V0), len(F0)
     if len(V1) >= n0 and len(F1) >= m0 and np.array_equal(V1[:n0], V0) and np.array_equal(F1[:m0], F0):
         reply.update(V_new=V1[n0:], F_new=F1[m0:])

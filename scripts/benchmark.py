@@ -116,7 +116,8 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALIN
             hole_rows = [r for r in result.holes if r["filler"] == run["filler"]]
             per_hole = [r.get("seconds") for r in hole_rows if r.get("closed") and r.get("seconds") is not None]
             rows.append({"faces": int(len(prepared.F0)), "filler": run["filler"], "status": run["status"],
-                         "run_seconds": run["seconds"], "closed": run.get("closed_holes"),
+                         "run_seconds": run["seconds"], "memory_mb": run.get("memory_mb"),
+                         "closed": run.get("closed_holes"),
                          "hole_edges": [h.boundary_edges for h in prepared.holes],
                          "hole_seconds": per_hole if len(per_hole) == len(hole_rows) else None,
                          "cut_seconds": cut_seconds})
@@ -158,13 +159,16 @@ def scaling_plot(rows, path):
 
 
 def scaling_table(rows):
-    header = ["faces", "filter", "closed", "seconds filling the holes", "seconds whole run", "rest (O(n) search, I/O)"]
+    header = ["faces", "filter", "closed", "seconds filling the holes", "seconds whole run", "rest (O(n) search, I/O)",
+              "peak MB"]
     table = []
     for r in rows:
         fill = sum(r["hole_seconds"]) if r["hole_seconds"] else None
+        memory = r.get("memory_mb")
         table.append([f"{r['faces']:,}", f"`{short_label(r['filler'])}`", f"{r['closed']}/{len(r['hole_edges'])}",
                       "–" if fill is None else f"{fill:.3f}", f"{r['run_seconds']:.2f}",
-                      "–" if fill is None else f"{r['run_seconds'] - fill:.2f}"])
+                      "–" if fill is None else f"{r['run_seconds'] - fill:.2f}",
+                      "–" if memory is None else f"{memory:.0f}"])
     return header, table
 
 
@@ -360,7 +364,8 @@ def main(argv=None):
             json.dump(rows, fh, indent=1)
         text += ("\n**Scaling** (the same three holes, ~20/60/150 boundary edges, in the bunny subdivided; "
                  "'filling the holes' is the filters' own per-hole time, the rest is the O(n) boundary search, "
-                 "mesh transfer and merge):\n\n" + _md_table(*scaling_table(rows)) + f"\n\nPlot: `{args.out}/scaling.png`.\n")
+                 "mesh transfer and merge; 'peak MB' is the worker's peak resident memory while it builds the "
+                 "MeshSet and runs the filter, above its memory before):\n\n" + _md_table(*scaling_table(rows)) + f"\n\nPlot: `{args.out}/scaling.png`.\n")
     if args.speed_case:
         rows = scaling_run(plain, args.seed, 2, max(args.timeout, 180.0), None, SPEED_CASE_SIZES, first_level=1)
         with open(os.path.join(args.out, "speed_case.json"), "w") as fh:

@@ -18,7 +18,7 @@ from meshlab_holefill.comparison import (Filler, IsolatedRunner, MeshCase, parse
 from meshlab_holefill.holes import boundary_halfedges, boundary_loops
 from meshlab_holefill.metrics import mesh_checks
 
-from conftest import cut_disks, grid as unit_grid
+from conftest import cut_disks, grid as unit_grid, mesh_arrays
 
 SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
 
@@ -377,3 +377,27 @@ def test_mesh_checks_counts_every_moved_vertex_and_changed_face(moved, rotated, 
     checks = mesh_checks(V0, F0, V1, F1)
     assert checks["originals_changed"] == len(moved) + len(rotated)
     assert checks["new_faces"] == checks["new_vertices"] == checks["nonmanifold_edges"] == 0
+
+
+def test_peak_memory_window_sees_a_freed_allocation():
+    from meshlab_holefill.isolation import peak_memory_since, reset_peak_memory
+
+    start = reset_peak_memory()
+    if start is None:
+        pytest.skip("no /proc/self/clear_refs here: memory is not reported")
+    block = np.ones(50_000_000)  # 400 MB, touched
+    del block
+    assert peak_memory_since(start) > 350
+    assert peak_memory_since(reset_peak_memory()) < 50  # a new window forgets it
+
+
+def test_filter_task_reports_its_memory(bunny_scan):
+    from meshlab_holefill.isolation import execute_task, reset_peak_memory
+
+    if reset_peak_memory() is None:
+        pytest.skip("no /proc/self/clear_refs here: memory is not reported")
+    V, F = mesh_arrays(bunny_scan)
+    reply = execute_task({"kind": "filter", "V": V, "F": F, "filter": "meshing_close_holes_min_angle_bilateral",
+                          "params": {}})
+    assert reply["status"] == "ok" and reply["result"]["closed_holes"] == 5
+    assert 0.1 < reply["memory_mb"] < 500  # the MeshSet of a 10k-face scan and the fill
