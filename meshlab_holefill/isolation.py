@@ -6,6 +6,8 @@ replaced for the next task. Only arrays and plain values cross the pipe.
 """
 from __future__ import annotations
 
+import ctypes
+import gc
 import multiprocessing
 import time
 import traceback
@@ -54,9 +56,16 @@ def _rss_mb(field):
 def reset_peak_memory():
     """Start a new peak-memory window (Linux: writing 5 to clear_refs resets VmHWM to the current RSS).
 
-    Returns the resident memory at the start of the window in MB, or None when peaks cannot
-    be reset here (then no memory figure is reported).
+    Free heap memory is first handed back to the system (glibc's ``malloc_trim``), so memory
+    an earlier run freed but the allocator kept does not hide this run's growth. Returns the
+    resident memory at the start of the window in MB, or None when peaks cannot be reset
+    here (then no memory figure is reported).
     """
+    gc.collect()
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
     try:
         with open("/proc/self/clear_refs", "w") as fh:
             fh.write("5")
