@@ -375,3 +375,31 @@ def test_pymeshlab_print_filter_parameter_list_knows_our_filters(capfd):
     pymeshlab.print_filter_parameter_list("meshing_close_holes")
     builtin = capfd.readouterr().out
     assert "maxholesize" in builtin and "sigma_c" not in builtin
+
+
+def test_a_failure_building_the_filled_layer_puts_the_old_one_back(bunny_scan, monkeypatch):
+    from meshlab_holefill import meshset_io
+
+    bunny_scan.compute_selection_by_condition_per_face(condselect="fi < 50")
+    m0 = bunny_scan.current_mesh()
+    before = (m0.vertex_matrix().copy(), m0.face_matrix().copy(), m0.face_color_matrix().copy(),
+              m0.wedge_tex_coord_matrix().copy(), m0.face_selection_array().copy())
+    build = meshset_io._new_mesh
+    calls = []
+
+    def out_of_memory_once(*args):
+        calls.append(len(args[1]))
+        if len(calls) == 1:
+            raise MemoryError("simulated")
+        return build(*args)
+
+    monkeypatch.setattr(meshset_io, "_new_mesh", out_of_memory_once)
+    with pytest.raises(MemoryError, match="simulated"):
+        getattr(bunny_scan, NAME)()
+    assert calls[0] > calls[1] == 9999  # the filled mesh was refused, the old layer rebuilt
+    m1 = bunny_scan.current_mesh()
+    after = (m1.vertex_matrix(), m1.face_matrix(), m1.face_color_matrix(), m1.wedge_tex_coord_matrix(),
+             m1.face_selection_array())
+    for a, b in zip(before, after):
+        assert np.array_equal(a, b)
+    assert bunny_scan.mesh_number() == 1 and m1.label() == "bunny10k_textured.obj" and m1.texture_number() == 1
