@@ -7,6 +7,7 @@ check, bit-exact originals, attributes, and the result dictionary.
 """
 from __future__ import annotations
 
+import hashlib
 import time
 
 import numpy as np
@@ -167,9 +168,10 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
         report.append(entry)
     fill_kwargs = {name: params[name] for name in algorithm_params}
     base = (arrays, list(loops), [dict(entry) for entry in report])
+    fills = {}  # hole -> outcome of its fill, reused by a later pass while its surroundings are the same
     while True:
         arrays, V, F, V2, F2, done_loops, patches, refinement, report = _fill_holes(
-            base, todo, params, fill, fill_kwargs, rings, prepare)
+            base, todo, params, fill, fill_kwargs, rings, prepare, fills)
         # A hole whose border was refined and which then failed would leave its split border
         # faces behind: fill again with that hole left out, so nothing of it is changed.
         undo = [i for i in todo if report[i]["status"] == "failed" and report[i].get("split_boundary_edges")]
@@ -202,11 +204,29 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
     return result
 
 
-def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare):
+def _context_key(ctx):
+    """Fingerprint of everything a fill can see of its hole: the local vertices and faces.
+
+    The algorithms read only the HoleContext's local arrays (normals, scales and the rest
+    derive from these), and they are deterministic, so an equal key means an equal outcome.
+    """
+    digest = hashlib.sha1()
+    for a in (ctx.vertices, ctx.faces, ctx.border_faces, ctx.forbidden_edges, ctx.depth):
+        a = np.ascontiguousarray(a)
+        digest.update(repr((a.dtype.str, a.shape)).encode())
+        digest.update(a.tobytes())
+    digest.update(bytes([bool(ctx.pinched)]))
+    return digest.digest()
+
+
+def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills):
     """One pass of :func:`close_holes` over the holes ``todo``: refine, fill, check, merge.
 
     ``base`` is (arrays, loops, report entries) of the mesh as given; nothing is written to
-    the MeshSet here.
+    the MeshSet here. ``fills`` maps a hole to (context key, patch or failure reason, seconds)
+    of an earlier pass: a hole whose surroundings did not change is not filled again (a
+    second pass only undoes the border refinement of holes that failed, and on face000.ply
+    with LS-SVM refilling every hole doubled the run).
     """
     arrays, loops, report = base[0], list(base[1]), [dict(entry) for entry in base[2]]
     V, F = arrays.V, arrays.F
@@ -225,17 +245,24 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare):
     for i in todo:
         entry = report[i]
         t0 = time.perf_counter()
-        try:
-            ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
-            patch = fill(ctx, **fill_kwargs)
-            validate_patch(patch, ctx.points, ctx.forbidden_edges)
-        except HoleFillError as exc:
-            entry.update(status="failed", reason=str(exc), seconds=time.perf_counter() - t0)
+        ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
+        key = _context_key(ctx)
+        if i in fills and fills[i][0] == key:
+            _, outcome, seconds = fills[i]
+        else:
+            try:
+                outcome = fill(ctx, **fill_kwargs)
+                validate_patch(outcome, ctx.points, ctx.forbidden_edges)
+            except HoleFillError as exc:
+                outcome = str(exc)
+            except (np.linalg.LinAlgError, ArithmeticError, ValueError, RuntimeError) as exc:
+                outcome = f"{type(exc).__name__}: {exc}"
+            seconds = time.perf_counter() - t0
+            fills[i] = (key, outcome, seconds)
+        if isinstance(outcome, str):
+            entry.update(status="failed", reason=outcome, seconds=seconds)
             continue
-        except (np.linalg.LinAlgError, ArithmeticError, ValueError, RuntimeError) as exc:
-            entry.update(status="failed", reason=f"{type(exc).__name__}: {exc}", seconds=time.perf_counter() - t0)
-            continue
-        filled.append((i, ctx, patch, time.perf_counter() - t0))
+        filled.append((i, ctx, outcome, seconds))
     if params["selfintersection"] and filled:
         candidates = face_boxes_near(V, F, np.stack([_patch_box(p.all_points(c.points)) for _, c, p, _ in filled]))
     done_loops, patches, closed_ids, crossing = [], [], [], []

@@ -256,20 +256,26 @@ def test_of_two_patches_sharing_a_chord_the_first_is_kept_and_the_rest_closed():
         tuple(sorted(loops[2].vertices.tolist()))}
 
 
-def test_a_hole_that_fails_after_its_border_was_refined_is_left_as_it_was():
-    """LS-SVM refines long border edges before filling (Sec. 3.1); a hole that then fails is
-    left exactly as it was (the filter fills again without it), and the other hole closes."""
+def _sphere_with_an_unfillable_hole():
+    """A 12-edge hole on top with a zero-length border edge (it cannot be filled) and a 36-edge one below."""
     ms = pymeshlab.MeshSet()
     ms.create_sphere(subdiv=3)
     V, F = mesh_arrays(ms)
     C = V[F].mean(axis=1)
     top = np.unique(F[(F == 0).any(axis=1)])
-    F = F[~np.isin(F, top).any(axis=1) & (C[:, 2] > -0.8)]  # a 12-edge hole on top, a wide one below
+    F = F[~np.isin(F, top).any(axis=1) & (C[:, 2] > -0.8)]
     loops = boundary_loops(F)
     assert sorted(len(lp) for lp in loops) == [12, 36]
     small = next(lp.vertices for lp in loops if len(lp) == 12)
     V = V.copy()
-    V[small[1]] = V[small[0]]  # a zero-length border edge: the small hole cannot be filled
+    V[small[1]] = V[small[0]]
+    return V, F, small
+
+
+def test_a_hole_that_fails_after_its_border_was_refined_is_left_as_it_was():
+    """LS-SVM refines long border edges before filling (Sec. 3.1); a hole that then fails is
+    left exactly as it was (the filter fills again without it), and the other hole closes."""
+    V, F, small = _sphere_with_an_unfillable_hole()
     ms = meshset_from_arrays(V, F)
     res = ms.meshing_close_holes_lssvm_poisson()
     status = {h["boundary_edges"]: h for h in res["holes"]}
@@ -281,6 +287,34 @@ def test_a_hole_that_fails_after_its_border_was_refined_is_left_as_it_was():
     # the failed hole's loop is still there, unchanged
     left = boundary_loops(F1)
     assert [sorted(lp.vertices.tolist()) for lp in left] == [sorted(small.tolist())]
+
+
+def test_the_second_pass_does_not_fill_again_a_hole_whose_surroundings_are_unchanged(monkeypatch):
+    from meshlab_holefill.algorithms import lssvm_poisson
+
+    V, F, _ = _sphere_with_an_unfillable_hole()
+    fill, sizes = lssvm_poisson.fill, []
+
+    def counting_fill(ctx, **kwargs):
+        sizes.append(ctx.size)
+        return fill(ctx, **kwargs)
+
+    from meshlab_holefill import hole_filter
+
+    key = hole_filter._context_key
+    monkeypatch.setattr(hole_filter, "_context_key", lambda ctx: object())  # never equal: every pass refills
+    reference = meshset_from_arrays(V, F)
+    reference.meshing_close_holes_lssvm_poisson()
+    monkeypatch.setattr(hole_filter, "_context_key", key)
+    monkeypatch.setattr(lssvm_poisson, "fill", counting_fill)
+    ms = meshset_from_arrays(V, F)
+    res = ms.meshing_close_holes_lssvm_poisson()
+    # pass 1 fills both (the small hole split to 13 edges, then failing); pass 2, without the
+    # failed hole's split, finds the large hole's surroundings unchanged and reuses its patch
+    assert sizes == [36, 13]
+    assert [h["status"] for h in sorted(res["holes"], key=lambda h: h["boundary_edges"])] == ["failed", "closed"]
+    np.testing.assert_array_equal(ms.current_mesh().vertex_matrix(), reference.current_mesh().vertex_matrix())
+    np.testing.assert_array_equal(ms.current_mesh().face_matrix(), reference.current_mesh().face_matrix())
 
 
 def _tent_over_the_other_hole(ctx):
