@@ -219,6 +219,23 @@ def _context_key(ctx):
     return digest.digest()
 
 
+_FILL_ERRORS = (HoleFillError, np.linalg.LinAlgError, ArithmeticError, ValueError, RuntimeError)
+
+
+def _reason(exc):
+    return str(exc) if isinstance(exc, HoleFillError) else f"{type(exc).__name__}: {exc}"
+
+
+def _fill_or_reason(fill, ctx, fill_kwargs):
+    """The hole's validated patch, or the reason it cannot be filled (str)."""
+    try:
+        patch = fill(ctx, **fill_kwargs)
+        validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    except _FILL_ERRORS as exc:
+        return _reason(exc)
+    return patch
+
+
 def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills):
     """One pass of :func:`close_holes` over the holes ``todo``: refine, fill, check, merge.
 
@@ -245,20 +262,15 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills):
     for i in todo:
         entry = report[i]
         t0 = time.perf_counter()
-        ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
+        try:
+            ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
+        except _FILL_ERRORS as exc:
+            entry.update(status="failed", reason=_reason(exc), seconds=time.perf_counter() - t0)
+            continue
         key = _context_key(ctx)
-        if i in fills and fills[i][0] == key:
-            _, outcome, seconds = fills[i]
-        else:
-            try:
-                outcome = fill(ctx, **fill_kwargs)
-                validate_patch(outcome, ctx.points, ctx.forbidden_edges)
-            except HoleFillError as exc:
-                outcome = str(exc)
-            except (np.linalg.LinAlgError, ArithmeticError, ValueError, RuntimeError) as exc:
-                outcome = f"{type(exc).__name__}: {exc}"
-            seconds = time.perf_counter() - t0
-            fills[i] = (key, outcome, seconds)
+        if i not in fills or fills[i][0] != key:
+            fills[i] = (key, _fill_or_reason(fill, ctx, fill_kwargs), time.perf_counter() - t0)
+        _, outcome, seconds = fills[i]
         if isinstance(outcome, str):
             entry.update(status="failed", reason=outcome, seconds=seconds)
             continue
