@@ -231,17 +231,14 @@ def _border_faces_per_loop(F, loops):
     for loop in loops:
         on_loop[loop] = True
     candidates = np.flatnonzero(on_loop[F].sum(axis=1) >= 2)
-    C = F[candidates]
     n = len(on_loop)
-    face_keys = np.stack([np.minimum(C, np.roll(C, -1, axis=1)), np.maximum(C, np.roll(C, -1, axis=1))], -1)
-    face_keys = face_keys[..., 0] * n + face_keys[..., 1]  # (c, 3) undirected edge keys
-    out = []
-    for loop in loops:
-        loop = np.asarray(loop, np.int64)
-        nxt = np.roll(loop, -1)
-        loop_keys = np.minimum(loop, nxt) * n + np.maximum(loop, nxt)
-        out.append(candidates[np.isin(face_keys, loop_keys).any(axis=1)])
-    return out
+
+    def edge_keys(a):  # undirected keys of the edges (a[..., i], a[..., i + 1]), cyclically
+        b = np.roll(a, -1, axis=-1)
+        return np.minimum(a, b) * n + np.maximum(a, b)
+
+    face_keys = edge_keys(F[candidates])  # (c, 3)
+    return [candidates[np.isin(face_keys, edge_keys(np.asarray(loop, np.int64))).any(axis=1)] for loop in loops]
 
 
 def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, select_faces=None):
