@@ -14,11 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import MeshTopologyError
 from ..geometry.quality import vertex_normals
-
-
-class MeshTopologyError(ValueError):
-    """The mesh violates an assumption of the hole fillers (named in the message)."""
 
 
 def _edge_runs(F):

@@ -5,11 +5,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import HoleFillError
 from ..geometry.quality import face_areas
-
-
-class HoleFillError(RuntimeError):
-    """An algorithm could not fill a hole; the message is the reason reported per hole."""
 
 
 @dataclass

@@ -16,7 +16,7 @@ from ..geometry.intersections import faces_intersecting
 from .holes import OUTLINE_RATIO, boundary_loops, edge_summary, hole_context, outline_ratios, vertex_face_incidence
 from ..meshlab.meshset_io import check_manifold_edges, current_mesh_arrays, extend_attributes, refine_mesh_arrays, replace_current_mesh
 from .patch import HoleFillError, merge_patches, validate_patch
-from ..meshlab.registration import ParamSpec
+from .parameters import ParamSpec
 
 COMMON_PARAMS = [
     ParamSpec("maxholesize", "int", 1000,

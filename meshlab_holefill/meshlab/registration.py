@@ -6,7 +6,6 @@ the command line, and the MeshLab ``.mlx`` names.
 """
 from __future__ import annotations
 
-import numbers
 import weakref
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -14,16 +13,9 @@ from typing import Any, Callable
 import numpy as np
 import pymeshlab
 
+from ..core import parameters as _parameters
+from ..core.parameters import MLX_TYPES, FilterParameterError, ParamSpec, Percentage  # noqa: F401 (re-exported)
 from .meshset_io import current_mesh_exists
-
-# MeshLab's RichParameter type for each kind of parameter (used when writing .mlx files).
-MLX_TYPES = {"int": "RichInt", "float": "RichFloat", "bool": "RichBool", "enum": "RichEnum",
-             "length": "RichAbsPerc", "string": "RichString"}
-
-
-class FilterParameterError(ValueError):
-    """A filter was called with an unknown, mistyped or out-of-range parameter."""
-
 
 def _shown(value):
     """A parameter value as a user wrote it (pymeshlab's value types have no readable repr)."""
@@ -34,49 +26,13 @@ def _shown(value):
     return repr(value)
 
 
-@dataclass(frozen=True)
-class ParamSpec:
-    """One filter parameter.
-
-    Attributes
-    ----------
-    name : str
-        Python keyword name.
-    kind : {'int', 'float', 'bool', 'enum', 'length', 'string'}
-        'length' accepts a float (absolute), ``pymeshlab.PureValue`` or
-        ``pymeshlab.PercentageValue`` (percent of the bounding-box diagonal), like MeshLab's
-        RichAbsPerc parameters.
-    default : Any
-        For 'length', the default as a percentage of the bounding-box diagonal is written
-        ``pymeshlab.PercentageValue(p)``.
-    help : str
-    minimum, maximum : float, optional
-        Inclusive bounds for numbers (for 'length', on the absolute value).
-    choices : tuple of str, optional
-        Allowed values of an 'enum' (also accepted as their index, as in .mlx files).
-    mlx_name : str, optional
-        Parameter name in MeshLab .mlx files; defaults to ``name``.
-    display : str, optional
-        Short description shown in MeshLab's dialog (``description`` in .mlx).
-    """
-
-    name: str
-    kind: str
-    default: Any
-    help: str
-    minimum: float | None = None
-    maximum: float | None = None
-    choices: tuple = ()
-    mlx_name: str | None = None
-    display: str | None = None
-
-    @property
-    def mlx(self):
-        return self.mlx_name or self.name
-
-    @property
-    def mlx_type(self):
-        return MLX_TYPES[self.kind]
+def as_core_value(value):
+    """pymeshlab's length values as the core's: PercentageValue -> Percentage, PureValue -> float."""
+    if isinstance(value, pymeshlab.PercentageValue):
+        return Percentage(value.value())
+    if isinstance(value, pymeshlab.PureValue):
+        return float(value.value())
+    return value
 
 
 @dataclass
@@ -116,49 +72,7 @@ def _bbox_diagonal(ms):
 
 def convert_param(spec: ParamSpec, value, filter_name, ms):
     """Validate and convert one parameter value (lengths to absolute); raises FilterParameterError."""
-    where = f"filter '{filter_name}', parameter '{spec.name}'"
-    kind = spec.kind
-    if kind == "bool":
-        if isinstance(value, (bool, np.bool_)):
-            return bool(value)
-        raise FilterParameterError(f"{where}: expected a bool, got {_shown(value)}")
-    if kind == "int":
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
-            raise FilterParameterError(f"{where}: expected an int, got {_shown(value)}")
-        value = int(value)
-    elif kind == "float":
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-            raise FilterParameterError(f"{where}: expected a number, got {_shown(value)}")
-        value = float(value)
-        if not np.isfinite(value):
-            raise FilterParameterError(f"{where}: must be finite, got {_shown(value)}")
-    elif kind == "length":
-        if isinstance(value, pymeshlab.PercentageValue):
-            value = value.value() / 100.0 * _bbox_diagonal(ms)
-        elif isinstance(value, pymeshlab.PureValue):
-            value = float(value.value())
-        elif isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)):
-            value = float(value)
-        else:
-            raise FilterParameterError(
-                f"{where}: expected a number, pymeshlab.PureValue or pymeshlab.PercentageValue, got {_shown(value)}")
-        if not np.isfinite(value):
-            raise FilterParameterError(f"{where}: must be finite, got {_shown(value)}")
-    elif kind == "enum":
-        if isinstance(value, numbers.Integral) and not isinstance(value, bool) and 0 <= value < len(spec.choices):
-            return spec.choices[int(value)]
-        if value not in spec.choices:
-            raise FilterParameterError(f"{where}: expected one of {list(spec.choices)}, got {_shown(value)}")
-        return value
-    elif kind == "string":
-        if not isinstance(value, str):
-            raise FilterParameterError(f"{where}: expected a string, got {_shown(value)}")
-        return value
-    if spec.minimum is not None and value < spec.minimum:
-        raise FilterParameterError(f"{where}: {value!r} is below the minimum {spec.minimum}")
-    if spec.maximum is not None and value > spec.maximum:
-        raise FilterParameterError(f"{where}: {value!r} is above the maximum {spec.maximum}")
-    return value
+    return _parameters.convert_param(spec, as_core_value(value), filter_name, _bbox_diagonal(ms) if ms else 0.0)
 
 
 def parse_text_value(text, percentages=True):
@@ -183,23 +97,16 @@ def parse_text_value(text, percentages=True):
 
 
 def resolve_params(spec: FilterSpec, kwargs: dict, ms=None):
-    """Validate keyword arguments against a filter spec and fill in defaults.
+    """Validate keyword arguments against a filter spec and fill in defaults (see core.parameters).
 
     Raises
     ------
     FilterParameterError
         Unknown name (with the list of valid ones), wrong type, value out of range.
     """
-    known = {p.name: p for p in spec.params}
-    unknown = sorted(set(kwargs) - set(known))
-    if unknown:
-        raise FilterParameterError(
-            f"filter '{spec.name}' has no parameter {', '.join(map(repr, unknown))}; "
-            f"valid parameters: {', '.join(known)}")
-    out = {}
-    for name, p in known.items():
-        out[name] = convert_param(p, kwargs.get(name, p.default), spec.name, ms)
-    return out
+    values = {p.name: as_core_value(p.default) for p in spec.params}
+    values.update({name: as_core_value(value) for name, value in kwargs.items()})
+    return _parameters.resolve_params(spec.params, values, spec.name, _bbox_diagonal(ms) if ms is not None else 0.0)
 
 
 def register(spec: FilterSpec):

@@ -40,8 +40,9 @@ from ...geometry.flips import relax_edges
 from ...geometry.intersections import faces_intersecting
 from ...geometry.quality import triangle_quality
 from ...geometry.topology import edge_pair_set
-from ...core.patch import HoleFillError, Patch
-from ...meshlab.registration import ParamSpec
+from ...core.patch import Patch
+from ...errors import HoleFillError
+from ...core.parameters import ParamSpec
 from .embedding import embed_patch
 from .unfolded_triangulation import triangulate_and_embed
 from ...geometry.development import boundary_gap_angles, develop_loop, developed_area, simple_development, simple_developments

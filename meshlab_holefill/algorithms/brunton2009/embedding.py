@@ -30,7 +30,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ...geometry.laplacian import uniform_laplacian
-from ...core.patch import HoleFillError
+from ...errors import HoleFillError
 
 
 def umbrella_operator(F, n):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...geometry.triangulate import polygon_perimeter, triangulate_polygon
-from ...core.patch import HoleFillError
+from ...errors import HoleFillError
 from .embedding import embed_patch
 
 MIN_ANGLE_DEGREES = 30.0  # Sec. 3.3 after Chew: every angle in [30, 120] degrees

@@ -60,7 +60,7 @@ import numpy as np
 
 from ...geometry.pca import fit_plane, plane_frame
 from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
-from ...core.patch import HoleFillError
+from ...errors import HoleFillError
 
 TEMPERATURE_FLOOR = 1e-3  # a run ends when k T < TEMPERATURE_FLOOR * T_start
 CONE_DEGREES = 10.0  # Sec. 3.1: next direction within 10 degrees of the previous one

@@ -55,7 +55,7 @@ from ...geometry.refine import refine_patch
 from ...geometry.segments import polygon_edges_touch
 from .hole_guards import patch_crossings, patch_guard, swaps_crossing
 from ...core.patch import Patch
-from ...meshlab.registration import ParamSpec
+from ...core.parameters import ParamSpec
 from .tangential_smoothing import tangential_smoothing
 from .min_angle_triangulation import min_angle_triangulation
 

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from ...geometry.topology import edge_pair_set
-from ...core.patch import HoleFillError
+from ...errors import HoleFillError
 
 
 def boundary_angles(P, normals):

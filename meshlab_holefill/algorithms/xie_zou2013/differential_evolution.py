@@ -91,8 +91,9 @@ import numpy as np
 
 from ...geometry.laplacian import tangential_umbrella_smoothing
 from ...geometry.quality import triangle_quality
-from ...core.patch import HoleFillError, Patch
-from ...meshlab.registration import ParamSpec
+from ...core.patch import Patch
+from ...errors import HoleFillError
+from ...core.parameters import ParamSpec
 from . import folds
 from . import triangulation as mesh_steps
 from . import optimisation

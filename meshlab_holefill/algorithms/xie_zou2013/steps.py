@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.patch import HoleFillError
+from ...errors import HoleFillError
 from . import folds
 from . import triangulation as mesh_steps
 from . import prediction

@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 from ...geometry.pca import plane_frame
 from ...geometry.topology import interior_edges
 from ...geometry.triangulate import polygon_signed_area, triangulate_polygon
-from ...core.patch import HoleFillError
+from ...errors import HoleFillError
 
 class PlaneMap:
     """Map of 3D points to the triangulation plane (Sec. 4.6, Fig. 1).

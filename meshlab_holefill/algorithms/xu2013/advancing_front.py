@@ -55,7 +55,7 @@ import math
 
 import numpy as np
 
-from ...core.patch import HoleFillError
+from ...errors import HoleFillError
 from .front_obstacles import FrontObstacles
 from .front_state import FrontState
 from .front_predicates import cross, direction_angle, dot, norm, scaled, segments_cross, sub, unit

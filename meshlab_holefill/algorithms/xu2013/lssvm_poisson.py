@@ -24,8 +24,9 @@ import scipy.sparse.linalg as spla
 from .border_split import split_long_boundary_edges
 from ...geometry.laplacian import tangential_umbrella_smoothing
 from ...core.holes import boundary_halfedges
-from ...core.patch import HoleFillError, Patch
-from ...meshlab.registration import ParamSpec
+from ...core.patch import Patch
+from ...errors import HoleFillError
+from ...core.parameters import ParamSpec
 from .lssvm import lssvm_fit
 from .poisson_patch import context_hits, folds, initial_patches, normalized_cotangent_laplacian, relax_patch, repair_slivers
 

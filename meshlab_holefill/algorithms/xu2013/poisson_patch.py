@@ -20,7 +20,7 @@ from ...geometry.laplacian import adjacency_matrix, cotangent_laplacian, tangent
 from ...geometry.quality import face_normals, triangle_quality, vertex_normals
 from ...geometry.segments import polygon_edges_touch
 from ...geometry.topology import interior_edges
-from ...core.patch import HoleFillError
+from ...errors import HoleFillError
 
 
 def normalized_cotangent_laplacian(V, F, n=None):
