@@ -9,7 +9,7 @@ import os
 import numpy as np
 
 from ..metrics import QUALITY_BINS
-from ._labels import CHART_METRICS, HEADINGS, SIZE_ORDER, aggregate, filler_colors, hole_seconds, short_label
+from .labels import CHART_METRICS, HEADINGS, SIZE_ORDER, aggregate, filler_colors, hole_seconds, short_label
 
 __all__ = ["chart_pictures", "metric_bars", "quality_histograms", "size_trends"]
 

@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from ..reference_targets import reference_table
-from ._labels import METRICS, SIZE_ORDER, aggregate, short_label
+from .labels import METRICS, SIZE_ORDER, aggregate, short_label
 
 __all__ = ["failures", "hole_table", "markdown_table", "report_blocks", "size_table", "summary_blocks",
            "summary_table", "to_html", "to_markdown", "wins"]
