@@ -69,6 +69,20 @@ class Hole:
 
 @dataclass
 class PreparedCase:
+    """A case ready to run: the mesh with its holes (V0, F0), the evaluated holes, notes.
+
+    Attributes
+    ----------
+    name : str
+    kind : str  "cut holes", "natural holes" or "given holes"
+    V0 : (n0, 3) float64, F0 : (m0, 3) int64  the mesh the fillers get
+    diag : float  bounding-box diagonal of the source mesh (per-mille figures)
+    holes : list of Hole
+    notes : list of str  holes that could not be cut or are not evaluated, and why
+    analytic, surface_area : as in MeshCase
+    source_faces : int  faces of the source mesh before holes were cut
+    """
+
     name: str
     kind: str  # "cut holes" | "natural holes" | "given holes"
     V0: np.ndarray
@@ -263,6 +277,10 @@ def default_fillers(refinehole=False):
     ``meshing_close_holes`` runs with its defaults (holes up to 30 edges) and with a
     ``maxholesize`` covering every hole ("all", resolved per comparison), optionally also with
     ``refinehole=True``.
+
+    Returns
+    -------
+    list of Filler
     """
     out = [Filler(name, name) for name in filter_list()]
     out += [Filler(f"{BASELINE} (default)", BASELINE),
@@ -362,7 +380,22 @@ def _context_faces(V0, F0, loop):
 
 
 def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
-    """Turn one worker reply into a run row, hole rows and picture data."""
+    """Turn one worker reply into a run row, hole rows and picture data.
+
+    Parameters
+    ----------
+    case : PreparedCase
+    filler : Filler
+    reply : dict  :func:`.isolation.execute_task`'s reply (``V_new``/``F_new`` or ``V``/``F``, ``result``)
+    resolved_params : dict  the parameters the filter ran with (:func:`resolve_params`)
+    full_metrics : bool  all metrics, or only closed/reason/time/counts
+
+    Returns
+    -------
+    run : dict  one row for the run
+    holes : list of dict  one row per hole of the case
+    pictures : dict  {hole index: {"V": (p, 3) float64, "F": (q, 3) int64, "quality": (q,), "face_distance": (q,)}}
+    """
     V0, F0 = case.V0, case.F0
     run = {"case": case.name, "filler": filler.label, "filter": filler.filter,
            "params": json_safe(resolved_params), "status": reply["status"], "error": reply.get("error"),
@@ -430,7 +463,17 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
 
 
 def resolve_params(filler, cases):
-    """The filler's parameters for these cases ("all" -> a maxholesize covering every hole)."""
+    """The filler's parameters for these cases ("all" -> a maxholesize covering every hole).
+
+    Parameters
+    ----------
+    filler : Filler
+    cases : list of PreparedCase
+
+    Returns
+    -------
+    dict
+    """
     params = dict(filler.params)
     if params.get("maxholesize") == "all":
         largest = max([h.boundary_edges for c in cases for h in c.holes] or [3])

@@ -75,6 +75,15 @@ def fan_triangle_quality(angle, rho):
     """2r/R of the triangle with sides 1 and ``rho`` enclosing ``angle`` (arrays broadcast).
 
     2r/R = (b + c - a)(c + a - b)(a + b - c) / (a b c) for sides a, b, c.
+
+    Parameters
+    ----------
+    angle : float or array  radians
+    rho : float or array  length of the second side (the first is 1)
+
+    Returns
+    -------
+    array of the broadcast shape, in [0, 1]
     """
     c = np.sqrt(np.maximum(1.0 + rho ** 2 - 2.0 * rho * np.cos(angle), 0.0))
     a, b = np.ones_like(c), rho * np.ones_like(c)
@@ -157,7 +166,17 @@ def hausdorff_one_way(src_V, src_F, dst_V, dst_F, samples=20000, seed=0):
 
 
 def compact_mesh(V, F):
-    """Keep only the vertices F uses; returns (V', F') with F' reindexed."""
+    """Keep only the vertices F uses, F reindexed.
+
+    Parameters
+    ----------
+    V : (n, 3) float, F : (m, 3) int
+
+    Returns
+    -------
+    V' : (u, 3), the u vertices F uses, in index order
+    F' : (m, 3) int64 indices into V'
+    """
     used = np.unique(np.asarray(F).ravel())
     remap = np.full(len(V), -1, np.int64)
     remap[used] = np.arange(len(used))

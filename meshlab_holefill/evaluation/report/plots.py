@@ -146,5 +146,6 @@ def size_trends(comparison, directory, name="error_time_vs_size.png"):
 
 
 def chart_pictures(comparison, directory):
+    """All charts of a comparison written into ``directory``: [(relative path, caption)]."""
     return [metric_bars(comparison, directory), quality_histograms(comparison, directory),
             size_trends(comparison, directory)]
