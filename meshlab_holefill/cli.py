@@ -168,8 +168,9 @@ _SUBCOMMANDS.append(_register_run)
 def cmd_compare(args, extra):
     import shlex
 
-    from .evaluation.cut_holes import compare
-    from .evaluation.report.tables import _md_table, summary_table, write_report
+    from .evaluation.compare import compare
+    from .evaluation.report.tables import markdown_table as _md_table, summary_table
+    from .evaluation.report.write import write_report
 
     result = compare(args.meshes, holes=args.holes, sizes=args.sizes.split(","), seed=args.seed,
                      filters=args.filters, refinehole=args.refinehole, timeout=args.timeout,
