@@ -147,12 +147,16 @@ class FilterName:
     ours : bool
         True for a filter of this package, False for a pymeshlab built-in.
     how : str
-        'display name', 'python name', 'old display name' or 'old python name'.
+        'display name', 'python name', 'MeshLab 2020.09 name', 'old display name' or
+        'old python name'.
+    meshlab_2020 : mlx_versions.Filter2020 or None
+        The MeshLab 2020.09 filter of this name, when it is one and stands for this filter.
     """
 
     python_name: str
     ours: bool
     how: str
+    meshlab_2020: object = None
 
 
 @functools.lru_cache(maxsize=None)
@@ -171,14 +175,32 @@ def resolve_filter(name):
     Tried in order: a display name of ours, a python name of ours, a current built-in display
     name, a current built-in python name, an old (pre-2022) python name, a current display
     name compared by MeshLab's rule (ignoring case and punctuation), an old display name
-    (by the rule that made the old python names). Current names win over old ones
+    (by the rule that made the old python names); a MeshLab 2020.09 display name
+    (:mod:`mlx_versions`) is tried right after the current names. Current names win over old ones
     ("Ambient Occlusion" is today the GPU filter; before 2022 it was
     ``compute_scalar_ambient_occlusion``).
+
+    A built-in filter named by its MeshLab 2020.09 name gets that filter's table entry
+    (``meshlab_2020``): its implied and renamed parameters, and the parameters current
+    MeshLab dropped.
 
     Returns
     -------
     FilterName or None
     """
+    understood = _resolve_filter(name)
+    if understood is None or understood.ours:
+        return understood
+    from .mlx_versions import filter_2020  # it imports this module
+
+    f2020 = filter_2020(name)
+    if f2020 is not None and f2020.python_name == understood.python_name:
+        return FilterName(understood.python_name, False, understood.how, f2020)
+    return understood
+
+
+def _resolve_filter(name):
+    """The filter a name stands for, without the MeshLab 2020.09 details."""
     for spec in registry.FILTERS.values():
         if name == spec.display_name:
             return FilterName(spec.name, True, "display name")
@@ -190,6 +212,11 @@ def resolve_filter(name):
         return FilterName(exact[name], False, "display name")
     if name in builtins:
         return FilterName(name, False, "python name")
+    from .mlx_versions import filter_2020  # it imports this module
+
+    f2020 = filter_2020(name)
+    if f2020 is not None and f2020.python_name in builtins:
+        return FilterName(f2020.python_name, False, "MeshLab 2020.09 name")
     old = old_python_names()
     if name in old:
         return FilterName(old[name], False, "old python name")

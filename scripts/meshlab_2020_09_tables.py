@@ -67,7 +67,7 @@ def dump_2020_09(workdir):
     flags = subprocess.run(["pkg-config", "--cflags", "--libs", "Qt5Xml"], check=True, capture_output=True,
                            text=True).stdout.split()
     subprocess.run(["g++", "-shared", "-fPIC", "-O2", "-o", shim, os.path.join(HERE, "meshlab_dump_shim.cpp")]
-                   + flags, check=True)
+                   + flags + ["-ldl"], check=True)
     out = os.path.join(workdir, "dump.txt")
     version = subprocess.run(["xvfb-run", "-a", "meshlabserver", "-h"], capture_output=True, text=True).stdout
     subprocess.run(["xvfb-run", "-a", "meshlabserver", "-d", out], check=True, capture_output=True,
