@@ -6,7 +6,7 @@ parameters, but lists each parameter by its label ("Max size to be closed"), not
 a script uses ("MaxHoleSize"). ``meshlab_dump_shim.cpp``, preloaded, makes the dump print each
 parameter as MeshLab writes it in a script instead (name, type and default value).
 
-Writes
+Writes (in meshlab_holefill/meshlab/mlx/)
     data/meshlab_2020_09_filters.tsv   every 2020.09 filter, its parameters in order, their types
                                        and defaults (defaults of an empty document: mesh-dependent
                                        ones are those of no mesh)
@@ -26,7 +26,7 @@ import sys
 import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-DATA = os.path.join(HERE, "..", "meshlab_holefill", "data")
+DATA = os.path.join(HERE, "..", "meshlab_holefill", "meshlab", "mlx", "data")
 
 # 2020.09 filters that current MeshLab has under a name the rules of mlx_names do not find:
 # name -> (python name, implied parameters, renamed parameters {2020 name: python name}).
@@ -91,7 +91,7 @@ def parse_dump(text):
 
 def counterpart(name, params):
     """(python name, implied, renamed, note) of a 2020.09 filter in current pymeshlab."""
-    from meshlab_holefill import mlx_names
+    from meshlab_holefill.meshlab.mlx import names as mlx_names
 
     if name in REMOVED:
         return None, {}, {}, REMOVED[name]

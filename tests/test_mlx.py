@@ -10,11 +10,12 @@ import pymeshlab
 import pytest
 
 import meshlab_holefill
-from meshlab_holefill import mlx_names, registry
+from meshlab_holefill.meshlab.mlx import names as mlx_names
+from meshlab_holefill.meshlab import registration as registry
 from meshlab_holefill.cli import main
-from meshlab_holefill.filter_specs import ALGORITHMS
-from meshlab_holefill.holes import boundary_loops
-from meshlab_holefill.mlx import MlxRunError, MlxScriptError, read_filter_script, run_filter_script
+from meshlab_holefill.meshlab.filter_specs import ALGORITHMS
+from meshlab_holefill.core.holes import boundary_loops
+from meshlab_holefill.meshlab.mlx.script import MlxRunError, MlxScriptError, read_filter_script, run_filter_script
 
 from conftest import mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
 
@@ -129,7 +130,8 @@ def test_meshlab_parameter_name_rule():
 
 
 @pytest.mark.parametrize("name, python_name, how", [
-    ("Re-Orient all faces coherentely", "meshing_re_orient_faces_coherently", "old display name"),
+    ("Re-Orient all faces coherentely", "meshing_re_orient_faces_coherently", "MeshLab 2020.09 name"),
+    ("re-orient all faces coherentely", "meshing_re_orient_faces_coherently", "old display name"),
     ("remove_duplicate_vertices", "meshing_remove_duplicate_vertices", "old python name"),
     ("laplacian_smooth", "apply_coord_laplacian_smoothing", "old python name"),
     ("snapshot", "save_snapshot", "old python name"),
