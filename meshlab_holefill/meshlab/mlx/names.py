@@ -78,7 +78,9 @@ def builtin_display_names():
 
 @functools.lru_cache(maxsize=None)
 def _builtin_names():
-    return frozenset(pymeshlab.filter_list())
+    from ..exceptions import pymeshlab_filter_list
+
+    return frozenset(pymeshlab_filter_list())
 
 
 def check_filter_table():

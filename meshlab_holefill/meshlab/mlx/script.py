@@ -43,6 +43,8 @@ from dataclasses import dataclass, field
 from typing import Any
 from xml.parsers import expat
 
+import pymeshlab
+
 from . import names as mlx_names
 from . import versions as mlx_versions
 from .. import registration as registry
@@ -57,8 +59,10 @@ __all__ = [
 ]
 
 
-class MlxScriptError(ValueError):
+class MlxScriptError(ValueError, pymeshlab.PyMeshLabException):
     """A filter script cannot be run; nothing was applied.
+
+    A ``ValueError``, and a ``pymeshlab.PyMeshLabException`` like pymeshlab's own script errors.
 
     Attributes
     ----------

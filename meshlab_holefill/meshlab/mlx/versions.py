@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 
 import numpy as np
+import pymeshlab
 
 from .names import python_param_name
 
@@ -42,7 +43,7 @@ NAMES_FILE = "meshlab_2020_09_names.tsv"
 _SAME_ATTRIBUTES = {"RichPosition": "RichPoint3f", "RichDirection": "RichPoint3f"}
 
 
-class MlxTargetError(ValueError):
+class MlxTargetError(ValueError, pymeshlab.PyMeshLabException):
     """A recorded filter cannot be written for the requested MeshLab version."""
 
 
