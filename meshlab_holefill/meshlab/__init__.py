@@ -1,0 +1,1 @@
+"""pymeshlab integration."""
