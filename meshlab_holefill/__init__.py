@@ -20,12 +20,23 @@ from . import pymeshlab_doors as _pymeshlab_doors
 
 __version__ = "0.1.0"
 
+
+def batch(inputs, out, **options):
+    """Repair many mesh files on dask (a local cluster or yours): see :func:`meshlab_holefill.batch.batch`.
+
+    Imported on first use, so ``import meshlab_holefill`` does not load dask.
+    """
+    from .batch import batch as run
+
+    return run(inputs, out, **options)
+
+
 _register_all()
 _pymeshlab_doors.extend()  # ms.apply_filter(name), load/apply_filter_script and the parameter listing know ours
 
 __all__ = [
     "FILTERS", "FilterParameterError", "HoleContext", "HoleFillError", "MeshTopologyError", "Patch",
-    "apply_filter", "boundary_loops", "compare", "filter_history", "filter_list", "hole_context",
+    "apply_filter", "batch", "boundary_loops", "compare", "filter_history", "filter_list", "hole_context",
     "print_filter_parameter_list",
     "MlxRunError", "MlxScriptError", "clear_filter_history", "filter_calls", "filter_script_xml",
     "read_filter_script", "run_filter_script", "save_filter_script",
