@@ -7,16 +7,13 @@ Importing the package registers the filters as methods of ``pymeshlab.MeshSet``:
     ms.load_new_mesh("scan.ply")
     ms.meshing_close_holes_min_angle_bilateral(maxholesize=500)
 """
-from .filter_specs import register_all as _register_all
-from .holes import HoleContext, MeshTopologyError, boundary_loops, hole_context
-from .patch import HoleFillError, Patch
-from .registry import (FILTERS, FilterParameterError, apply_filter, clear_filter_history, filter_calls,
-                       filter_history, filter_list, print_filter_parameter_list)
-from .mlx import (MlxRunError, MlxScriptError, filter_script_xml, read_filter_script, run_filter_script,
-                  save_filter_script)
+from .core.holes import HoleContext, MeshTopologyError, boundary_loops, hole_context
+from .core.patch import HoleFillError, Patch
+from .meshlab.registration import FILTERS, FilterParameterError, apply_filter, clear_filter_history, filter_calls, filter_history, filter_list, print_filter_parameter_list
+from .meshlab.mlx.script import MlxRunError, MlxScriptError, filter_script_xml, read_filter_script, run_filter_script, save_filter_script
 
-from . import compare  # a callable module: meshlab_holefill.compare(meshes, report="dir")
-from . import pymeshlab_doors as _pymeshlab_doors
+from .evaluation import cut_holes as compare  # a callable module: meshlab_holefill.evaluation.cut_holes(meshes, report="dir")
+from .meshlab import register_all as _register_all
 
 __version__ = "0.1.0"
 
@@ -31,8 +28,7 @@ def batch(inputs, out, **options):
     return run(inputs, out, **options)
 
 
-_register_all()
-_pymeshlab_doors.extend()  # ms.apply_filter(name), load/apply_filter_script and the parameter listing know ours
+_register_all()  # MeshSet methods; ms.apply_filter(name), filter scripts and the parameter listing know ours
 
 __all__ = [
     "FILTERS", "FilterParameterError", "HoleContext", "HoleFillError", "MeshTopologyError", "Patch",

@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 
-from .registry import parse_text_value
+from .meshlab.registration import parse_text_value
 
 
 def _params_from_unknown(unknown):
@@ -64,7 +64,7 @@ def _hole_status_table(result):
 
 
 def cmd_holes(args, extra):
-    from .holes import OUTLINE_RATIO, boundary_loops, loop_measures, outline_ratios
+    from .core.holes import OUTLINE_RATIO, boundary_loops, loop_measures, outline_ratios
 
     ms = _load(args.input)
     m = ms.current_mesh()
@@ -88,12 +88,12 @@ def cmd_holes(args, extra):
 
 
 def cmd_filters(args, extra):
-    from .registry import FILTERS, filter_help
+    from .meshlab.registration import FILTERS, filter_help
 
     names = [args.name] if args.name else sorted(FILTERS)
     for name in names:
         if name not in FILTERS:
-            from .registry import print_filter_parameter_list
+            from .meshlab.registration import print_filter_parameter_list
 
             print_filter_parameter_list(name)
             continue
@@ -130,7 +130,7 @@ _SUBCOMMANDS = []
 
 
 def cmd_run(args, extra):
-    from .mlx import read_filter_script, run_filter_script, save_filter_script
+    from .meshlab.mlx.script import read_filter_script, run_filter_script, save_filter_script
 
     script = read_filter_script(args.script)  # all problems reported before the mesh is even loaded
     if args.check:
@@ -187,8 +187,8 @@ _SUBCOMMANDS.append(_register_run)
 def cmd_compare(args, extra):
     import shlex
 
-    from .compare import compare
-    from .report import _md_table, summary_table, write_report
+    from .evaluation.cut_holes import compare
+    from .evaluation.report.tables import _md_table, summary_table, write_report
 
     result = compare(args.meshes, holes=args.holes, sizes=args.sizes.split(","), seed=args.seed,
                      filters=args.filters, refinehole=args.refinehole, timeout=args.timeout,

@@ -27,8 +27,8 @@ import numpy as np
 import pymeshlab
 
 import meshlab_holefill
-from meshlab_holefill.comparison import (BASELINE, MeshCase, parse_fillers, prepare_case, run_comparison)
-from meshlab_holefill.report import _md_table, short_label, summary_blocks, to_markdown, write_report
+from meshlab_holefill.evaluation.comparison import BASELINE, MeshCase, parse_fillers, prepare_case, run_comparison
+from meshlab_holefill.evaluation.report.tables import _md_table, short_label, summary_blocks, to_markdown, write_report
 
 SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
 CLOSED = ["bunny.obj", "bone.ply", "cow.obj", "airplane.obj", "sphere", "torus"]
@@ -85,7 +85,7 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALIN
     -------
     list of dict rows: faces, filter, run seconds, per-hole seconds (filters that report them)
     """
-    from meshlab_holefill.compare import cut_holes
+    from meshlab_holefill.evaluation.cut_holes import cut_holes
 
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(os.path.join(SAMPLES, "bunny.obj"))
@@ -103,7 +103,7 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALIN
         case = MeshCase(f"bunny_{m.face_number() // 1000}k", np.asarray(m.vertex_matrix(), np.float64),
                         np.asarray(m.face_matrix(), np.int64))
         t0 = time.perf_counter()
-        from meshlab_holefill.compare import cut_holes as cut
+        from meshlab_holefill.evaluation.cut_holes import cut_holes as cut
 
         _, cut_h = cut(case.V, case.F, sizes=sizes, shapes=["compact"] * len(sizes), centers=centers, seed=seed)
         removed = np.zeros(len(case.F), bool)
@@ -133,7 +133,7 @@ def scaling_plot(rows, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from meshlab_holefill.report import filler_colors
+    from meshlab_holefill.evaluation.report.tables import filler_colors
 
     labels = list(dict.fromkeys(r["filler"] for r in rows))
     colors = filler_colors(labels)
@@ -263,17 +263,17 @@ def papers_table(result, command, seed=0, timeout=600.0):
               "| | NP | NOT | NHT | MPE | APE | RT (s) |", "|---|---|---|---|---|---|---|",
               "| paper (MATLAB, 2.8 GHz) | 1600 | 3040 | 1210 | 1.77E-02 | 7.35E-03 | 9.3 |"]
     try:
-        from meshlab_holefill.algorithms import hpde_experiment  # noqa: F401
+        from meshlab_holefill.evaluation.papers import hpde_sphere as hpde_experiment  # noqa: F401
         present = hasattr(hpde_experiment, "sphere_experiment")
     except ImportError:
         present = False
     if name not in registered or not present:
         lines.append("| ours | not registered | | | | | |")
     else:
-        from meshlab_holefill.comparison import IsolatedRunner
+        from meshlab_holefill.evaluation.comparison import IsolatedRunner
 
         with IsolatedRunner() as runner:
-            reply = runner.run({"kind": "call", "function": "meshlab_holefill.algorithms.hpde_experiment.sphere_experiment",
+            reply = runner.run({"kind": "call", "function": "meshlab_holefill.evaluation.papers.hpde_sphere.sphere_experiment",
                                 "kwargs": {"seed": seed}}, timeout)
         if reply["status"] == "ok":
             v = reply["value"]
@@ -287,7 +287,7 @@ def papers_table(result, command, seed=0, timeout=600.0):
 
 def xie_all_fillers(fillers, seed, timeout):
     """Eq. 17 (MPE/APE over the new vertices of both holes) on the paper's sphere, for every filler."""
-    from meshlab_holefill.algorithms.hpde_experiment import SPHERE_HOLES, ellipse_hole, uv_sphere
+    from meshlab_holefill.evaluation.papers.hpde_sphere import SPHERE_HOLES, ellipse_hole, uv_sphere
 
     V, F = uv_sphere()
     removed = np.zeros(len(F), bool)

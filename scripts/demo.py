@@ -11,7 +11,7 @@ import pymeshlab
 
 import meshlab_holefill
 from meshlab_holefill.geometry.quality import edge_lengths, triangle_quality
-from meshlab_holefill.holes import boundary_loops
+from meshlab_holefill.core.holes import boundary_loops
 
 SCAN = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes", "bunny10k_textured.obj")
 

@@ -62,7 +62,7 @@ def bunny_scan():
 
 def scan_with_loops(name):
     """A sample mesh's vertices, faces and boundary loops."""
-    from meshlab_holefill.holes import boundary_loops
+    from meshlab_holefill.core.holes import boundary_loops
 
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(sample(name))
@@ -107,7 +107,7 @@ def assert_filled_cleanly(V0, F0, V1, F1, faces_kept=True):
     LS-SVM filter splits long border edges, Sec. 3.1, and so replaces some border faces).
     """
     from meshlab_holefill.geometry.intersections import faces_intersecting
-    from meshlab_holefill.holes import boundary_loops, nonmanifold_edges
+    from meshlab_holefill.core.holes import boundary_loops, nonmanifold_edges
 
     assert np.array_equal(V1[:len(V0)], V0)
     if faces_kept:

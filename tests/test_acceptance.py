@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshlab_holefill.acceptance import TARGETS, criteria
+from meshlab_holefill.evaluation.reference_targets import TARGETS, criteria
 from meshlab_holefill.geometry.quality import triangle_quality
-from meshlab_holefill.holes import OUTLINE_RATIO, boundary_loops, outline_ratios
-from meshlab_holefill.metrics import corner_quality_bound
+from meshlab_holefill.core.holes import OUTLINE_RATIO, boundary_loops, outline_ratios
+from meshlab_holefill.evaluation.metrics import corner_quality_bound
 
 from test_compare import grid, sphere
 
@@ -117,7 +117,7 @@ def test_open_hole_fails_the_distance_criterion():
 
 
 def test_fan_formula_matches_triangle_quality():
-    from meshlab_holefill.metrics import fan_triangle_quality
+    from meshlab_holefill.evaluation.metrics import fan_triangle_quality
 
     rng = np.random.default_rng(3)
     for angle, rho in zip(rng.uniform(0.05, 3.0, 20), rng.uniform(0.2, 5.0, 20)):
@@ -141,7 +141,7 @@ def test_short_edge_beside_a_long_one_at_a_sharp_corner_lowers_the_bound():
 
 
 def test_versus_variant_compares_on_the_named_cases_only():
-    from meshlab_holefill.acceptance import versus_variant
+    from meshlab_holefill.evaluation.reference_targets import versus_variant
 
     ours = [_row(case="sphere", dist_patch_to_gt_mean_permille=0.1), _row(case="cow.obj", dist_patch_to_gt_mean_permille=9.0)]
     zero = [_row(case="sphere", dist_patch_to_gt_mean_permille=0.2), _row(case="cow.obj", dist_patch_to_gt_mean_permille=0.1)]
@@ -161,8 +161,8 @@ def test_capped_island_outline_quality_is_not_judged():
 def test_targets_table_judges_option_sets_but_not_the_comparison_variant():
     from types import SimpleNamespace
 
-    from meshlab_holefill.acceptance import targets_table
-    from meshlab_holefill.comparison import parse_fillers
+    from meshlab_holefill.evaluation.reference_targets import targets_table
+    from meshlab_holefill.evaluation.comparison import parse_fillers
 
     fillers = parse_fillers("lssvm_poisson,lssvm_poisson:laplacian_prediction=zero,"
                             "min_angle_bilateral:fairing=thinplate,meshing_close_holes:maxholesize=all")

@@ -12,11 +12,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import meshlab_holefill
-from meshlab_holefill import compare as cmp
-from meshlab_holefill.comparison import (Filler, IsolatedRunner, MeshCase, parse_fillers, prepare_case,
-                                         run_comparison)
-from meshlab_holefill.holes import boundary_halfedges, boundary_loops
-from meshlab_holefill.metrics import mesh_checks
+from meshlab_holefill.evaluation import cut_holes as cmp
+from meshlab_holefill.evaluation.comparison import Filler, IsolatedRunner, MeshCase, parse_fillers, prepare_case, run_comparison
+from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops
+from meshlab_holefill.evaluation.metrics import mesh_checks
 
 from conftest import cut_disks, grid as unit_grid, mesh_arrays
 
@@ -211,7 +210,7 @@ def test_failing_filter_is_reported_and_others_run():
 def test_compare_report_end_to_end(tmp_path):
     V, F = sphere(4)
     case = MeshCase("sphere", V, F, analytic=lambda X: np.linalg.norm(X, axis=1) - 1.0)
-    result = meshlab_holefill.compare([case, os.path.join(SAMPLES, "bunny10k_textured.obj")],
+    result = meshlab_holefill.evaluation.cut_holes([case, os.path.join(SAMPLES, "bunny10k_textured.obj")],
                                       report=str(tmp_path), holes=2, sizes=("small", "medium"),
                                       filters="min_angle_bilateral,baseline", progress=False)
     labels = [f.label for f in result.fillers]
@@ -258,7 +257,7 @@ def test_cli_compare(tmp_path, capsys):
 
 def test_patch_distance_does_not_depend_on_its_triangulation():
     """The same flat cap, as 2 triangles or split 4-fold, is the same distance from a curved truth."""
-    from meshlab_holefill.metrics import hausdorff_one_way
+    from meshlab_holefill.evaluation.metrics import hausdorff_one_way
 
     coarse_V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
     coarse_F = np.array([[0, 1, 2], [0, 2, 3]])
@@ -278,7 +277,7 @@ def test_patch_distance_does_not_depend_on_its_triangulation():
 
 def test_patch_distance_depends_only_on_the_two_surfaces():
     """Same figures whatever was sampled before (MeshLab's sampler has one unseedable generator)."""
-    from meshlab_holefill.metrics import closest_faces, hausdorff_one_way, sample_surface
+    from meshlab_holefill.evaluation.metrics import closest_faces, hausdorff_one_way, sample_surface
 
     ms = pymeshlab.MeshSet()
     ms.create_sphere(subdiv=2)
@@ -297,7 +296,7 @@ def test_patch_distance_depends_only_on_the_two_surfaces():
 
 
 def test_surface_samples_are_spread_by_area():
-    from meshlab_holefill.metrics import sample_surface
+    from meshlab_holefill.evaluation.metrics import sample_surface
 
     V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [3, 0, 0], [3, 1, 0]])
     F = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])  # unit square, then a 2x1 rectangle
@@ -309,7 +308,7 @@ def test_surface_samples_are_spread_by_area():
 
 
 def test_patch_info_becomes_info_columns():
-    from meshlab_holefill.comparison import _patch_info
+    from meshlab_holefill.evaluation.comparison import _patch_info
 
     entry = {"hole": 3, "status": "closed", "seconds": 0.1, "new_faces": 9, "restarts": 2,
              "unfolding_seconds": 0.01, "method": "annealed", "history": [1, 2]}
@@ -380,7 +379,7 @@ def test_mesh_checks_counts_every_moved_vertex_and_changed_face(moved, rotated, 
 
 
 def test_peak_memory_window_sees_a_freed_allocation():
-    from meshlab_holefill.isolation import peak_memory_since, reset_peak_memory
+    from meshlab_holefill.evaluation.isolation import peak_memory_since, reset_peak_memory
 
     start = reset_peak_memory()
     if start is None:
@@ -392,7 +391,7 @@ def test_peak_memory_window_sees_a_freed_allocation():
 
 
 def test_filter_task_reports_its_memory(bunny_scan):
-    from meshlab_holefill.isolation import execute_task, reset_peak_memory
+    from meshlab_holefill.evaluation.isolation import execute_task, reset_peak_memory
 
     if reset_peak_memory() is None:
         pytest.skip("no /proc/self/clear_refs here: memory is not reported")

@@ -9,23 +9,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from meshlab_holefill import FILTERS, HoleFillError
-from meshlab_holefill.algorithms import curve_unfolding as cu
-from meshlab_holefill.algorithms import unfolded_triangulation as tri
-from meshlab_holefill.algorithms.embedding import (embed_patch, embedding_energy, energy_rows, tangential_relaxation,
-                                                   umbrella_operator, vertex_normals)
-from meshlab_holefill.algorithms.unfolding import (anneal_loop, colour_classes, linear_motion_is_simple,
-                                                   planarity_energy, planarity_terms, project_to_best_plane,
-                                                   unfold_loop)
-from meshlab_holefill.geometry.development import (MIN_CLOSURE_RATIO, boundary_gap_angles, close_lengths, developed_area,
-                                                   develop_loop, simple_development)
-from meshlab_holefill.comparison import MeshCase, prepare_case
+from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
+from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
+from meshlab_holefill.algorithms.brunton2009.embedding import embed_patch, embedding_energy, energy_rows, tangential_relaxation, umbrella_operator, vertex_normals
+from meshlab_holefill.algorithms.brunton2009.unfolding import anneal_loop, colour_classes, linear_motion_is_simple, planarity_energy, planarity_terms, project_to_best_plane, unfold_loop
+from meshlab_holefill.geometry.development import MIN_CLOSURE_RATIO, boundary_gap_angles, close_lengths, developed_area, develop_loop, simple_development
+from meshlab_holefill.evaluation.comparison import MeshCase, prepare_case
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.geometry.segments import min_segment_distance, segment_distances
 from meshlab_holefill.geometry.triangulate import polygon_signed_area
-from meshlab_holefill.holes import boundary_loops, hole_context, nonmanifold_edges, outline_ratios
-from meshlab_holefill.metrics import corner_quality_bound
-from meshlab_holefill.patch import validate_patch
+from meshlab_holefill.core.holes import boundary_loops, hole_context, nonmanifold_edges, outline_ratios
+from meshlab_holefill.evaluation.metrics import corner_quality_bound
+from meshlab_holefill.core.patch import validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
 
@@ -582,7 +578,7 @@ def fill_rest(ctx, Q, keep, ears):
 
 def test_clip_ears_cuts_exactly_the_convex_corners_of_a_staircase_hole():
     from meshlab_holefill.geometry.triangulate import polygon_signed_area
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.core.patch import Patch
 
     ctx = flat_disk_hole()
     k, Q = ctx.size, ctx.points[:, :2]
@@ -605,7 +601,7 @@ def test_clip_ears_cuts_exactly_the_convex_corners_of_a_staircase_hole():
 
 
 def test_clip_ears_never_uses_a_chord_the_mesh_already_has():
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.core.patch import Patch
 
     # A 2 x 2 block of squares cut from a 6 x 6 grid except the triangle (14, 15, 21) of its
     # lower-left square: the loop runs 14 -> 21 -> 15, and the chord (14, 15) is a mesh edge.
@@ -638,7 +634,7 @@ def test_clip_ears_never_uses_a_chord_the_mesh_already_has():
 def test_improve_by_swaps_undoes_a_bad_swap_and_keeps_the_energy_solved():
     from meshlab_holefill.geometry.quality import face_normals
     from meshlab_holefill.geometry.topology import interior_edges
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.core.patch import Patch
 
     ctx = flat_disk_hole()
     k = ctx.size
@@ -678,7 +674,7 @@ def test_improve_by_swaps_undoes_a_bad_swap_and_keeps_the_energy_solved():
 @settings(max_examples=30, deadline=None)
 @given(n=st.integers(4, 6), order=st.sampled_from([1, 2]), anchors=st.booleans(), seed=st.integers(0, 10_000))
 def test_minimise_embedding_energy_matches_a_dense_least_squares_solve(n, order, anchors, seed):
-    from meshlab_holefill.algorithms.embedding import minimise_embedding_energy
+    from meshlab_holefill.algorithms.brunton2009.embedding import minimise_embedding_energy
 
     V, F = grid(n, n)
     rng = np.random.default_rng(seed)
@@ -699,7 +695,7 @@ def test_minimise_embedding_energy_matches_a_dense_least_squares_solve(n, order,
 
 
 def test_minimise_embedding_energy_without_free_rows_or_with_a_free_island():
-    from meshlab_holefill.algorithms.embedding import minimise_embedding_energy
+    from meshlab_holefill.algorithms.brunton2009.embedding import minimise_embedding_energy
 
     V, F = grid(4, 4)
     R = energy_rows(F, 16, np.zeros(16, bool), 1)

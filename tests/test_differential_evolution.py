@@ -9,13 +9,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import meshlab_holefill  # noqa: F401  (registers the filters)
-from meshlab_holefill.algorithms import differential_evolution as hpde
-from meshlab_holefill.algorithms import (hpde_experiment, hpde_folds, hpde_mesh, hpde_optimisation,
-                                         hpde_prediction, hpde_sections, hpde_smoothing, hpde_steps)
-from meshlab_holefill.geometry.de import de_rand_1_bin, reflect_into_bounds
+from meshlab_holefill.algorithms.xie_zou2013 import differential_evolution as hpde
+from meshlab_holefill.evaluation.papers import hpde_sphere as hpde_experiment
+from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, triangulation as hpde_mesh, optimisation as hpde_optimisation, prediction as hpde_prediction, sections as hpde_sections, smoothing as hpde_smoothing, steps as hpde_steps
+from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
-from meshlab_holefill.holes import boundary_loops, hole_context
-from meshlab_holefill.patch import validate_patch
+from meshlab_holefill.core.holes import boundary_loops, hole_context
+from meshlab_holefill.core.patch import validate_patch
 
 from conftest import assert_filled_cleanly
 
@@ -412,7 +412,7 @@ def test_triangulation_keeps_every_loop_edge_and_detects_fold_overs(sphere_hole)
     result = hpde_steps.predict_points(ctx, base, normals, None, np.pi / 15, e,
                                  dict(N_factor=3, F=0.8, CR=0.05, generations=10, seed=0))
     V, F, ids = hpde_steps.triangulate(ctx, base, normals, seg, "plane", result, e, np.zeros(len(result[0]), bool))
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.core.patch import Patch
 
     validate_patch(Patch(V[ctx.size:], F), ctx.points, ctx.forbidden_edges)
     assert np.array_equal(V[ctx.size:], result[0][ids])
@@ -854,7 +854,7 @@ def test_narrow_bent_hole_is_projected_on_a_plane_facing_the_surface():
     # is across the strip, so the PCA plane of Sec. 4.6 stands across the surface and the
     # projected loop is not simple (the plane layout failed, the disc or the loop-only last
     # resort took over). The plane nearest the surface normal projects it simply.
-    from meshlab_holefill.algorithms import hpde_experiment
+    from meshlab_holefill.evaluation.papers import hpde_sphere as hpde_experiment
 
     V, F = hpde_experiment.uv_sphere()
     removed = hpde_experiment.ellipse_hole(V, F, 0.0, 0.0, 1.0, 0.2)
@@ -936,7 +936,7 @@ def test_loop_only_last_resort_is_lifted_by_the_quality_pass():
 
 def test_raise_min_quality_lifts_a_sliver_and_keeps_the_loop():
     """A free vertex pushed next to a loop edge (a sliver) is moved back; loop vertices stay, nothing folds."""
-    from meshlab_holefill.algorithms import hpde_quality
+    from meshlab_holefill.algorithms.xie_zou2013 import quality_pass as hpde_quality
 
     V, F = grid_plane(6)
     F_cut, removed = cut(V, F, (0.5, 0.5, 0), 0.3)
@@ -967,7 +967,7 @@ def test_raise_min_quality_lifts_a_sliver_and_keeps_the_loop():
 @settings(max_examples=25, deadline=None)
 @given(k=st.integers(6, 16), points=st.integers(3, 25), seed=st.integers(0, 10_000))
 def test_quality_pass_never_lowers_the_minimum_and_keeps_the_disc(k, points, seed):
-    from meshlab_holefill.algorithms import hpde_quality
+    from meshlab_holefill.algorithms.xie_zou2013 import quality_pass as hpde_quality
     from meshlab_holefill.geometry.quality import face_areas, face_normals
 
     from conftest import random_planar_patch
@@ -994,7 +994,7 @@ def _cyclic(face):
 @given(k=st.integers(4, 12), data=st.data())
 def test_loop_triangulation_of_a_planar_polygon_is_flat_valid_and_avoids_forbidden_chords(k, data):
     from meshlab_holefill.geometry.quality import face_areas
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.core.patch import Patch
 
     t = 2 * np.pi * np.arange(k) / k
     P = np.stack([np.cos(t), np.sin(t), np.zeros(k)], axis=1)  # counter-clockwise: patch normal +z
@@ -1037,7 +1037,7 @@ def test_loop_triangulation_minimises_the_largest_dihedral_angle_exactly():
 @given(k=st.integers(6, 14), points=st.integers(4, 24), seed=st.integers(0, 10_000), drag=st.floats(1.2, 2.5))
 def test_repair_folds_unfolds_a_dragged_vertex_and_keeps_the_loop(k, points, seed, drag):
     from meshlab_holefill.geometry.quality import face_areas, face_normals
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.core.patch import Patch
 
     from conftest import random_planar_patch
 
@@ -1065,7 +1065,7 @@ def test_repair_folds_unfolds_a_dragged_vertex_and_keeps_the_loop(k, points, see
 
 @pytest.mark.parametrize("reverse", [False, True])
 def test_triangulate_planar_drops_outside_near_and_duplicate_points_and_keeps_the_loop_orientation(reverse):
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.core.patch import Patch
 
     # Square [0, 2]^2 with its edge midpoints (k = 8), lifted onto the plane z = 0.1 x.
     Q = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [2, 2], [1, 2], [0, 2], [0, 1.0]])

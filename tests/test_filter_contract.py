@@ -8,9 +8,9 @@ from hypothesis import strategies as st
 import meshlab_holefill
 from meshlab_holefill import FilterParameterError, MeshTopologyError, apply_filter, filter_list
 from meshlab_holefill.geometry.quality import triangle_quality
-from meshlab_holefill.holes import boundary_loops
-from meshlab_holefill.meshset_io import index_ranges, set_selection
-from meshlab_holefill.holes import nonmanifold_edges as nonmanifold_edges_of
+from meshlab_holefill.core.holes import boundary_loops
+from meshlab_holefill.meshlab.meshset_io import index_ranges, set_selection
+from meshlab_holefill.core.holes import nonmanifold_edges as nonmanifold_edges_of
 
 from conftest import (assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample,
                       sphere_with_holes)
@@ -191,7 +191,7 @@ def test_apply_filter_runs_builtins_and_ours_and_rejects_unknown(bunny_scan):
 
 
 def test_percentage_lengths_are_converted_like_builtin_filters():
-    from meshlab_holefill.registry import FilterSpec, ParamSpec, resolve_params
+    from meshlab_holefill.meshlab.registration import FilterSpec, ParamSpec, resolve_params
 
     spec = FilterSpec("x", "X", "", [ParamSpec("radius", "length", pymeshlab.PercentageValue(1), "r")], run=None)
     ms = pymeshlab.MeshSet()
@@ -202,7 +202,8 @@ def test_percentage_lengths_are_converted_like_builtin_filters():
     assert resolve_params(spec, {"radius": pymeshlab.PercentageValue(10)}, ms)["radius"] == pytest.approx(diag / 10)
 
 
-@pytest.mark.parametrize("module", ["curve_unfolding", "differential_evolution", "lssvm_poisson", "min_angle_bilateral"])
+@pytest.mark.parametrize("module", ["brunton2009.curve_unfolding", "xie_zou2013.differential_evolution",
+                                    "xu2013.lssvm_poisson", "hu2012.min_angle_bilateral"])
 def test_every_fill_keyword_is_a_filter_parameter_with_the_same_default(module):
     # What an algorithm can do, a MeshSet user (and a .mlx script, and the CLI) can ask for.
     import importlib
@@ -378,7 +379,7 @@ def test_pymeshlab_print_filter_parameter_list_knows_our_filters(capfd):
 
 
 def test_a_failure_building_the_filled_layer_puts_the_old_one_back(bunny_scan, monkeypatch):
-    from meshlab_holefill import meshset_io
+    from meshlab_holefill.meshlab import meshset_io
 
     bunny_scan.compute_selection_by_condition_per_face(condselect="fi < 50")
     m0 = bunny_scan.current_mesh()

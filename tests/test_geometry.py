@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from meshlab_holefill.geometry.bilateral import bilateral_filter
-from meshlab_holefill.geometry.fairing import fair_positions
+from meshlab_holefill.algorithms.hu2012.bilateral_filter import bilateral_filter
+from meshlab_holefill.algorithms.hu2012.fairing import fair_positions
 from meshlab_holefill.geometry.flips import circumcenters, min_angle_scores, relax_edges
 from meshlab_holefill.geometry.laplacian import cotangent_laplacian, tangential_umbrella_smoothing, uniform_laplacian
 from meshlab_holefill.geometry.pca import fit_plane, project_to_plane
@@ -11,7 +11,7 @@ from meshlab_holefill.geometry.quality import corner_angles, face_areas, triangl
 from meshlab_holefill.geometry.refine import refine_patch, split_condition
 from meshlab_holefill.geometry.topology import interior_edges
 from meshlab_holefill.geometry.triangulate import triangulate_polygon
-from meshlab_holefill.patch import HoleFillError
+from meshlab_holefill.core.patch import HoleFillError
 
 from conftest import grid
 

@@ -6,9 +6,9 @@ from hypothesis import given, settings, strategies as st
 
 import meshlab_holefill  # noqa: F401  (registers the filters)
 from meshlab_holefill.geometry.intersections import faces_intersecting
-from meshlab_holefill.hole_filter import close_holes, face_boxes_near, patch_intersections
-from meshlab_holefill.holes import boundary_halfedges, boundary_loops, nonmanifold_edges
-from meshlab_holefill.patch import Patch, validate_patch
+from meshlab_holefill.core.pipeline import close_holes, face_boxes_near, patch_intersections
+from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops, nonmanifold_edges
+from meshlab_holefill.core.patch import Patch, validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays
 
@@ -290,7 +290,7 @@ def test_a_hole_that_fails_after_its_border_was_refined_is_left_as_it_was():
 
 
 def test_the_second_pass_does_not_fill_again_a_hole_whose_surroundings_are_unchanged(monkeypatch):
-    from meshlab_holefill.algorithms import lssvm_poisson
+    from meshlab_holefill.algorithms.xu2013 import lssvm_poisson
 
     V, F, _ = _sphere_with_an_unfillable_hole()
     fill, sizes = lssvm_poisson.fill, []
@@ -299,7 +299,7 @@ def test_the_second_pass_does_not_fill_again_a_hole_whose_surroundings_are_uncha
         sizes.append(ctx.size)
         return fill(ctx, **kwargs)
 
-    from meshlab_holefill import hole_filter
+    from meshlab_holefill.core import pipeline as hole_filter
 
     key = hole_filter._context_key
     monkeypatch.setattr(hole_filter, "_context_key", lambda ctx: object())  # never equal: every pass refills

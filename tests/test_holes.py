@@ -5,9 +5,8 @@ import pymeshlab
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from meshlab_holefill.hole_guards import inside_hole_sector
-from meshlab_holefill.holes import (boundary_halfedges, boundary_loops, edge_face_counts, edge_summary, hole_context,
-                                    loop_measures, nonmanifold_edges, vertex_face_incidence)
+from meshlab_holefill.algorithms.hu2012.hole_guards import inside_hole_sector
+from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops, edge_face_counts, edge_summary, hole_context, loop_measures, nonmanifold_edges, vertex_face_incidence
 
 from conftest import cut_disks, grid, mesh_arrays, sample, sphere_with_holes
 

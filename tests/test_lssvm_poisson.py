@@ -7,16 +7,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshlab_holefill.algorithms import lssvm_poisson as xu
-from meshlab_holefill.algorithms.lssvm import kkt_matrix, lssvm_fit, rbf_kernel
-from meshlab_holefill.algorithms.lssvm_poisson_patch import normalized_cotangent_laplacian
-from meshlab_holefill.geometry.advancing_front import advancing_front_triangulation
-from meshlab_holefill.geometry.front_predicates import front_angle
-from meshlab_holefill.geometry.border_split import split_long_boundary_edges
+from meshlab_holefill.algorithms.xu2013 import lssvm_poisson as xu
+from meshlab_holefill.algorithms.xu2013.lssvm import kkt_matrix, lssvm_fit, rbf_kernel
+from meshlab_holefill.algorithms.xu2013.poisson_patch import normalized_cotangent_laplacian
+from meshlab_holefill.algorithms.xu2013.advancing_front import advancing_front_triangulation
+from meshlab_holefill.algorithms.xu2013.front_predicates import front_angle
+from meshlab_holefill.algorithms.xu2013.border_split import split_long_boundary_edges
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import face_areas, triangle_quality
-from meshlab_holefill.holes import boundary_loops, hole_context, nonmanifold_edges
-from meshlab_holefill.patch import HoleFillError, Patch, validate_patch
+from meshlab_holefill.core.holes import boundary_loops, hole_context, nonmanifold_edges
+from meshlab_holefill.core.patch import HoleFillError, Patch, validate_patch
 
 from conftest import assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample
 
@@ -106,7 +106,7 @@ def test_boundary_split_halves_long_edges_and_keeps_the_surface():
 
 
 def test_refined_mesh_attributes_interpolate_vertices_and_copy_faces():
-    from meshlab_holefill.meshset_io import MeshArrays, refine_mesh_arrays
+    from meshlab_holefill.meshlab.meshset_io import MeshArrays, refine_mesh_arrays
 
     V, F = annulus_with_long_hole_edge()
     hole = next(lp for lp in boundary_loops(F) if np.allclose(V[lp.vertices].min(axis=0)[:2], 0.3))
@@ -198,7 +198,7 @@ def test_front_angle_convex_reflex_and_collinear():
 
 def first_step(P):
     """Apply the advancing front's first step; returns (rule, faces added, vertices added)."""
-    from meshlab_holefill.geometry.advancing_front import _AdvancingFront
+    from meshlab_holefill.algorithms.xu2013.advancing_front import _AdvancingFront
 
     front = _AdvancingFront(np.asarray(P, float), UP, (), 0.75, 10_000)
     node = front._pop()
@@ -228,7 +228,7 @@ def test_merge_may_not_close_a_wide_neighbour_angle_by_an_ear():
     # so v falls back to the next rule; without the limit the merge goes through.
     import math
 
-    from meshlab_holefill.geometry.advancing_front import MERGE_EAR_MAX, _AdvancingFront
+    from meshlab_holefill.algorithms.xu2013.advancing_front import MERGE_EAR_MAX, _AdvancingFront
 
     p = 0.1 * np.array([math.cos(math.radians(100)), math.sin(math.radians(100)), 0.0])
     u = 0.65 * np.array([math.cos(math.radians(50)), math.sin(math.radians(50)), 0.0])
@@ -244,7 +244,7 @@ def test_merge_may_not_close_a_wide_neighbour_angle_by_an_ear():
 def test_swaps_do_not_cut_off_a_worse_ear():
     # Boundary p, v, q with a 146-degree corner at v, inner vertex c: swapping (v, c) to (p, q)
     # would leave the ear (p, v, q), worse than the two triangles it replaces.
-    from meshlab_holefill.algorithms.lssvm_poisson_patch import _ear_guard
+    from meshlab_holefill.algorithms.xu2013.poisson_patch import _ear_guard
 
     V = np.array([[-1.0, 0.0, 0.0], [0.0, 0.3, 0.0], [1.0, 0.0, 0.0], [0.0, -0.6, 0.0]])
     F = np.array([[0, 3, 1], [1, 3, 2]])
@@ -260,7 +260,7 @@ def test_swaps_do_not_cut_off_a_worse_ear():
 
 def test_new_vertices_lie_in_the_plane_of_the_two_front_edges():
     # A non-planar boundary: the first (rule 3) step puts its vertices in the plane of p, v, q.
-    from meshlab_holefill.geometry.advancing_front import _AdvancingFront
+    from meshlab_holefill.algorithms.xu2013.advancing_front import _AdvancingFront
 
     P = circle(30)
     P[:, 2] = 0.2 * P[:, 0] ** 2
@@ -312,7 +312,7 @@ def test_self_crossing_boundary_fails_clearly():
 
 
 def test_steps_that_cross_the_surrounding_mesh_are_rejected():
-    from meshlab_holefill.geometry.advancing_front import _AdvancingFront
+    from meshlab_holefill.algorithms.xu2013.advancing_front import _AdvancingFront
 
     P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     wall = np.array([[0.5, 0.5, -1], [0.9, 0.1, -1], [0.7, 0.3, 1.0]], float)  # pierces triangle (0, 1, 2)
@@ -330,7 +330,7 @@ def test_refused_nodes_far_from_a_step_stay_refused_without_changing_the_patch(m
     # After a step only the refused nodes within the reach of its checks are retried
     # (_release_blocked_near); retrying every refused node must give the same patches. On
     # bunny10k_textured one hole's front refuses 35 steps, 2 of them kept back after far steps.
-    from meshlab_holefill.geometry import advancing_front
+    from meshlab_holefill.algorithms.xu2013 import advancing_front
 
     def run():
         ms = pymeshlab.MeshSet()
@@ -351,7 +351,7 @@ def test_refused_nodes_far_from_a_step_stay_refused_without_changing_the_patch(m
 def test_front_that_runs_out_of_the_hole_stops():
     # The outer border of a flat grid, read as a hole, is the plane outside the square: with
     # the surface normals the front grows outward without end; it must stop with a reason.
-    from meshlab_holefill.algorithms.lssvm_poisson_patch import reference_normals
+    from meshlab_holefill.algorithms.xu2013.poisson_patch import reference_normals
 
     V, F = grid(10, 10)
     ctx = hole_context(V, F, boundary_loops(F)[0], rings=2)
@@ -458,7 +458,7 @@ def test_poisson_solve_with_zero_laplacian_is_the_membrane():
 def test_repeated_poisson_solves_converge_to_their_own_weights():
     # Sec. 3.4: L_Vn depends on the positions, so each further solve uses the previous result's
     # weights; the displacement shrinks and the final positions satisfy their own Laplacian system.
-    from meshlab_holefill.algorithms.lssvm_poisson import poisson_reposition
+    from meshlab_holefill.algorithms.xu2013.lssvm_poisson import poisson_reposition
 
     V, F, _ = sphere_hole()
     ctx = context_of(V, F)
@@ -501,7 +501,7 @@ def _fold_case():
 def test_poisson_solve_folded_across_one_edge_is_kept_when_a_swap_unfolds_it():
     # The path of 335d403: a solve that turns one quad over is kept with the quad's other diagonal
     # instead of being discarded. The right-hand side is set so that the solve lands exactly on T.
-    from meshlab_holefill.algorithms.lssvm_poisson_patch import folds
+    from meshlab_holefill.algorithms.xu2013.poisson_patch import folds
 
     X, F, T, ctx = _fold_case()
     free = np.arange(len(X)) >= ctx.size
@@ -520,7 +520,7 @@ def test_poisson_solve_folded_across_one_edge_is_kept_when_a_swap_unfolds_it():
 
 
 def test_sliver_repair_leaves_good_patches_alone():
-    from meshlab_holefill.algorithms.lssvm_poisson_patch import repair_slivers
+    from meshlab_holefill.algorithms.xu2013.poisson_patch import repair_slivers
 
     X, F, T, ctx = _fold_case()
     fixed = np.arange(len(X)) < ctx.size
@@ -532,7 +532,7 @@ def test_sliver_repair_leaves_good_patches_alone():
 @pytest.fixture(scope="module")
 def face_hole_227():
     """face000.ply's largest natural hole (227 edges; the benchmark's face000 hole 1) after Sec. 3.1."""
-    from meshlab_holefill.metrics import corner_quality_bound
+    from meshlab_holefill.evaluation.metrics import corner_quality_bound
 
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(sample("rangemaps/face000.ply"))
@@ -548,7 +548,7 @@ def test_sliver_repair_lifts_the_border_row_the_poisson_solve_squeezes(face_hole
     # (fill() takes ~3 s to find that out; this builds that patch directly). The Poisson solve
     # squeezes the triangles along a stretch of the border; smoothing and swaps alone leave 0.216,
     # while the corner bound is 0.596. The local repair lifts them above 0.3.
-    from meshlab_holefill.algorithms.lssvm_poisson_patch import harmonic_lift, planar_boundaries
+    from meshlab_holefill.algorithms.xu2013.poisson_patch import harmonic_lift, planar_boundaries
 
     ctx, bound = face_hole_227
     assert bound > 0.5
@@ -656,7 +656,7 @@ def off_plane(X):
 
 
 def test_initial_patches_yield_every_domain_in_order_each_closing_the_hole_on_its_plane():
-    from meshlab_holefill.algorithms.lssvm_poisson_patch import initial_patches
+    from meshlab_holefill.algorithms.xu2013.poisson_patch import initial_patches
 
     ctx = tilted_polar_hole()
     k = ctx.size
@@ -673,7 +673,7 @@ def test_initial_patches_yield_every_domain_in_order_each_closing_the_hole_on_it
 
 
 def test_initial_patches_fall_back_lazily_and_record_why(monkeypatch):
-    from meshlab_holefill.algorithms import lssvm_poisson_patch as patch_module
+    from meshlab_holefill.algorithms.xu2013 import poisson_patch as patch_module
 
     ctx = tilted_polar_hole()
     calls = []
@@ -697,7 +697,7 @@ def test_initial_patches_fall_back_lazily_and_record_why(monkeypatch):
 
 
 def test_planar_boundaries_offer_the_projection_of_a_planar_hole_with_collinear_edges():
-    from meshlab_holefill.algorithms.lssvm_poisson_patch import planar_boundaries
+    from meshlab_holefill.algorithms.xu2013.poisson_patch import planar_boundaries
     from meshlab_holefill.geometry.segments import polygon_edges_touch
 
     # Minimal: a U whose two top edges lie on y = 2, far apart; the polygon is simple.
@@ -722,7 +722,7 @@ def patch_of_removed_faces(V, F_kept, F_removed, rings=2):
 
 
 def test_fair_patch_in_context_restores_a_flat_grid_exactly():
-    from meshlab_holefill.geometry.fairing import fair_patch_in_context
+    from meshlab_holefill.algorithms.hu2012.fairing import fair_patch_in_context
 
     # On a regular flat grid every vertex is the mean of its 1-ring, so L x = 0 and L^2 x = 0 hold
     # at the true positions: fairing any start must give them back, flat.
@@ -735,7 +735,7 @@ def test_fair_patch_in_context_restores_a_flat_grid_exactly():
 
 
 def test_fair_patch_in_context_bulges_a_flat_patch_onto_the_sphere():
-    from meshlab_holefill.geometry.fairing import fair_patch_in_context
+    from meshlab_holefill.algorithms.hu2012.fairing import fair_patch_in_context
 
     V, F, removed = sphere_hole(radius=0.5)
     ctx, truth, Fp = patch_of_removed_faces(V, F, removed)

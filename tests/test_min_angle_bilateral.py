@@ -7,14 +7,13 @@ from hypothesis import strategies as st
 
 import dataclasses
 
-from meshlab_holefill.algorithms.min_angle_bilateral import fill, relaxation_guard
-from meshlab_holefill.algorithms.min_angle_triangulation import (boundary_angles, min_angle_triangulation,
-                                                                 normal_angle_threshold)
+from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import fill, relaxation_guard
+from meshlab_holefill.algorithms.hu2012.min_angle_triangulation import boundary_angles, min_angle_triangulation, normal_angle_threshold
 from meshlab_holefill.geometry.flips import relax_edges
 from meshlab_holefill.geometry.quality import triangle_quality
-from meshlab_holefill.hole_guards import patch_guard
-from meshlab_holefill.holes import boundary_loops, hole_context, vertex_face_incidence
-from meshlab_holefill.patch import validate_patch
+from meshlab_holefill.algorithms.hu2012.hole_guards import patch_guard
+from meshlab_holefill.core.holes import boundary_loops, hole_context, vertex_face_incidence
+from meshlab_holefill.core.patch import validate_patch
 
 from conftest import assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, random_planar_patch, sample, sphere_with_holes
 
@@ -175,8 +174,8 @@ def test_relaxation_guard_still_refuses_a_swap_through_the_surrounding_mesh():
 # ----------------------------------------------------------------------------- speed-ups kept exact
 
 def test_scalar_sector_test_agrees_with_the_vectorised_one():
-    from meshlab_holefill.algorithms.min_angle_triangulation import _in_sector
-    from meshlab_holefill.hole_guards import inside_hole_sector
+    from meshlab_holefill.algorithms.hu2012.min_angle_triangulation import _in_sector
+    from meshlab_holefill.algorithms.hu2012.hole_guards import inside_hole_sector
 
     rng = np.random.default_rng(3)
     agree = 0
@@ -200,7 +199,7 @@ def _disk_patch(n=6):
 
 
 def test_embeds_in_projection_accepts_a_flat_disk_and_rejects_a_folded_one():
-    from meshlab_holefill.algorithms.min_angle_bilateral import embeds_in_projection
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import embeds_in_projection
     from meshlab_holefill.geometry.intersections import intersecting_pairs
 
     V, F, k = _disk_patch()
@@ -220,7 +219,7 @@ def test_embeds_in_projection_accepts_a_flat_disk_and_rejects_a_folded_one():
 def test_embeds_in_projection_rejects_a_doubly_wound_fan():
     # A fan around a centre that winds twice (a helicoid step): every face keeps its
     # orientation over the plane, yet the surface overlaps itself in projection.
-    from meshlab_holefill.algorithms.min_angle_bilateral import embeds_in_projection
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import embeds_in_projection
 
     m = 12
     t = np.linspace(0, 4 * np.pi, m, endpoint=False)
@@ -242,7 +241,7 @@ def _noisy_grid(noise, seed=1):
 
 
 def test_bilateral_guard_keeps_every_face_above_its_floor():
-    from meshlab_holefill.geometry.bilateral import bilateral_filter
+    from meshlab_holefill.algorithms.hu2012.bilateral_filter import bilateral_filter
 
     V, F, movable = _noisy_grid(0.1)
     h = 0.125  # grid spacing: sigma_c = 0.1 and sigma_s = 0.5 of it, as the filter's defaults
@@ -260,7 +259,7 @@ def test_bilateral_guard_keeps_every_face_above_its_floor():
 
 
 def test_bilateral_default_is_unchanged_by_the_new_keywords():
-    from meshlab_holefill.geometry.bilateral import bilateral_filter
+    from meshlab_holefill.algorithms.hu2012.bilateral_filter import bilateral_filter
 
     V, F, movable = _noisy_grid(0.05)
     a = bilateral_filter(V, F, movable, 0.06, 0.1, 3)
@@ -270,7 +269,7 @@ def test_bilateral_default_is_unchanged_by_the_new_keywords():
 
 def test_radius_neighbourhood_reaches_the_fixed_surrounding_points():
     # A flat patch with fixed points lifted beside it: only Eq. 4's spatial neighbourhood sees them.
-    from meshlab_holefill.geometry.bilateral import bilateral_filter
+    from meshlab_holefill.algorithms.hu2012.bilateral_filter import bilateral_filter
 
     V, F = grid(5, 5)
     V = V.astype(float)
@@ -308,7 +307,7 @@ def test_unfolded_relaxation_equals_the_circumcircle_test_in_the_plane_and_conve
 @pytest.fixture(scope="module")
 def cow_cut_holes():
     """The benchmark suite's cut holes in pymeshlab's cow.obj (seed 0): contexts and loops."""
-    from meshlab_holefill.compare import cut_holes, hole_plan
+    from meshlab_holefill.evaluation.cut_holes import cut_holes, hole_plan
 
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(sample("cow.obj"))
@@ -356,7 +355,7 @@ def test_tangential_smoothing_lifts_a_vertex_off_a_border_edge_and_keeps_the_pla
     # the triangle on that edge is flat (no split or swap of Sec. III.C may touch it, the edge
     # being the hole border). Smoothing moves the vertex up, in the plane, and never lowers the
     # smallest quality around it.
-    from meshlab_holefill.algorithms.min_angle_smoothing import tangential_smoothing
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import tangential_smoothing
 
     V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [2, 2, 0], [1, 2, 0], [0, 2, 0], [0, 1, 0],
                   [1.0, 0.1, 0]], float)
@@ -380,7 +379,7 @@ def test_tangential_smoothing_lifts_a_vertex_off_a_border_edge_and_keeps_the_pla
 def test_smoothing_is_off_by_default_and_leaves_the_default_patch_alone():
     import inspect
 
-    from meshlab_holefill.algorithms.min_angle_bilateral import PARAMS
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import PARAMS
 
     assert next(p for p in PARAMS if p.name == "smoothing").default == 0
     assert inspect.signature(fill).parameters["smoothing"].default == 0
@@ -395,7 +394,7 @@ def test_smoothing_option_lifts_the_slivers_the_refinement_leaves_on_scan_holes(
     # face000's holes of 86 and 142 edges: the paper's steps leave centroids next to border
     # edges (min quality 0.298 and 0.211, although no border corner forces a triangle below
     # 0.76 / 0.64); the smoothing option (beyond the paper) lifts them.
-    from meshlab_holefill.metrics import corner_quality_bound
+    from meshlab_holefill.evaluation.metrics import corner_quality_bound
 
     V, F, loops = face_scan
     loop = next(lp for lp in loops if len(lp) == edges)
@@ -431,7 +430,7 @@ def test_bilateral_step_pulls_a_flat_cap_inward_and_fairing_with_smoothing_beats
         area = np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
         return np.average(np.abs(np.linalg.norm(P, axis=1) - 1), weights=np.tile(area, len(w)))
 
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.core.patch import Patch
 
     flat = Patch(vertices=np.zeros((0, 3)), faces=min_angle_triangulation(ctx.points, ctx.loop_normals,
                                                                           ctx.forbidden_edges))
@@ -445,7 +444,7 @@ def test_bilateral_step_pulls_a_flat_cap_inward_and_fairing_with_smoothing_beats
 def test_bisect_obtuse_splits_the_chord_of_an_obtuse_ear():
     # An ear with a 140-degree border corner at vertex 1: its chord (0, 2) is split at its
     # midpoint, which joins vertex 1 to the rest of the patch (no swap or move could).
-    from meshlab_holefill.algorithms.min_angle_smoothing import bisect_obtuse
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import bisect_obtuse
 
     h = np.tan(np.radians(20))
     V = np.array([[0, 0, 0], [1, -h, 0], [2, 0, 0], [1, 1.5, 0]], float)
@@ -466,7 +465,7 @@ def test_smoothing_option_removes_a_centroid_stuck_in_a_narrow_scan_hole(face_sc
     # face000's 23-edge hole is a strip about one edge wide: the refinement leaves a centroid
     # next to its 2.2-long border edge (quality 0.117, corner bound 0.50); no tangential move
     # frees it, a collapse (collapse_poor, part of the smoothing option) does.
-    from meshlab_holefill.algorithms.min_angle_smoothing import tangential_smoothing
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import tangential_smoothing
 
     V, F, loops = face_scan
     loop = next(lp for lp in loops if len(lp) == 23)
@@ -489,8 +488,8 @@ def test_smoothing_option_removes_a_centroid_stuck_in_a_narrow_scan_hole(face_sc
 def test_collapse_poor_keeps_the_link_condition_and_fixed_edges():
     # A vertex squeezed against the bottom edge (0, 1) of a fan: it is collapsed into the
     # neighbour that gives the best smallest quality around it; the patch stays a valid disk.
-    from meshlab_holefill.algorithms.min_angle_smoothing import collapse_poor
-    from meshlab_holefill.patch import Patch
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import collapse_poor
+    from meshlab_holefill.core.patch import Patch
 
     V = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [1, 2.2, 0], [0, 2, 0], [1.0, 0.05, 0], [1.0, 1.2, 0]], float)
     k = 5
@@ -511,7 +510,7 @@ def test_collapse_poor_keeps_the_link_condition_and_fixed_edges():
 @settings(max_examples=25, deadline=None)
 @given(k=st.integers(6, 16), points=st.integers(3, 25), seed=st.integers(0, 10_000), split=st.booleans())
 def test_smoothing_option_keeps_the_loop_and_the_disc(k, points, seed, split):
-    from meshlab_holefill.algorithms.min_angle_smoothing import tangential_smoothing
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import tangential_smoothing
     from meshlab_holefill.geometry.quality import face_areas, face_normals
 
     X, F = random_planar_patch(k, points, seed)

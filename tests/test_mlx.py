@@ -10,11 +10,12 @@ import pymeshlab
 import pytest
 
 import meshlab_holefill
-from meshlab_holefill import mlx_names, registry
+from meshlab_holefill.meshlab.mlx import names as mlx_names
+from meshlab_holefill.meshlab import registration as registry
 from meshlab_holefill.cli import main
-from meshlab_holefill.filter_specs import ALGORITHMS
-from meshlab_holefill.holes import boundary_loops
-from meshlab_holefill.mlx import MlxRunError, MlxScriptError, read_filter_script, run_filter_script
+from meshlab_holefill.meshlab.filter_specs import ALGORITHMS
+from meshlab_holefill.core.holes import boundary_loops
+from meshlab_holefill.meshlab.mlx.script import MlxRunError, MlxScriptError, read_filter_script, run_filter_script
 
 from conftest import mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
 

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from meshlab_holefill.holes import boundary_loops, nonmanifold_edges
-from meshlab_holefill.patch import HoleFillError, Patch, merge_patches, validate_patch
+from meshlab_holefill.core.holes import boundary_loops, nonmanifold_edges
+from meshlab_holefill.core.patch import HoleFillError, Patch, merge_patches, validate_patch
 
 SQUARE = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
 

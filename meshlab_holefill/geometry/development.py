@@ -187,7 +187,7 @@ def simple_development(P, gap_angles, eps, ladder=RELAX_LADDER):
 def simple_developments(P, gap_angles, eps, ladder=RELAX_LADDER):
     """Every development of the ladder that is a simple polygon, least relaxed first.
 
-    The repair step (:func:`meshlab_holefill.algorithms.curve_unfolding.repair_crossings`) tries them as alternative
+    The repair step (:func:`meshlab_holefill.algorithms.brunton2009.curve_unfolding.repair_crossings`) tries them as alternative
     planar domains when the first patch crosses the surrounding mesh.
 
     Parameters

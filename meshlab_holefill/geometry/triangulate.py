@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import triangle
 
-from ..patch import HoleFillError
+from ..errors import HoleFillError
 
 
 def polygon_signed_area(Q):

@@ -1,0 +1,1 @@
+"""algorithms.brunton2009."""

@@ -1,0 +1,384 @@
+"""Unfolding a boundary loop into a simple planar polygon (Brunton et al. 2009, Sec. 3.1).
+
+The loop is moved vertex by vertex by simulated annealing (Press et al., Numerical Recipes
+Sec. 10.9) to lower the planarity energy E_PE (the angles between the normals n_i of
+consecutive vertex triples), never letting two non-adjacent segments come closer than
+epsilon, and then projected to its best-fitting plane; the projection is accepted when the
+loop reaches it by a linear motion without self-intersection, otherwise annealing restarts.
+
+Readings of what Sec. 3.1 leaves open:
+
+* **Move.** One annealing step moves one vertex p_j by ``u * max(eps, d_MD)`` along a unit
+  direction (u uniform in [0, 1)), the paper's step bound. Vertices whose moves touch
+  disjoint energy terms are moved as one vectorised batch (:func:`colour_classes`); because
+  up to m / 4 vertices then move at once, each gets half that bound, which still keeps any
+  two segments from passing through each other. ``step_bound='local'`` replaces the global
+  d_MD by the clearance of the moved segments (>= d_MD, same guarantee). A move that would
+  leave d_MD <= eps is rejected (the constraint d_MD > eps).
+* **Energy.** d_PE(p_i) is the angle between the vectors n_i and n_{i+1}, in [0, pi], as
+  written in the paper (a zero normal, three collinear vertices, gives angle 0).
+* **Direction.** "Move each point along a direction within 10 degrees of the previous random
+  direction" after an accepted improving step: every vertex remembers the direction of its
+  last move; if that move was accepted and lowered E_PE, its next direction is drawn within a
+  10 degree cone around it, otherwise uniformly on the sphere.
+* **Schedule.** Acceptance ``exp(-dE / (k T))`` (Metropolis). The paper calls k < 1 the rate of
+  cooling and T the start temperature; as in Press et al.'s schedule the temperature drops by
+  the factor k after each stage, ``T <- k T``, a stage being one sweep (every vertex one move).
+* **Stopping rule.** At the start of every stage the loop's projection is tested; a run ends
+  as soon as it is simple (so a loop that already projects simply is accepted before any
+  move: 0 steps), when k T < 1e-3 T_start (66 stages for k = 0.9) or after ``sa_steps`` moves.
+  Running the schedule to the end regardless is worse: E_PE has no term keeping the loop's
+  shape or edge lengths, and on the bunny scan's holes, whose projections are simple from the
+  start, a full anneal diffused the loop into one whose projection self-intersects in most
+  runs.
+* **Restart.** A run without a simple projection restarts from the original loop with the
+  next random numbers of the same generator (one seed fixes the whole sequence).
+* **Units.** epsilon is relative to the loop's mean edge length (the paper's 1e-5 is in model
+  units), which makes the method scale invariant.
+
+Beyond the paper, :func:`geometry.development.develop_loop` gives a fallback polygon for loops the annealing does not
+unfold (loops wrapped around a tube or a knob project onto themselves from every side), and
+:func:`geometry.development.simple_development` relaxes it towards the convex polygon until it is simple.
+
+Why the annealing does not unfold a long wrapped loop (measured on the benchmark's torus hole,
+m = 211, wrapped 255 degrees around the tube; its best-plane projection has 5 crossing
+segment pairs): E_PE starts at 489 rad, almost all of it the zig-zag of the grid border (each
+change of turning sign costs about pi), while the wrap itself costs about 2 pi whatever its
+angle, so lowering E_PE first straightens the zig-zag and gives no pull towards unwrapping.
+With the global step bound, d_MD random-walks down to ~1e-7 h within a few thousand moves
+and every later move is that short (E_PE 489 -> 372 in 66 stages); with ``step_bound='local'``
+E_PE falls to 72-85 after 655-1966 stages (cooling per sweep 0.9^(1/10) and 0.9^(1/30)),
+but the loop stays non-planar (largest distance to the best plane 0.33-0.64 of its extent)
+and its projection crosses itself more (190-300 segment pairs) than at the start. At a
+temperature of 0.005 (no uphill moves) the outcome is the same, so it is not the schedule.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...geometry.pca import fit_plane, plane_frame
+from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
+from ...errors import HoleFillError
+
+TEMPERATURE_FLOOR = 1e-3  # a run ends when k T < TEMPERATURE_FLOOR * T_start
+CONE_DEGREES = 10.0  # Sec. 3.1: next direction within 10 degrees of the previous one
+NEAR_EDGES = 4.0  # exact segment distances within this many mean edge lengths, lower bounds beyond
+
+
+def triple_normals(P):
+    """n_i = (p_i - p_{i+1}) x (p_{i+2} - p_{i+1}) of Sec. 3.1, indices mod m, (m, 3)."""
+    P = np.asarray(P, np.float64)
+    P1, P2 = np.roll(P, -1, axis=0), np.roll(P, -2, axis=0)
+    return np.cross(P - P1, P2 - P1)
+
+
+def planarity_terms(P):
+    """d_PE(p_i) = angle(n_i, n_{i+1}) of Sec. 3.1, in radians, (m,).
+
+    A zero normal (three collinear vertices) makes an angle of 0 (atan2(0, 0)).
+    """
+    N = triple_normals(P)
+    N1 = np.roll(N, -1, axis=0)
+    return np.arctan2(np.linalg.norm(np.cross(N, N1), axis=1), np.einsum("ij,ij->i", N, N1))
+
+
+def planarity_energy(P):
+    """E_PE = sum_i d_PE(p_i) of Sec. 3.1 (O(m), vectorised)."""
+    return float(planarity_terms(P).sum())
+
+
+def colour_classes(m):
+    """Vertex classes whose moves touch disjoint d_PE terms and non-adjacent segments.
+
+    A move of p_j changes n_{j-2}, n_{j-1}, n_j and the terms d_PE(p_{j-3}) .. d_PE(p_j); two
+    vertices at cyclic distance >= 4 share none of these, so their Metropolis decisions are
+    independent and one class is processed as one vectorised batch, exactly as if its moves
+    were made one after the other. Classes: j mod 4 over the first 4 floor(m / 4) vertices
+    (the wrap-around gap is then >= 4 too), each remaining vertex alone.
+
+    Returns
+    -------
+    list of (b,) int64
+    """
+    full = 4 * (m // 4)
+    classes = [np.arange(c, full, 4) for c in range(4)] + [np.array([j]) for j in range(full, m)]
+    return [c for c in classes if len(c)]
+
+
+def _cross_normals(A, B, C):
+    """n = (a - b) x (c - b) row-wise, (b, 3)."""
+    return np.cross(A - B, C - B)
+
+
+def _angles(N1, N2):
+    """Angle between row vectors (0 where one is zero), (b,)."""
+    return np.arctan2(np.linalg.norm(np.cross(N1, N2), axis=1), (N1 * N2).sum(axis=1))
+
+
+def _cone_directions(prev, G, r):
+    """Unit vectors within CONE_DEGREES of the unit rows of ``prev``: each tilted by
+    atan(r tan(cone)) towards G's component orthogonal to it (G standard normal, r in [0, 1))."""
+    w = G - (G * prev).sum(axis=1)[:, None] * prev
+    wn = np.linalg.norm(w, axis=1)
+    w = w / np.where(wn > 0, wn, 1.0)[:, None]
+    d = prev + (r * np.tan(np.radians(CONE_DEGREES)))[:, None] * w
+    return d / np.linalg.norm(d, axis=1)[:, None]
+
+
+def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bound="global",
+                stop_when_simple=True, on_move=None):
+    """One simulated-annealing run lowering E_PE subject to d_MD > eps (Sec. 3.1).
+
+    A move displaces one vertex; the moves of a colour class (:func:`colour_classes`) are
+    proposed, tested (Metropolis) and applied together, which is equivalent to making them
+    one after the other because they touch disjoint energy terms. The energy change of a
+    move is computed from the four d_PE terms it touches (O(1) each); the constraint is
+    checked with one numpy call for the distances of all moved segments to all segments.
+    See the module docstring for the move length, the 10 degree direction rule, the
+    schedule and the stopping rule.
+
+    Parameters
+    ----------
+    P : (m, 3) float64
+        Simple loop with d_MD > eps.
+    rng : numpy.random.Generator
+    k : float
+        Boltzmann constant / cooling factor (paper: 0.9).
+    temperature : float
+        Start temperature (paper: 0.5), in radians of E_PE.
+    eps : float
+        Absolute distance threshold of the constraint d_MD > eps.
+    sa_steps : int
+        Maximum number of moves in the run.
+    step_bound : {'global', 'local'}
+        Bound of a move's length: the global d_MD or the clearance of the moved segments.
+    stop_when_simple : bool
+        End the run at the first temperature stage whose loop projects to a simple polygon.
+    on_move : callable, optional
+        Called as ``on_move(P)`` with the new loop after every accepted batch of moves (tests).
+
+    Returns
+    -------
+    A : (m, 3) float64
+        Annealed loop, still simple with d_MD > eps.
+    stats : dict
+        ``steps``, ``accepted``, ``stages``, ``energy_start``, ``energy_end``, ``d_md``,
+        ``simple`` (the run ended on a simple projection).
+    """
+    P = np.array(P, np.float64)
+    m = len(P)
+    if m < 4:
+        return P, {"steps": 0, "accepted": 0, "stages": 0, "energy_start": 0.0, "energy_end": 0.0,
+                   "d_md": math.inf, "simple": linear_motion_is_simple(project_to_best_plane(P)[0], eps)}
+    mask = nonadjacent_mask(m)
+    # Exact distances only below `near`: far pairs keep a lower bound, which is all a step
+    # bound or the constraint needs.
+    near = NEAR_EDGES * float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean())
+    N = triple_normals(P)
+    T = _angles(N, np.roll(N, -1, axis=0))
+    energy_start = float(T.sum())
+    D = segment_distance_matrix(P, near)
+    d_md = float(D.min())
+    last_dir = np.zeros((m, 3))
+    improving = np.zeros(m, bool)
+    classes = colour_classes(m)
+    kT = k * temperature
+    kT_floor = TEMPERATURE_FLOOR * temperature
+    steps = accepted = stages = 0
+    simple = False
+    while True:
+        if stop_when_simple and linear_motion_is_simple(project_to_best_plane(P)[0], eps, near):
+            simple = True
+            break
+        if steps >= sa_steps or kT < kT_floor:
+            break
+        for ci in rng.permutation(len(classes)).tolist():
+            J = classes[ci][: max(sa_steps - steps, 0)]
+            if len(J) == 0:
+                break
+            steps += len(J)
+            G = rng.standard_normal((len(J), 3))
+            U = rng.random((len(J), 3))
+            dirs = G / np.linalg.norm(G, axis=1)[:, None]
+            cone = improving[J]
+            if cone.any():
+                dirs[cone] = _cone_directions(last_dir[J[cone]], G[cone], U[cone, 1])
+            last_dir[J] = dirs
+            jm, jp = (J - 1) % m, (J + 1) % m
+            jm2, jm3, jp2 = (J - 2) % m, (J - 3) % m, (J + 2) % m
+            if step_bound == "global":
+                clearance = np.full(len(J), d_md)
+            else:
+                clearance = np.minimum(D[jm].min(axis=1), D[J].min(axis=1))
+            # Moves of one class happen together: half the bound keeps any two moving segments
+            # from meeting (their distance is >= d_MD and shrinks by less than two half steps).
+            length = U[:, 0] * 0.5 * np.maximum(eps, clearance)
+            q = P[J] + length[:, None] * dirs
+            n_a = _cross_normals(P[jm2], P[jm], q)    # n_{j-2}
+            n_b = _cross_normals(P[jm], q, P[jp])     # n_{j-1}
+            n_c = _cross_normals(q, P[jp], P[jp2])    # n_j
+            t0, t1 = _angles(N[jm3], n_a), _angles(n_a, n_b)
+            t2, t3 = _angles(n_b, n_c), _angles(n_c, N[jp])
+            dE = (t0 + t1 + t2 + t3) - (T[jm3] + T[jm2] + T[jm] + T[J])
+            with np.errstate(over="ignore"):
+                acc = (dE <= 0.0) | (U[:, 2] < np.exp(-dE / kT))
+            # Constraint d_MD > eps on the moved segments, all moves of the class applied.
+            for _ in range(3):
+                if not acc.any():
+                    break
+                trial = P.copy()
+                trial[J[acc]] = q[acc]
+                ends = np.roll(trial, -1, axis=0)
+                moved = np.unique(np.concatenate([jm[acc], J[acc]]))
+                rows = segment_distance_rows(trial[moved], ends[moved], trial, ends, mask[moved], near)
+                bad = moved[rows.min(axis=1) <= eps]
+                if len(bad) == 0:
+                    break
+                acc &= ~(np.isin(J, bad) | np.isin(jm, bad))
+            else:
+                acc[:] = False
+            improving[J] = acc & (dE < 0.0)
+            if not acc.any():
+                continue
+            accepted += int(acc.sum())
+            P = trial
+            N[jm2[acc]], N[jm[acc]], N[J[acc]] = n_a[acc], n_b[acc], n_c[acc]
+            T[jm3[acc]], T[jm2[acc]], T[jm[acc]], T[J[acc]] = t0[acc], t1[acc], t2[acc], t3[acc]
+            D[moved, :] = rows
+            D[:, moved] = rows.T
+            d_md = float(D.min())
+            if on_move is not None:
+                on_move(P)
+        stages += 1
+        kT *= k
+    return P, {"steps": steps, "accepted": accepted, "stages": stages, "energy_start": energy_start,
+               "energy_end": planarity_energy(P), "d_md": min_segment_distance(P), "simple": simple}
+
+
+def project_to_best_plane(P):
+    """Orthogonal projection of a loop onto its best-fitting (least-squares) plane (Sec. 3.1).
+
+    Parameters
+    ----------
+    P : (m, 3) float64
+
+    Returns
+    -------
+    Q : (m, 2) float64
+        Coordinates in an orthonormal frame (u, v) of the plane, (u, v, normal) right-handed.
+    projected : (m, 3) float64
+        The projected points in space.
+    normal : (3,) float64
+    """
+    P = np.asarray(P, np.float64)
+    centroid, normal, _, _ = fit_plane(P)
+    u, v = plane_frame(normal)
+    rel = P - centroid
+    Q = np.stack([rel @ u, rel @ v], axis=1)
+    projected = P - np.outer(rel @ normal, normal)
+    return Q, projected, normal
+
+
+def linear_motion_is_simple(Q, eps, near=None):
+    """Whether a simple loop reaches its projection by linear motion without self-intersection.
+
+    Sec. 3.1 accepts the unfolding only if the annealed loop can be moved to its projection
+    onto its best-fitting plane by linear motions of the vertices without self-intersection.
+    This test is exact and reduces to the end point: under the motion p(t) = p + t (proj(p) -
+    p) every point keeps its in-plane coordinates and its height above the plane is scaled by
+    (1 - t). Two points of two segments coincide at time t < 1 only if they have the same
+    in-plane position and equal heights, and heights scaled by the common factor (1 - t) are
+    equal exactly when they were equal at t = 0, where the loop is simple (d_MD > eps). So the
+    motion is free of self-intersection iff the projected polygon is simple; it is required to
+    keep the clearance d_MD > eps, like the annealing.
+
+    Parameters
+    ----------
+    Q : (m, 2) float64
+        Projected polygon.
+    eps : float
+        Absolute clearance.
+    near : float, optional
+        Distances beyond ``near`` (> eps) are only bounded from below (faster, same answer).
+
+    Returns
+    -------
+    bool
+    """
+    return is_simple_polygon(Q, eps, near)
+
+
+def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000,
+                step_bound="global", fallback=None):
+    """Unfold a boundary loop into a simple planar polygon (Sec. 3.1).
+
+    Anneal (:func:`anneal_loop`), project to the best-fitting plane
+    (:func:`project_to_best_plane`) and accept if the linear motion to the projection keeps
+    the loop simple (:func:`linear_motion_is_simple`); otherwise restart from the original
+    loop, at most ``max_restarts`` annealing runs in all. A ``fallback`` polygon (e.g.
+    :func:`geometry.development.develop_loop`), beyond the paper, is tried after the first failed run; if it is
+    simple it is used and the remaining restarts are skipped.
+
+    Parameters
+    ----------
+    P : (m, 3) float64
+        Boundary loop in order, m >= 3.
+    rng : numpy.random.Generator
+    k, temperature, sa_steps, step_bound : see :func:`anneal_loop`
+    epsilon : float
+        Clearance threshold relative to the loop's mean edge length.
+    max_restarts : int
+        Maximum number of annealing runs (paper: 100).
+    fallback : (m, 2) float64, optional
+
+    Returns
+    -------
+    Q : (m, 2) float64
+        Simple planar polygon, vertex i the image of loop vertex i.
+    info : dict
+        ``method`` ('annealing' or 'development'), ``restarts`` (annealing runs - 1),
+        ``sa_steps`` (moves over all runs), ``accepted_steps``, ``energy_pe_start``,
+        ``energy_pe_end`` (E_PE before and after the last run), ``d_md_start``.
+
+    Raises
+    ------
+    HoleFillError
+        For a degenerate loop (non-finite, touching itself, zero area) or when no run
+        gives a simple projection and the fallback is not simple either (e.g. a knotted loop).
+    """
+    P = np.asarray(P, np.float64)
+    m = len(P)
+    if m < 3:
+        raise HoleFillError("a boundary loop needs at least 3 vertices")
+    if not np.all(np.isfinite(P)):
+        raise HoleFillError("boundary loop has non-finite coordinates")
+    h = float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean())
+    if not h > 0:
+        raise HoleFillError("boundary loop has zero length")
+    eps = epsilon * h
+    d_md = min_segment_distance(P)
+    if d_md <= eps:
+        raise HoleFillError(f"boundary loop touches itself (d_MD = {d_md:.3g} <= epsilon = {eps:.3g}); "
+                            "curve unfolding needs a simple loop")
+    info = {"method": "annealing", "restarts": 0, "sa_steps": 0, "accepted_steps": 0, "d_md_start": d_md}
+    runs = max(int(max_restarts), 1)
+    for run in range(runs):
+        annealed, stats = anneal_loop(P, rng, k=k, temperature=temperature, eps=eps,
+                                      sa_steps=sa_steps, step_bound=step_bound)
+        info.update(restarts=run, sa_steps=info["sa_steps"] + stats["steps"],
+                    accepted_steps=info["accepted_steps"] + stats["accepted"],
+                    energy_pe_start=stats["energy_start"], energy_pe_end=stats["energy_end"])
+        Q, _, _ = project_to_best_plane(annealed)
+        if linear_motion_is_simple(Q, eps):
+            return Q, info
+        if run == 0 and fallback is not None and linear_motion_is_simple(fallback, eps):
+            info["method"] = "development"
+            return np.asarray(fallback, np.float64), info
+    if m == 3:
+        raise HoleFillError("boundary loop is a degenerate (zero-area) triangle")
+    raise HoleFillError(f"curve unfolding failed: no annealing run out of {runs} gave a loop whose projection "
+                        "to its best-fitting plane is simple"
+                        + (", nor is the loop's development" if fallback is not None else "")
+                        + " (knotted or strongly wrapped boundary)")

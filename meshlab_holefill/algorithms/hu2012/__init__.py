@@ -1,0 +1,1 @@
+"""algorithms.hu2012."""

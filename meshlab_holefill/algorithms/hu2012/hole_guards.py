@@ -1,0 +1,166 @@
+"""Guards that keep a patch inside its hole: hole-sector tests and crossing checks.
+
+A triangulation step or an edge swap must not make a boundary vertex send an edge out of the
+hole, through the surrounding mesh. :func:`inside_hole_sector` and :class:`LoopSectors` test
+the direction of such an edge in the tangent plane of the vertex (the hole side is the sector
+swept counter-clockwise from the next boundary vertex to the previous one, the loop being in
+patch orientation); :func:`patch_crossings` and :func:`swaps_crossing` test new triangles
+against the surrounding faces of a HoleContext and the rest of the patch;
+:func:`patch_guard` combines them as the veto hook of :func:`geometry.flips.relax_edges`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...geometry.intersections import faces_intersecting, intersecting_pairs
+
+
+def sector_angle(apex, normal, reference, directions):
+    """Angles of directions about ``normal``, counter-clockwise from (reference - apex), in [0, 2 pi).
+
+    Parameters
+    ----------
+    apex, normal, reference : (3,) float64
+    directions : (d, 3) float64
+    """
+    n = normal / max(np.linalg.norm(normal), 1e-300)
+    u = reference - apex
+    u = u - np.dot(u, n) * n
+    u /= max(np.linalg.norm(u), 1e-300)
+    w = np.cross(n, u)
+    D = np.atleast_2d(directions)
+    return np.mod(np.arctan2(D @ w, D @ u), 2 * np.pi)
+
+
+def inside_hole_sector(apex, normal, prev_point, next_point, targets, margin=1e-9):
+    """True where the segment from a boundary vertex to each target starts into the hole.
+
+    With the loop in patch orientation the hole side at a vertex is the sector swept
+    counter-clockwise (about the vertex normal, in its tangent plane) from the next
+    boundary vertex to the previous one. Used to refuse diagonals and swapped edges that
+    would leave a boundary vertex on the wrong side, through the surrounding mesh.
+
+    Parameters
+    ----------
+    apex, normal, prev_point, next_point : (3,) float64
+    targets : (d, 3) float64
+
+    Returns
+    -------
+    (d,) bool
+    """
+    limit = sector_angle(apex, normal, next_point, prev_point - apex)[0]
+    phi = sector_angle(apex, normal, next_point, np.atleast_2d(targets) - apex)
+    return (phi > margin) & (phi < limit - margin)
+
+
+class LoopSectors:
+    """The hole sector of every loop vertex, for vectorised :func:`inside_hole_sector` tests.
+
+    Parameters
+    ----------
+    points : (k, 3) float64  loop points, patch orientation
+    normals : (k, 3) float64
+    """
+
+    def __init__(self, points, normals):
+        P = np.asarray(points, np.float64)
+        N = np.asarray(normals, np.float64)
+        N = N / np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
+        u = np.roll(P, -1, axis=0) - P
+        u -= np.einsum("ij,ij->i", u, N)[:, None] * N
+        u /= np.maximum(np.linalg.norm(u, axis=1), 1e-300)[:, None]
+        self.points, self.u, self.w = P, u, np.cross(N, u)
+        self.limit = self._angle(np.arange(len(P)), np.roll(P, 1, axis=0))
+
+    def _angle(self, i, targets):
+        D = targets - self.points[i]
+        return np.mod(np.arctan2(np.einsum("ij,ij->i", D, self.w[i]), np.einsum("ij,ij->i", D, self.u[i])),
+                      2 * np.pi)
+
+    def contains(self, i, targets, margin=1e-9):
+        """(s,) bool: does the segment from loop vertex i[j] to targets[j] start into the hole?"""
+        i = np.asarray(i, np.int64)
+        phi = self._angle(i, np.atleast_2d(targets))
+        return (phi > margin) & (phi < self.limit[i] - margin)
+
+
+def patch_crossings(ctx, patch_points, patch_faces, faces=None):
+    """Patch faces (or the given subset of candidate faces) that intersect the HoleContext's surrounding faces.
+
+    Parameters
+    ----------
+    ctx : HoleContext
+    patch_points : (k + p, 3) float64  loop points then new vertices
+    patch_faces : (q, 3) int           faces in patch numbering
+    faces : (s, 3) int, optional       faces to test instead of ``patch_faces``
+
+    Returns
+    -------
+    (t,) int64 sorted indices into the tested faces
+    """
+    k, n_local = ctx.size, len(ctx.vertices)
+    test = np.asarray(patch_faces if faces is None else faces, np.int64).reshape(-1, 3)
+    if len(test) == 0 or len(ctx.faces) == 0:
+        return np.zeros(0, np.int64)
+    X = np.concatenate([ctx.vertices, np.asarray(patch_points)[k:]])
+    local = np.where(test >= k, test - k + n_local, test)
+    allF = np.concatenate([local, ctx.faces])
+    return faces_intersecting(X, allF, np.arange(len(local)), np.arange(len(local), len(allF)))
+
+
+def patch_guard(ctx, check_intersections=False):
+    """Veto for edge swaps that would push a patch out of its hole or through itself.
+
+    Returns ``allowed(V, F, A, B, replaced) -> (s,) bool`` (the ``allowed`` hook of
+    :func:`geometry.flips.relax_edges`), where V, F are the current patch (loop vertices
+    first, as in a Patch) and A[i], B[i] the two triangles a swap would create in place of
+    faces replaced[i]. A swap is refused when its new edge leaves a boundary vertex outside
+    its hole sector (:class:`LoopSectors`) and, with ``check_intersections``, when a new
+    triangle intersects the surrounding faces or the rest of the patch (slower: one
+    intersection query per round of swaps).
+    """
+    k = ctx.size
+    sectors = LoopSectors(ctx.points, ctx.loop_normals)
+
+    def allowed(V, F, A, B, replaced):
+        c, d = B[:, 1], B[:, 2]
+        ok = np.ones(len(A), bool)
+        for end, other in ((c, d), (d, c)):
+            on_loop = end < k
+            ok[on_loop] &= sectors.contains(end[on_loop], V[other[on_loop]])
+        if not check_intersections or not ok.any():
+            return ok
+        idx = np.flatnonzero(ok)
+        ok[idx] &= ~swaps_crossing(ctx, V, F, A[idx], B[idx], replaced[idx])
+        return ok
+
+    return allowed
+
+
+def swaps_crossing(ctx, V, F, A, B, replaced):
+    """Which edge swaps would make a patch cross the surrounding faces or itself.
+
+    Parameters
+    ----------
+    ctx : HoleContext
+    V : (k + p, 3) float64  the current patch's points (loop first, as in a Patch)
+    F : (q, 3) int          the current patch's faces
+    A, B : (s, 3) int       the two triangles each swap would create
+    replaced : (s, 2) int   the faces of ``F`` each swap replaces (they do not count against it)
+
+    Returns
+    -------
+    (s,) bool  True where a new triangle intersects the mesh near the hole or the rest of the patch
+    """
+    s = len(A)
+    new = np.concatenate([A, B])
+    bad = np.zeros(2 * s, bool)
+    bad[patch_crossings(ctx, V, None, faces=new)] = True
+    allF = np.concatenate([new, F])
+    pairs = intersecting_pairs(V, allF, np.arange(2 * s), np.arange(2 * s, len(allF)))
+    if len(pairs):
+        q, other = pairs[:, 0], pairs[:, 1] - 2 * s
+        own = replaced[q % s]
+        bad[q[(other != own[:, 0]) & (other != own[:, 1])]] = True
+    return bad[:s] | bad[s:]

@@ -1,0 +1,222 @@
+"""Modified principle of minimum angle (Hu et al., Sec. III.B): the initial triangulation of a hole.
+
+Boundary vertices get the angle of Eq. 2 (concave ones reflexed, from the oriented-triangle
+normal against the vertex normal), and ears are cut at the vertex of smallest angle whose two
+neighbours' normals agree within the threshold sigma. The LS-SVM filter's fallback uses the
+same triangulation.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...geometry.topology import edge_pair_set
+from ...errors import HoleFillError
+
+
+def boundary_angles(P, normals):
+    """Angle of each boundary vertex, with concave vertices reflexed (Sec. III.B, Eq. 2).
+
+    With the loop in patch orientation, vertex i is convex when the normal of the oriented
+    triangle (v_{i-1}, v_i, v_{i+1}) points the same way as the vertex normal (the paper's
+    anticlockwise case); convex vertices get theta_i, concave ones 2 pi - theta_i.
+
+    Parameters
+    ----------
+    P : (k, 3) float64  loop points in patch orientation
+    normals : (k, 3) float64  vertex normals
+
+    Returns
+    -------
+    angle : (k,) float64 in [0, 2 pi]
+    convex : (k,) bool
+    """
+    prev, nxt = np.roll(P, 1, axis=0), np.roll(P, -1, axis=0)
+    u, w = prev - P, nxt - P
+    theta = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+    n_t = np.cross(P - prev, nxt - prev)
+    convex = np.einsum("ij,ij->i", n_t, normals) >= 0
+    return np.where(convex, theta, 2 * np.pi - theta), convex
+
+
+def normal_angle_threshold(normals):
+    """Threshold sigma on the angle between neighbour normals (Sec. III.B).
+
+    45 degrees when the largest angle between two boundary-vertex normals is below 55
+    degrees, otherwise 85% of that largest angle.
+    """
+    N = np.asarray(normals, np.float64)
+    largest = float(np.arccos(np.clip((N @ N.T).min(), -1.0, 1.0)))
+    return np.radians(45.0) if largest < np.radians(55.0) else 0.85 * largest
+
+
+def _vertex_angle(p_prev, p, p_next, normal):
+    """Eq. 2 angle of one boundary vertex given its current neighbours (plain-float 3-sequences).
+
+    Returns the angle and |u x w| (twice the ear's area).
+    """
+    u = (p_prev[0] - p[0], p_prev[1] - p[1], p_prev[2] - p[2])
+    w = (p_next[0] - p[0], p_next[1] - p[1], p_next[2] - p[2])
+    cross = _cross3(u, w)
+    area2 = math.sqrt(cross[0] ** 2 + cross[1] ** 2 + cross[2] ** 2)
+    theta = math.atan2(area2, u[0] * w[0] + u[1] * w[1] + u[2] * w[2])
+    # n_t = (p - p_prev) x (p_next - p_prev) = w x u = -(u x w): convex when it agrees with the normal.
+    convex = -(cross[0] * normal[0] + cross[1] * normal[1] + cross[2] * normal[2]) >= 0
+    return (theta if convex else 2 * math.pi - theta), area2
+
+
+def _cross3(a, b):
+    """Cross product of two 3-vectors as a tuple (np.cross's overhead dominates at this size)."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _in_sector(apex, normal, prev_point, next_point, target, margin=1e-9):
+    """Scalar :func:`hole_guards.inside_hole_sector` for one target (plain floats: called once per ear).
+
+    True when the segment apex -> target starts into the hole sector, swept counter-clockwise
+    about the normal from the next boundary vertex to the previous one.
+    """
+    nl = max(math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2), 1e-300)
+    n = (normal[0] / nl, normal[1] / nl, normal[2] / nl)
+    u = (next_point[0] - apex[0], next_point[1] - apex[1], next_point[2] - apex[2])
+    un = u[0] * n[0] + u[1] * n[1] + u[2] * n[2]
+    u = (u[0] - un * n[0], u[1] - un * n[1], u[2] - un * n[2])
+    ul = max(math.sqrt(u[0] ** 2 + u[1] ** 2 + u[2] ** 2), 1e-300)
+    u = (u[0] / ul, u[1] / ul, u[2] / ul)
+    w = _cross3(n, u)
+
+    def angle(p):
+        d = (p[0] - apex[0], p[1] - apex[1], p[2] - apex[2])
+        return math.atan2(d[0] * w[0] + d[1] * w[1] + d[2] * w[2], d[0] * u[0] + d[1] * u[1] + d[2] * u[2]) % (2 * math.pi)
+
+    phi = angle(target)
+    return margin < phi < angle(prev_point) - margin
+
+
+def _ear_holds_a_vertex(P, p, v, n, others):
+    """True when a boundary vertex of ``others`` lies in the ear triangle (p, v, n) or on its new edge.
+
+    The test is made in the ear's plane, for vertices within half the ear's longest edge of
+    that plane: the classic ear condition, which the paper's angle rule takes for granted.
+    """
+    A, B, C = P[p], P[v], P[n]
+    nt = np.array(_cross3(B - A, C - A))
+    area2 = math.sqrt(nt @ nt)
+    if area2 == 0 or len(others) == 0:
+        return False
+    nt = nt / area2
+    reach = 0.5 * math.sqrt(max((B - A) @ (B - A), (C - B) @ (C - B), (A - C) @ (A - C)))
+    Q = P[others]
+    height = (Q - A) @ nt
+    near = np.abs(height) <= reach
+    if not near.any():
+        return False
+    Q = Q[near] - np.outer(height[near], nt)
+    # Barycentric signs: inside or on the boundary of the triangle (tolerance relative to its size).
+    # (x - X) . ((Y - X) x nt) is the signed area of (X, Y, x) about nt, for each side X -> Y.
+    tol = -1e-9
+    inside = np.ones(len(Q), bool)
+    for X, Y in ((B, C), (C, A), (A, B)):
+        m = np.array(_cross3(nt, Y - X))  # points into the triangle, |m| = |Y - X|
+        inside &= (Q - X) @ m / area2 >= tol
+    return bool(inside.any())
+
+
+def min_angle_triangulation(P, normals, forbidden_edges=()):
+    """Modified principle of minimum angle (Sec. III.B, Steps 1-3).
+
+    Repeatedly take the vertex v of smallest angle (Eq. 2) whose two loop neighbours'
+    normals make an angle alpha <= sigma (:func:`normal_angle_threshold`), add the oriented
+    triangle (v1, v, v2) and remove v, until three vertices remain, which form the last
+    triangle (Step 3). When no vertex passes the normal test the smallest-angle vertex is
+    used (the paper leaves this case open). An ear is never cut when its new edge (v1, v2)
+    already exists in the mesh (``forbidden_edges``) or its area is zero; ears whose new
+    edge leaves v1 or v2 outside the hole (:func:`inside_hole_sector`, about the vertex
+    normal) or whose triangle holds another boundary vertex (:func:`_ear_holds_a_vertex`)
+    are cut only when no other ear is left.
+
+    After a cut only the ears within two positions of the removed vertex change, so each
+    step costs O(1) updates plus one arg-min over the remaining vertices.
+
+    Parameters
+    ----------
+    P : (k, 3) float64  loop points, patch orientation
+    normals : (k, 3) float64
+    forbidden_edges : (p, 2) int  loop-index pairs that must not become edges
+
+    Returns
+    -------
+    F : (k - 2, 3) int64  faces in loop indices, oriented like the loop
+    """
+    k = len(P)
+    if k < 3:
+        raise HoleFillError("a hole needs at least 3 boundary vertices")
+    N = np.asarray(normals, np.float64)
+    P = np.asarray(P, np.float64)
+    sigma = normal_angle_threshold(N)
+    cos_sigma = np.cos(sigma)
+    forbidden = edge_pair_set(forbidden_edges)
+    Pl, Nl = P.tolist(), N.tolist()  # plain floats for the scalar per-ear tests
+    prv = [(i - 1) % k for i in range(k)]
+    nxt = [(i + 1) % k for i in range(k)]
+    active = np.ones(k, bool)
+    angle = np.full(k, np.inf)
+    cuttable = np.zeros(k, bool)      # non-degenerate, new edge not already in the mesh
+    normals_agree = np.zeros(k, bool)  # the normal test alpha <= sigma
+    verdict = {}                       # cached ear/sector test, dropped when the ear changes
+    area_tol = 1e-14 * float(np.ptp(P, axis=0).max()) ** 2
+
+    def evaluate(v):
+        p, n = prv[v], nxt[v]
+        angle[v], area2 = _vertex_angle(Pl[p], Pl[v], Pl[n], Nl[v])
+        cuttable[v] = area2 > area_tol and tuple(sorted((p, n))) not in forbidden
+        normals_agree[v] = N[p] @ N[n] >= cos_sigma
+        verdict.pop(v, None)
+
+    def proper_ear(v):
+        # Removing other vertices can only unblock an ear, so a cached False stays safe.
+        if v not in verdict:
+            p, n = prv[v], nxt[v]
+            ok = (_in_sector(Pl[p], Nl[p], Pl[prv[p]], Pl[v], Pl[n])
+                  and _in_sector(Pl[n], Nl[n], Pl[v], Pl[nxt[n]], Pl[p]))
+            if ok:
+                others = np.flatnonzero(active)
+                others = others[(others != p) & (others != v) & (others != n)]
+                ok = not _ear_holds_a_vertex(P, p, v, n, others)
+            verdict[v] = ok
+        return verdict[v]
+
+    for v in range(k):
+        evaluate(v)
+    faces = []
+    remaining = k
+    while remaining > 3:
+        pick = None
+        for tier in (active & cuttable & normals_agree, active & cuttable):
+            candidates = np.flatnonzero(tier)
+            for v in candidates[np.argsort(angle[candidates], kind="stable")].tolist():
+                if proper_ear(v):
+                    pick = v
+                    break
+            if pick is not None:
+                break
+        if pick is None:
+            candidates = np.flatnonzero(active & cuttable)
+            if len(candidates) == 0:
+                raise HoleFillError("no valid ear left in the minimum-angle triangulation")
+            pick = int(candidates[np.argmin(angle[candidates])])
+        v = pick
+        p, n = prv[v], nxt[v]
+        faces.append((p, v, n))
+        nxt[p], prv[n] = n, p
+        active[v] = False
+        remaining -= 1
+        for u in {prv[p], p, n, nxt[n]}:
+            evaluate(u)
+    a = int(np.flatnonzero(active)[0])
+    b, c = nxt[a], nxt[nxt[a]]
+    if any(tuple(sorted(e)) in forbidden for e in ((a, b), (b, c), (c, a))):
+        raise HoleFillError("the last triangle would duplicate an existing edge")
+    faces.append((a, b, c))
+    return np.asarray(faces, np.int64)

@@ -1,0 +1,1 @@
+"""algorithms.xie_zou2013."""

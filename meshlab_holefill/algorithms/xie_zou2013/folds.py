@@ -1,0 +1,288 @@
+"""Fold-overs of an HPDE patch (Sec. 4.6 "detect and handle"): detection, repair, last resort.
+
+A fold-over is a face turned against its projection plane after the mapping back (the
+paper's case), or two neighbouring patch faces, or a patch face and the mesh face across a
+loop edge, bent by more than FOLD_ANGLE. Edge swaps and a local relaxation repair what
+they can; the caller drops prediction points left on folds. When every layout folds, the
+loop alone is triangulated with Liepa's weights (beyond the paper).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...geometry.flips import relax_edges
+from ...geometry.intersections import faces_intersecting
+from ...geometry.quality import face_normals
+from ...geometry.topology import edge_pair_set, interior_edges
+from .optimisation import adjacency
+
+# Neighbouring patch faces whose normals differ by more than this are a fold-over.
+FOLD_ANGLE = np.radians(150.0)
+
+
+def crossing_triangles(ctx, max_size=60):
+    """Set of loop triples (i, m, j), i < m < j, whose triangle crosses the surrounding rings.
+
+    All C(k, 3) candidate triangles are tested at once against the context's faces (for
+    :func:`loop_triangulation`); empty for loops longer than ``max_size``.
+    """
+    k = ctx.size
+    if k > max_size or k < 3:
+        return set()
+    T = np.array([t for t in np.ndindex(k, k, k) if t[0] < t[1] < t[2]], np.int64)
+    X = np.concatenate([ctx.points, ctx.vertices[k:]])
+    allF = np.concatenate([T, ctx.faces])
+    hits = faces_intersecting(X, allF, np.arange(len(T)), np.arange(len(T), len(allF)))
+    return set(map(tuple, T[np.asarray(hits, np.int64)].tolist()))
+
+
+def loop_triangulation(P, border_normals, forbidden_edges=(), max_size=60, blocked=frozenset()):
+    """Triangulation of the loop alone minimising (largest dihedral angle, area), as Liepa (2003).
+
+    Last resort beyond the paper, used only when every HPDE attempt folds (slit-like or
+    crumpled natural holes, where no base point keeps a correspondence): dynamic programming
+    over the O(k^3) triangulations of the polygon, the dihedral angle of a triangle taken
+    against its neighbours in the triangulation and, on a loop edge, against the mesh face
+    across it; chords that duplicate a mesh edge and ``blocked`` triangles are not used.
+
+    Parameters
+    ----------
+    P : (k, 3) float64  loop points (patch orientation)
+    border_normals : (k, 3) float64  unit normal of the mesh face on loop edge (i, i+1) (0 rows: unknown)
+    forbidden_edges : (p, 2) int
+    max_size : int  larger loops are refused (cubic cost)
+    blocked : set of (i, m, j), i < m < j  triangles not to use (they cross the mesh)
+
+    Returns
+    -------
+    F : (k - 2, 3) int64, or None when impossible
+    worst : float  largest dihedral angle (radians) of the result
+    """
+    k = len(P)
+    if k > max_size:
+        return None, np.inf
+    forbidden = edge_pair_set(forbidden_edges)
+    normal = {}
+
+    def tri_normal(i, m, j):
+        key = (i, m, j)
+        if key not in normal:
+            n = np.cross(P[m] - P[i], P[j] - P[i])
+            length = np.linalg.norm(n)
+            normal[key] = (n / length if length > 0 else n, 0.5 * length)
+        return normal[key]
+
+    def angle(n1, n2):
+        if not np.any(n1) or not np.any(n2):
+            return 0.0
+        return float(np.arccos(np.clip(n1 @ n2, -1.0, 1.0)))
+
+    inf = (np.inf, np.inf)
+    W = {}
+    apex = {}
+    for i in range(k - 1):
+        W[(i, i + 1)] = (0.0, 0.0)
+    for span in range(2, k):
+        for i in range(k - span):
+            j = i + span
+            if span < k - 1 and tuple(sorted((i, j))) in forbidden:
+                W[(i, j)] = inf
+                continue
+            best, best_m = inf, -1
+            for m in range(i + 1, j):
+                a, b = W[(i, m)], W[(m, j)]
+                if a[0] == np.inf or b[0] == np.inf:
+                    continue
+                n, area = tri_normal(i, m, j)
+                if area <= 0 or (i, m, j) in blocked:
+                    continue
+                worst = max(a[0], b[0])
+                for (u, v), sub in (((i, m), apex.get((i, m))), ((m, j), apex.get((m, j)))):
+                    other = border_normals[u] if v == u + 1 else tri_normal(u, sub, v)[0]
+                    worst = max(worst, angle(n, other))
+                if span == k - 1:
+                    worst = max(worst, angle(n, border_normals[k - 1]))
+                cand = (worst, a[1] + b[1] + area)
+                if cand < best:
+                    best, best_m = cand, m
+            W[(i, j)] = best
+            apex[(i, j)] = best_m
+    if W[(0, k - 1)][0] == np.inf:
+        return None, np.inf
+    faces, stack = [], [(0, k - 1)]
+    while stack:
+        i, j = stack.pop()
+        if j - i < 2:
+            continue
+        m = apex[(i, j)]
+        faces.append((i, m, j))
+        stack += [(i, m), (m, j)]
+    return np.asarray(faces, np.int64), W[(0, k - 1)][0]
+
+
+def fold_overs(V, F, reference):
+    """Faces folded over relative to the planar triangulation (normal against its reference), (m,) bool."""
+    N = face_normals(V, F, normalize=False)
+    return np.einsum("ij,ij->i", N, reference) <= 0.0
+
+
+def local_folds(V, F, border_normals=None, max_angle=FOLD_ANGLE):
+    """Faces folded onto a neighbour: normals of two faces sharing an edge differ by more than ``max_angle``.
+
+    The fold-over test that needs no reference plane. With ``border_normals`` (the unit
+    normal of the mesh face on each loop edge (i, i+1), i < k) the patch face on a loop edge
+    is also compared with the mesh face across it, which catches a patch folding back over
+    the surrounding surface. Degenerate faces count as folded.
+
+    Parameters
+    ----------
+    V : (n, 3) float64  loop vertices first
+    F : (m, 3) int64
+    border_normals : (k, 3) float64, optional
+
+    Returns
+    -------
+    (m,) bool
+    """
+    N = face_normals(V, F)
+    bad = ~np.any(N != 0, axis=1)
+    limit = np.cos(max_angle)
+    E, f1, _, f2, _ = interior_edges(F, len(V))
+    sharp = np.einsum("ij,ij->i", N[f1], N[f2]) < limit
+    bad[f1[sharp]] = True
+    bad[f2[sharp]] = True
+    if border_normals is not None:
+        k = len(border_normals)
+        a, b = F.ravel(), np.roll(F, -1, axis=1).ravel()
+        on_loop = (a < k) & (b == (a + 1) % k)
+        face = np.flatnonzero(on_loop) // 3
+        bad[face[np.einsum("ij,ij->i", N[face], border_normals[a[on_loop]]) < limit]] = True
+    return bad
+
+
+def _border_agreement(F, N, border_normals):
+    """Smallest dot of each face normal with the mesh normals across its loop edges (1 if none), (m,)."""
+    out = np.ones(len(F))
+    if border_normals is None or len(F) == 0:
+        return out
+    k = len(border_normals)
+    for c in range(3):
+        u, v = F[:, c], F[:, (c + 1) % 3]
+        on = (u < k) & (v == (u + 1) % k)
+        out[on] = np.minimum(out[on], np.einsum("ij,ij->i", N[on], border_normals[u[on]]))
+    return out
+
+
+def _pair_agreement(V, A, B, border_normals):
+    """Fold agreement of the face pairs A[i], B[i] and whether both faces are non-degenerate.
+
+    The agreement is the smallest dot product among the pair's unit normals and, for a face on
+    a loop edge, the mesh normal across it (:func:`_border_agreement`).
+
+    Returns
+    -------
+    agreement : (s,) float64
+    proper : (s,) bool
+    """
+    NA, NB = face_normals(V, A), face_normals(V, B)
+    agreement = np.minimum(np.einsum("ij,ij->i", NA, NB),
+                           np.minimum(_border_agreement(A, NA, border_normals),
+                                      _border_agreement(B, NB, border_normals)))
+    return agreement, np.any(NA != 0, axis=1) & np.any(NB != 0, axis=1)
+
+
+def unfold_by_swaps(V, F, forbidden_edges=(), border_normals=None, max_rounds=20):
+    """Repair folds by edge swaps (reading of Sec. 4.6's "handle fold-overs").
+
+    The agreement of an interior edge is the smallest dot product among its two triangles'
+    unit normals and, for a triangle on a loop edge, the normal of the mesh triangle across
+    it. An edge with negative agreement (a fold of more than 90 degrees) is swapped when the
+    swap raises it and leaves no degenerate triangle. Typical case: a zigzag tooth of the loop
+    that is concave on the surface but convex in the projection, where the triangulation puts
+    an ear (i-1, i, i+1) facing against the surface. The swap loop is
+    :func:`geometry.flips.relax_edges` with this agreement as its scored criterion (worst fold
+    first) and without its orientation test, which a folded pair cannot pass.
+
+    Returns
+    -------
+    F : (m, 3) int64
+    swaps : int
+    """
+    def agreement_gain(V, old1, old2, new1, new2):
+        old, _ = _pair_agreement(V, old1, old2, border_normals)
+        new, proper = _pair_agreement(V, new1, new2, border_normals)
+        # Only folds (negative agreement) are swapped, the worst first.
+        return old, np.where((old < 0.0) & proper, new, -np.inf), -old
+
+    return relax_edges(V, F, forbidden_edges, max_rounds=max_rounds, criterion=agreement_gain, normal_cos=None)
+
+
+def repair_folds(V, F, n_fixed, forbidden_edges=(), border_normals=None, rounds=5, relax_steps=10):
+    """Remove fold-overs: swaps (:func:`unfold_by_swaps`), then local relaxation of what is left.
+
+    A fold that no swap removes is a vertex whose ring is turned over (a spike of the
+    prediction); the free vertices of the folded faces and their neighbours are moved
+    ``relax_steps`` times to the mean of their neighbours, and the swaps are tried again, for
+    at most ``rounds`` rounds. The caller checks :func:`local_folds` afterwards.
+
+    Returns
+    -------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    repairs : int  swaps plus relaxed vertices
+    """
+    V = np.array(V, np.float64)
+    repairs = 0
+    for _ in range(rounds):
+        F, swaps = unfold_by_swaps(V, F, forbidden_edges, border_normals)
+        repairs += swaps
+        bad = local_folds(V, F, border_normals)
+        if not bad.any():
+            break
+        _, A = adjacency(F, len(V))
+        region = np.zeros(len(V), bool)
+        region[F[bad].ravel()] = True
+        region |= np.asarray(A @ region.astype(np.int8)).ravel() > 0
+        region[:n_fixed] = False
+        if not region.any():
+            break
+        deg = np.maximum(np.asarray(A.sum(axis=1)).ravel(), 1)
+        Ar = A[region]
+        for _ in range(relax_steps):
+            V[region] = (Ar @ V) / deg[region, None]
+        repairs += int(region.sum())
+    return V, F, repairs
+
+
+def intersects_surroundings(ctx, V, F):
+    """Whether the patch crosses itself or the surrounding rings of the context.
+
+    The filter checks the whole mesh afterwards; testing the rings here lets a crossing
+    attempt give way to the next layout instead of failing the hole.
+    """
+    k, p = ctx.size, len(V) - ctx.size
+    X = np.concatenate([V, ctx.vertices[k:]])
+    local = np.where(ctx.faces >= k, ctx.faces + p, ctx.faces)
+    allF = np.concatenate([F, local])
+    return len(faces_intersecting(X, allF, np.arange(len(F)), np.arange(len(allF)))) > 0
+
+
+def boundary_ears(F, k):
+    """Faces made of three consecutive loop vertices (i - 1, i, i + 1), (m,) bool."""
+    on_loop = np.all(F < k, axis=1)
+    s = np.sort(np.where(on_loop[:, None], F, 0), axis=1)
+    gaps = np.sort(np.stack([s[:, 1] - s[:, 0], s[:, 2] - s[:, 1], s[:, 0] + k - s[:, 2]], axis=1), axis=1)
+    return on_loop & (gaps[:, 0] == 1) & (gaps[:, 1] == 1)
+
+
+def border_normals(ctx):
+    """Unit normal of the mesh face on each loop edge, (k, 3), for the fold test across the loop.
+
+    A border face that is itself folded against the surface (normal opposite to the mean
+    vertex normal of its loop edge, as in crumpled scan borders) gives no reference: its row
+    is zero and the test skips that edge.
+    """
+    N = face_normals(ctx.vertices, ctx.faces[ctx.border_faces])
+    vn = ctx.loop_normals + np.roll(ctx.loop_normals, -1, axis=0)
+    N[np.einsum("ij,ij->i", N, vn) <= 0] = 0.0
+    return N

@@ -1,0 +1,387 @@
+"""HPDE step 7, second half (Xie and Zou 2013, Sec. 4.7): mesh optimisation of the smoothed patch.
+
+After the smoothing (:mod:`.hpde_smoothing`), edges shorter
+than a rate of EdgeLen are collapsed to their midpoints and edges are swapped while that
+raises the smaller angle of their two triangles (Fig. 5). The tangential relaxation and the
+obtuse-edge splits are the option ``relax`` beyond the paper; the final guarded pass on the
+worst triangles (option ``quality_floor``) is in hpde_quality.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ...geometry.flips import relax_edges
+from ...geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
+from ...geometry.topology import edge_pair_set, interior_edges
+
+# A collapse may turn no surrounding face by more than this (cosine of 60 degrees); a swap
+# may turn its two faces no further from their former mean normal.
+COLLAPSE_MIN_COS = 0.5
+
+
+def split_obtuse_edges(V, F, n_fixed, max_angle=np.radians(120.0)):
+    """Split the long edge of every triangle with an angle above ``max_angle`` (new vertex at the quad centroid).
+
+    Beyond the paper (part of option ``relax``): flat triangles whose three corners are loop
+    vertices (ears of a nearly straight stretch of the loop, where no prediction point was
+    kept) cannot be improved by moving vertices; splitting their interior long edge gives a
+    free vertex that the relaxation then moves into the hole. Loop edges are never split; each
+    triangle takes part in at most one split per call.
+
+    Returns
+    -------
+    V : (n + s, 3) float64
+    F : (m + 2 s, 3) int64
+    splits : int
+    """
+    V = np.array(V, np.float64)
+    F = np.array(F, np.int64)
+    n = len(V)
+    ang = corner_angles(V, F)
+    obtuse = np.flatnonzero(ang.max(axis=1) > max_angle)
+    if len(obtuse) == 0:
+        return V, F, 0
+    E, f1, c1, f2, c2 = interior_edges(F, n)
+    # Half-edge of each interior edge in face f1 starts at corner c1: key the opposite corner.
+    opposite = {}
+    for i, (f, c, g, d) in enumerate(zip(f1.tolist(), c1.tolist(), f2.tolist(), c2.tolist())):
+        opposite[(f, (c + 2) % 3)] = i
+        opposite[(g, (d + 2) % 3)] = i
+    busy = np.zeros(len(F), bool)
+    new_faces, splits = [], 0
+    for f in obtuse[np.argsort(-ang.max(axis=1)[obtuse])].tolist():
+        i = opposite.get((f, int(np.argmax(ang[f]))))
+        if i is None or busy[f1[i]] or busy[f2[i]]:
+            continue
+        a, b = E[i]
+        c = F[f1[i], (c1[i] + 2) % 3]
+        d = F[f2[i], (c2[i] + 2) % 3]
+        w = len(V)
+        # The centroid of the quad a, c, b, d: off the flat corner c, towards d.
+        V = np.vstack([V, 0.25 * (V[a] + V[b] + V[c] + V[d])])
+        F[f1[i]] = (a, w, c)
+        F[f2[i]] = (b, w, d)
+        new_faces += [(w, b, c), (w, a, d)]
+        busy[[f1[i], f2[i]]] = True
+        splits += 1
+    if new_faces:
+        F = np.concatenate([F, np.asarray(new_faces, np.int64)])
+    return V, F, splits
+
+
+def remove_valence_three(V, F, n_fixed, forbidden_edges=()):
+    """Remove free vertices with three neighbours, their three triangles becoming one.
+
+    Beyond the paper (part of option ``relax``): such a vertex has an angle of at least 120
+    degrees in one of its triangles, and no relaxation helps when its neighbours are loop
+    vertices. Refused when the new triangle would duplicate an edge, use a forbidden edge or
+    face against the removed ones.
+
+    Returns
+    -------
+    V : (n', 3) float64  compacted (loop vertices first, unchanged)
+    F : (m', 3) int64
+    removed : int
+    keep : (n',) int64  input index of each remaining vertex
+    """
+    V = np.asarray(V, np.float64)
+    F = np.array(F, np.int64)
+    n = len(V)
+    forbidden = edge_pair_set(forbidden_edges)
+    valence = np.bincount(F.ravel(), minlength=n)
+    alive = np.ones(len(F), bool)
+    gone = np.zeros(n, bool)
+    new_faces = []
+    for v in np.flatnonzero((valence == 3) & (np.arange(n) >= n_fixed)).tolist():
+        ring = np.flatnonzero(np.any(F == v, axis=1) & alive)
+        if len(ring) != 3 or np.any(gone[F[ring]]):
+            continue
+        # The link of v, in the order its faces traverse it.
+        nxt = {}
+        for f in ring:
+            c = int(np.flatnonzero(F[f] == v)[0])
+            nxt[int(F[f, (c + 1) % 3])] = int(F[f, (c + 2) % 3])
+        a = next(iter(nxt))
+        b = nxt.get(a)
+        c = nxt.get(b)
+        if b is None or c is None or nxt.get(c) != a or len({a, b, c}) != 3:
+            continue  # not a closed triangle link
+        tri = (a, b, c)
+        if any(tuple(sorted((tri[i], tri[(i + 1) % 3]))) in forbidden for i in range(3)):
+            continue
+        old = face_normals(V, F[ring], normalize=False).sum(axis=0)
+        new = np.cross(V[tri[1]] - V[tri[0]], V[tri[2]] - V[tri[0]])
+        if new @ old <= 0.5 * np.linalg.norm(new) * np.linalg.norm(old):
+            continue
+        alive[ring] = False
+        gone[v] = True
+        new_faces.append(tri)
+    if not new_faces:
+        return V, F, 0, np.arange(n)
+    V, F, keep = compact_vertices(V, np.concatenate([F[alive], np.asarray(new_faces, np.int64)]), ~gone)
+    return V, F, len(new_faces), keep
+
+
+def compact_vertices(V, F, alive):
+    """Drop the vertices not ``alive`` (removed by collapses) and renumber the faces.
+
+    Returns
+    -------
+    V : (n', 3) float64  the alive vertices, in order
+    F : (m, 3) int64  renumbered
+    keep : (n',) int64  input index of each remaining vertex
+    """
+    keep = np.flatnonzero(alive)
+    index = np.full(len(V), -1, np.int64)
+    index[keep] = np.arange(len(keep))
+    return V[keep], index[F], keep
+
+
+def adjacency(F, n):
+    """Unique edges (e, 2) and the symmetric (n, n) int8 CSR vertex adjacency of a face list."""
+    E = unique_edges(F)
+    A = sp.coo_matrix((np.ones(2 * len(E), np.int8), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
+                      shape=(n, n)).tocsr()
+    return E, A
+
+
+def _sliver_priority(V, F, E, lengths, n_fixed, sliver_angle, eligible=None):
+    """Edge lengths with 0 for the edge from a sliver apex to the nearer end of its loop edge.
+
+    A sliver apex is a free vertex whose angle exceeds ``sliver_angle`` in a face whose
+    opposite edge is a loop edge: it sits almost on the loop, too close to be kept.
+    """
+    ang = corner_angles(V, F)
+    out = lengths.copy()
+    n = len(V)
+    keys = E[:, 0] * n + E[:, 1]
+    for c in range(3):
+        apex, u, w = F[:, c], F[:, (c + 1) % 3], F[:, (c + 2) % 3]
+        loop_edge = (u < n_fixed) & (w < n_fixed) & ((w == (u + 1) % n_fixed) | (u == (w + 1) % n_fixed))
+        ok = apex >= n_fixed
+        if eligible is not None:
+            ok &= eligible[apex]
+        hit = np.flatnonzero(loop_edge & ok & (ang[:, c] > sliver_angle))
+        if len(hit) == 0:
+            continue
+        du = np.linalg.norm(V[apex[hit]] - V[u[hit]], axis=1)
+        dw = np.linalg.norm(V[apex[hit]] - V[w[hit]], axis=1)
+        near = np.where(du <= dw, u[hit], w[hit])
+        k = np.minimum(apex[hit], near) * n + np.maximum(apex[hit], near)
+        out[np.isin(keys, k)] = 0.0
+    return out
+
+
+def decimate_short_edges(V, F, n_fixed, threshold, forbidden_edges=(), max_rounds=100, sliver_angle=None,
+                         sliver_eligible=None):
+    """Collapse edges shorter than ``threshold`` (Sec. 4.7 and 4.8, Fig. 5(a)-(b)).
+
+    The two triangles on the edge P_1 P_2 disappear and the remaining vertex moves to the
+    midpoint (P_1 + P_2) / 2, shortest edges first. Readings: an edge with one boundary end
+    collapses onto the boundary vertex (the loop is kept exactly); edges between two boundary
+    vertices are kept; a collapse must pass the link condition (the edge's ends share only its
+    two opposite vertices), must not turn any surrounding face by more than 60 degrees and must
+    not create a forbidden edge. The paper's queue (sorted edges, the shortest renewed edge
+    next) is realised in rounds: each round collapses, shortest first, edges whose
+    neighbourhoods do not overlap.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64  consistently oriented
+    n_fixed : int  the first n_fixed vertices are the boundary loop
+    threshold : float
+    forbidden_edges : (p, 2) int  pairs of boundary vertices that must not be joined
+    sliver_angle : float, optional
+        Also collapse a free vertex onto the nearer end of a loop edge when its angle opposite
+        that edge exceeds this (a sliver on the loop; used after the relaxation).
+    sliver_eligible : (n,) bool, optional  vertices that may be collapsed as sliver apexes
+
+    Returns
+    -------
+    V : (n', 3) float64  compacted (boundary first, unchanged)
+    F : (m', 3) int64
+    collapses : int
+    keep : (n',) int64  input index of each remaining vertex
+    """
+    V = np.array(V, np.float64)
+    F = np.array(F, np.int64)
+    n = len(V)
+    forbidden = edge_pair_set(forbidden_edges)
+    alive_v = np.ones(n, bool)
+    collapses = 0
+    for _ in range(max_rounds):
+        E, A = adjacency(F, n)
+        lengths = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+        if sliver_angle is not None:
+            lengths = _sliver_priority(V, F, E, lengths, n_fixed, sliver_angle, sliver_eligible)
+        cand = np.flatnonzero((lengths < threshold) & ~((E[:, 0] < n_fixed) & (E[:, 1] < n_fixed)))
+        if len(cand) == 0:
+            break
+        cand = cand[np.argsort(lengths[cand], kind="stable")]
+        a, b = E[cand, 0], E[cand, 1]
+        # Independent set: closed neighbourhoods of chosen edges are disjoint, shortest wins.
+        R = (A + sp.identity(n, dtype=np.int8, format="csr")).tocsr()
+        M = (R[a] + R[b]).tocoo()
+        rank = np.arange(len(cand))
+        claim = np.full(n, len(cand))
+        np.minimum.at(claim, M.col, rank[M.row])
+        lost = np.zeros(len(cand), bool)
+        np.logical_or.at(lost, M.row, claim[M.col] != rank[M.row])
+        sel = ~lost
+        # Link condition: exactly two common neighbours (the edge's opposite vertices).
+        common = np.asarray(A[a].multiply(A[b]).sum(axis=1)).ravel()
+        sel &= common == 2
+        if not sel.any():
+            break
+        a, b = a[sel], b[sel]
+        # Survivor: the boundary end if any (a < b, so only b can be... either can be boundary).
+        a_fixed, b_fixed = a < n_fixed, b < n_fixed
+        survivor = np.where(b_fixed, b, a)
+        victim = np.where(b_fixed, a, b)
+        newpos = np.where((a_fixed | b_fixed)[:, None], V[survivor], 0.5 * (V[a] + V[b]))
+        # Faces around either end, except the two on the edge.
+        VF = sp.csr_matrix((np.ones(3 * len(F), np.int8), (F.ravel(), np.repeat(np.arange(len(F)), 3))),
+                           shape=(n, len(F)))
+        around = (VF[a] + VF[b]).tocoo()
+        on_edge = around.data > 1
+        rows, faces = around.row[~on_edge], around.col[~on_edge]
+        corners = V[F[faces]]
+        moved = (F[faces] == a[rows, None]) | (F[faces] == b[rows, None])
+        new_corners = np.where(moved[..., None], newpos[rows, None, :], corners)
+        n_old = cross_rows(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        n_new = cross_rows(new_corners[:, 1] - new_corners[:, 0], new_corners[:, 2] - new_corners[:, 0])
+        ok_face = np.einsum("ij,ij->i", n_old, n_new) > COLLAPSE_MIN_COS * np.linalg.norm(n_old, axis=1) * \
+            np.linalg.norm(n_new, axis=1)
+        bad = np.zeros(len(a), bool)
+        np.logical_or.at(bad, rows, ~ok_face)
+        if forbidden:
+            for t in np.flatnonzero(~bad & (a_fixed | b_fixed)):
+                s, vct = int(survivor[t]), int(victim[t])
+                nbrs = A[vct].indices
+                if any(tuple(sorted((s, int(x)))) in forbidden for x in nbrs if x < n_fixed and x != s):
+                    bad[t] = True
+        good = ~bad
+        if not good.any():
+            break
+        s, vct, p = survivor[good], victim[good], newpos[good]
+        V[s] = p
+        remap = np.arange(n)
+        remap[vct] = s
+        F = remap[F]
+        F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
+        alive_v[vct] = False
+        collapses += int(good.sum())
+    V, F, keep = compact_vertices(V, F, alive_v)
+    return V, F, collapses, keep
+
+
+def swap_edges_min_angle(V, F, forbidden_edges=(), max_rounds=100):
+    """Swap interior edges while that raises the minimum angle of the two triangles (Sec. 4.7, Fig. 5(c)-(d)).
+
+    Edge P_1 P_2 with opposite vertices Q_1, Q_2 becomes Q_1 Q_2 when the smallest angle of
+    triangles P_1 Q_1 Q_2, P_2 Q_1 Q_2 exceeds that of P_1 P_2 Q_1, P_1 P_2 Q_2
+    (:func:`geometry.flips.relax_edges` with ``criterion="min_angle"``). Readings: a swap is
+    refused when the new edge exists, is forbidden, or a new triangle would turn 60 degrees or
+    more from the mean normal of the old pair (no fold, and the shape of a bent quad is kept);
+    swaps run in rounds of face-disjoint edges, largest gain first, until none applies.
+
+    Returns
+    -------
+    F : (m, 3) int64
+    swaps : int
+    """
+    return relax_edges(V, F, forbidden_edges, max_rounds=max_rounds, criterion="min_angle",
+                       normal_cos=COLLAPSE_MIN_COS)
+
+
+def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5, 0.25)):
+    """Move free vertices of poor triangles to where the worst of their triangles is best.
+
+    Beyond the paper (part of option ``relax``): the min-angle swaps of Sec. 4.7 cannot fix a
+    triangle whose long edge is a loop edge (a free vertex almost on the loop) or whose
+    vertices all have poor rings. For every free vertex with an incident triangle of quality
+    2r/R below ``target``, candidate positions are tried on the segment from the vertex
+    towards the centroid of its link, projected onto its tangent plane, and towards the
+    best apex for each poor incident triangle's opposite edge
+    (the apex of an equilateral triangle on that edge, in the tangent plane, on the side the
+    triangle's orientation puts the vertex); the candidate raising the
+    smallest quality of the vertex's triangles most is taken, if no triangle turns by more
+    than 60 degrees from the vertex normal. Rounds repeat while anything moves.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    n_fixed : int  the first n_fixed vertices (the loop) do not move
+    target : float  quality below which a triangle's free vertices are moved
+    rounds : int
+    steps : sequence of float  fractions of each candidate displacement tried
+
+    Returns
+    -------
+    V : (n, 3) float64
+    moved : int  accepted moves
+    """
+    from ...geometry.quality import triangle_quality, vertex_normals
+
+    V = np.array(V, np.float64)
+    F = np.asarray(F, np.int64)
+    n = len(V)
+    if len(F) == 0 or n <= n_fixed:
+        return V, 0
+    incident = [[] for _ in range(n)]
+    for f, tri in enumerate(F.tolist()):
+        for v in tri:
+            incident[v].append(f)
+    moved = 0
+    for _ in range(rounds):
+        q = triangle_quality(V, F)
+        poor = np.flatnonzero(q < target)
+        verts = np.unique(F[poor].ravel())
+        verts = verts[verts >= n_fixed]
+        if len(verts) == 0:
+            break
+        N = vertex_normals(V, F, n)
+        changed = 0
+        for v in verts[np.argsort([q[incident[v]].min() for v in verts])].tolist():
+            faces = np.asarray(incident[v], np.int64)
+            tri = F[faces]
+            nv = N[v] / max(np.linalg.norm(N[v]), 1e-300)
+            current = triangle_quality(V, tri).min()
+            # Candidate targets: the link centroid and, for each poor incident triangle, the apex
+            # of the equilateral triangle on its opposite edge (on the side the vertex is on).
+            link = np.unique(tri[tri != v])
+            goals = [V[link].mean(axis=0)]
+            for t in tri[triangle_quality(V, tri) < target]:
+                c = int(np.flatnonzero(t == v)[0])
+                a, b = V[t[(c + 1) % 3]], V[t[(c + 2) % 3]]
+                mid, e = 0.5 * (a + b), b - a
+                side = np.cross(nv, e)  # in the tangent plane, perpendicular to the edge
+                side /= max(np.linalg.norm(side), 1e-300)
+                goals.append(mid + side * (np.sqrt(3.0) / 2.0) * np.linalg.norm(e))
+            best, best_q = None, current
+            old_normals = face_normals(V, tri)
+            for goal in goals:
+                d = goal - V[v]
+                d -= (d @ nv) * nv  # tangential: keep the shape
+                for s in steps:
+                    p = V[v] + s * d
+                    W = V.copy()
+                    W[v] = p
+                    qn = triangle_quality(W, tri).min()
+                    if qn <= best_q + 1e-6:
+                        continue
+                    fn = face_normals(W, tri)
+                    if np.any(np.einsum("ij,j->i", fn, nv) <= COLLAPSE_MIN_COS) or \
+                            np.any(np.einsum("ij,ij->i", fn, old_normals) <= COLLAPSE_MIN_COS):
+                        continue
+                    best, best_q = p, qn
+            if best is not None:
+                V[v] = best
+                changed += 1
+        moved += changed
+        if changed == 0:
+            break
+    return V, moved

@@ -1,0 +1,307 @@
+"""HPDE step 6 (Xie and Zou 2013, Sec. 4.6): planar triangulation of the boundary and prediction points.
+
+The boundary and prediction points are projected to the PCA plane of the boundary, or, for a
+segmented boundary, to the two fitted planes unfolded into one about their common line
+(Fig. 1); Triangle's constrained Delaunay triangulation keeps every boundary edge and its
+topology is applied to the 3D points. A disc layout is the fallback beyond the paper for holes
+no plane can flatten; fold-overs are handled in :mod:`hpde_folds`.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ...geometry.pca import plane_frame
+from ...geometry.topology import interior_edges
+from ...geometry.triangulate import polygon_signed_area, triangulate_polygon
+from ...errors import HoleFillError
+
+class PlaneMap:
+    """Map of 3D points to the triangulation plane (Sec. 4.6, Fig. 1).
+
+    One plane: orthogonal projection to the plane (centroid c, unit normal n). Two planes
+    alpha, beta (segmented boundary): a point goes to the plane whose half-plane (bounded by
+    the common line of the two planes, on the side of its own base points) is nearer in angle
+    around that line; beta is unfolded about the line into alpha's plane.
+
+    Attributes
+    ----------
+    segmented : bool
+    """
+
+    def __init__(self, centroid, normal, second=None):
+        self.segmented = second is not None
+        if not self.segmented:
+            n = normal / np.linalg.norm(normal)
+            self.origin = np.asarray(centroid, np.float64)
+            self.u, self.v = plane_frame(n)
+            self.normal = n
+            return
+        (c1, n1), (c2, n2) = (centroid, normal), second
+        h = np.cross(n1, n2)
+        h /= np.linalg.norm(h)
+        # A point on both planes, nearest the middle of the two centroids.
+        A = np.stack([n1, n2, h])
+        mid = 0.5 * (c1 + c2)
+        self.origin = np.linalg.solve(A, np.array([n1 @ c1, n2 @ c2, h @ mid]))
+        w1 = np.cross(n1, h)
+        w1 *= 1.0 if (c1 - self.origin) @ w1 >= 0 else -1.0
+        w2 = np.cross(n2, h)
+        w2 *= 1.0 if (c2 - self.origin) @ w2 >= 0 else -1.0
+        self.h, self.w1, self.w2 = h, w1, w2
+        self.n1 = np.cross(h, w1)  # frame normals of the two half-planes in the unfolded layout
+        self.n2 = np.cross(h, -w2)
+
+    def side(self, X):
+        """(q,) bool: True where a point belongs to the second plane (beta)."""
+        if not self.segmented:
+            return np.zeros(len(X), bool)
+        D = X - self.origin
+        return D @ self.w2 > D @ self.w1
+
+    def to_2d(self, X):
+        """2D coordinates of 3D points, (q, 2)."""
+        D = np.asarray(X, np.float64) - self.origin
+        if not self.segmented:
+            return np.stack([D @ self.u, D @ self.v], axis=1)
+        beta = self.side(X)
+        y = np.where(beta, -(D @ self.w2), D @ self.w1)
+        return np.stack([D @ self.h, y], axis=1)
+
+    def reference_normals(self, X, F, orientation):
+        """Expected normal direction of each face (orientation of the planar triangulation), (m, 3).
+
+        ``orientation`` is +1 for a counter-clockwise boundary polygon, -1 otherwise. Faces with
+        corners on both planes get the sum of the two plane normals.
+        """
+        if not self.segmented:
+            return np.repeat((orientation * self.normal)[None, :], len(F), axis=0)
+        beta = self.side(X)[F]
+        share = beta.mean(axis=1)[:, None]
+        N = (1.0 - share) * self.n1 + share * self.n2
+        return orientation * N
+
+
+def points_in_polygon(Q, X):
+    """Even-odd rule: which 2D points lie inside the closed polygon Q, (q,) bool."""
+    a, b = Q, np.roll(Q, -1, axis=0)
+    px, py = X[:, 0:1], X[:, 1:2]
+    crosses = (a[None, :, 1] > py) != (b[None, :, 1] > py)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xint = a[None, :, 0] + (py - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
+    return (np.count_nonzero(crosses & (px < xint), axis=1) % 2) == 1
+
+
+def distance_to_polygon(Q, X):
+    """Distance of 2D points to the edges of the closed polygon Q, (q,)."""
+    a, b = Q[None, :, :], np.roll(Q, -1, axis=0)[None, :, :]
+    d = b - a
+    t = np.einsum("qkd,qkd->qk", X[:, None, :] - a, d) / np.maximum(np.einsum("qkd,qkd->qk", d, d), 1e-300)
+    t = np.clip(t, 0, 1)
+    closest = a + t[..., None] * d
+    return np.linalg.norm(X[:, None, :] - closest, axis=2).min(axis=1)
+
+
+def disc_coordinates(loop_arc, perimeter, base_count, pair_a, pair_b, fraction, offsets=None):
+    """Fallback embedding of the boundary and prediction points in a disc (beyond the paper).
+
+    Used only when neither the PCA plane nor the two unfolded planes give a simple boundary
+    polygon without fold-overs (holes wrapping round a thin part, Sec. 6 "more intermediate
+    planes are needed"). Boundary points go to the circle of circumference BudLen by arc
+    length; a prediction point at fraction t along the chord of pair (a, b) goes to the same
+    fraction of the straight chord between the images of BP_a and BP_b. The pairs of a chain
+    are nested, so these chords never cross and the layout mirrors the section structure.
+    ``offsets`` (the lateral offset of each loop vertex from the smoothed boundary curve,
+    positive into the hole) move the loop vertices radially, so that the teeth of a zigzag
+    loop keep their convex or concave turn in the disc.
+
+    Parameters
+    ----------
+    loop_arc : (k,) float64  arc length of each loop vertex from loop vertex 0
+    perimeter : float  BudLen
+    base_count : int  n (BP_j sits at arc length j BudLen / n)
+    pair_a, pair_b : (q,) int64  base points of the pair of each prediction point
+    fraction : (q,) float64
+    offsets : (k,) float64, optional
+
+    Returns
+    -------
+    Q : (k, 2) float64  counter-clockwise circle polygon
+    X : (q, 2) float64
+    """
+    radius = perimeter / (2 * np.pi)
+    circle = lambda angle: radius * np.stack([np.cos(angle), np.sin(angle)], axis=-1)  # noqa: E731
+    Q = circle(2 * np.pi * np.asarray(loop_arc) / perimeter)
+    if offsets is not None:
+        Q *= (1.0 - np.asarray(offsets) / radius)[:, None]
+    A = circle(2 * np.pi * np.asarray(pair_a) / base_count)
+    B = circle(2 * np.pi * np.asarray(pair_b) / base_count)
+    t = np.asarray(fraction)[:, None]
+    return Q, (1 - t) * A + t * B
+
+
+def inside_boundary(X, BP, inward, clearance):
+    """3D inside test for the disc layout: X lies on the hole side of its nearest base point, (q,) bool.
+
+    A point is kept when it is at least ``clearance`` from every base point and its offset
+    from the nearest base point has a positive component along that point's into-hole
+    direction (:func:`hpde_sections.boundary_frames`).
+    """
+    if len(X) == 0:
+        return np.zeros(0, bool)
+    dist, j = cKDTree(BP).query(X)
+    return (dist > clearance) & (np.einsum("ij,ij->i", X - BP[j], inward[j]) > 0)
+
+
+def lateral_offsets(P, normals, window=2):
+    """Offset of each loop vertex from the loop smoothed over +-window vertices, into the hole, (k,).
+
+    The into-hole direction at vertex i is normal x tangent of the smoothed loop (patch
+    orientation: the hole is on the left).
+    """
+    k = len(P)
+    S = sum(np.roll(P, s, axis=0) for s in range(-window, window + 1)) / (2 * window + 1)
+    t = np.roll(S, -1, axis=0) - np.roll(S, 1, axis=0)
+    t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
+    inward = np.cross(normals, t)
+    return np.einsum("ij,ij->i", P - S, inward) if k > 2 * window else np.zeros(k)
+
+
+def triangulate_planar(loop_points, predicted, Q, X, clearance, edge_clearance=0.0, stats=None, long_edge=0.0):
+    """Constrained triangulation of the boundary and prediction points laid out in 2D (Sec. 4.6).
+
+    Triangle keeps every boundary edge and inserts the prediction points; the topology is
+    then applied to the 3D points. Reading: prediction points whose 2D image falls outside
+    the boundary polygon or within ``clearance`` of it are left out (Triangle would
+    otherwise put slivers on the kept boundary edges; the paper's decimation merges such
+    points with the boundary later), as are exact duplicates.
+
+    Parameters
+    ----------
+    loop_points : (k, 3) float64
+    predicted : (q, 3) float64
+    Q : (k, 2) float64  2D boundary polygon (must be simple)
+    X : (q, 2) float64  2D images of the prediction points
+    clearance : float
+    edge_clearance : float
+        Beyond the paper: a prediction point that the triangulation makes the apex of a
+        triangle on a boundary edge longer than ``long_edge`` (2D length L) is left out, and
+        the points retriangulated, when it is nearer than this share of L to that edge (their
+        number goes to ``stats["edge_cleared"]`` when a dict is given). On loop edges much
+        longer than the prediction spacing (range-scan borders, 2-4 EdgeLen) such an apex
+        makes a sliver (apex angle ~145 degrees, 2r/R ~ 0.15) that neither the decimation nor
+        the swaps of Sec. 4.7 can remove. With 0.35 the apex is at least 0.35 L from the edge
+        (2r/R ~ 0.6 for a centred apex). 0 = only ``clearance``.
+    stats : dict, optional
+    long_edge : float  (2D length)
+
+    Returns
+    -------
+    V : (k + q', 3) float64  loop points then the kept prediction points
+    F : (t, 3) int64  faces oriented like the loop (patch orientation)
+    orientation : int  +1 when the 2D polygon is counter-clockwise
+    kept : (q',) int64  indices of the kept prediction points (V[k:] = predicted[kept])
+    """
+    k = len(loop_points)
+    orientation = 1 if polygon_signed_area(Q) > 0 else -1
+    keep = np.ones(len(X), bool)
+    if len(X):
+        keep = points_in_polygon(Q, X) & (distance_to_polygon(Q, X) > clearance)
+        if keep.sum() > 1:
+            idx = np.flatnonzero(keep)
+            for i, j in cKDTree(X[idx]).query_pairs(1e-9 * clearance):  # relative: any unit
+                keep[idx[max(i, j)]] = False
+    L = np.linalg.norm(np.roll(Q, -1, axis=0) - Q, axis=1)
+    unused_rounds = cleared = 0
+    while True:
+        _, T = triangulate_polygon(Q, extra_points=X[keep])
+        idx = np.flatnonzero(keep)
+        used = np.zeros(k + len(idx), bool)
+        used[T.ravel()] = True
+        if not used.all():
+            unused_rounds += 1
+            if unused_rounds >= 3:
+                raise HoleFillError("triangulation left prediction points unused")
+            keep[idx[~used[k:]]] = False
+            continue
+        drop = edge_sliver_apexes(np.concatenate([Q, X[keep]]), T, k, L, long_edge, edge_clearance)
+        if len(drop) == 0:
+            break
+        keep[idx[drop - k]] = False
+        cleared += len(drop)
+    if stats is not None:
+        stats["edge_cleared"] = int(cleared)
+    V = np.concatenate([loop_points, predicted[keep]])
+    return V, T, orientation, np.flatnonzero(keep)
+
+
+def edge_sliver_apexes(Y, T, k, L, long_edge, edge_clearance):
+    """Prediction points that are the apex of a triangle on a long loop edge, too near to it.
+
+    A triangle of T on loop edge (i, i + 1) with L[i] > ``long_edge`` whose apex is a
+    prediction point (index >= k) nearer than ``edge_clearance`` * L[i] to the edge (2D
+    points Y, loop first). Returns the sorted unique apex indices (>= k).
+    """
+    if edge_clearance <= 0 or len(T) == 0 or not np.any(L > long_edge):
+        return np.zeros(0, np.int64)
+    out = []
+    for c in range(3):
+        u, w, apex = T[:, c], T[:, (c + 1) % 3], T[:, (c + 2) % 3]
+        fwd = (u < k) & (w < k) & (w == (u + 1) % k)
+        bwd = (u < k) & (w < k) & (u == (w + 1) % k)
+        e = np.where(fwd, u, w)
+        hit = (fwd | bwd) & (apex >= k)
+        hit[hit] &= L[e[hit]] > long_edge
+        if not hit.any():
+            continue
+        a, b, p = Y[u[hit]], Y[w[hit]], Y[apex[hit]]
+        d = b - a
+        t = np.clip(np.einsum("ij,ij->i", p - a, d) / np.maximum(np.einsum("ij,ij->i", d, d), 1e-300), 0, 1)
+        near = np.linalg.norm(p - (a + t[:, None] * d), axis=1) < edge_clearance * L[e[hit]]
+        out.append(apex[hit][near])
+    return np.unique(np.concatenate(out)) if out else np.zeros(0, np.int64)
+
+
+def triangulate_projection(loop_points, predicted, plane_map, clearance, edge_clearance=0.0, stats=None,
+                           long_edge=0.0):
+    """:func:`triangulate_planar` on the projection of the points by a :class:`PlaneMap`."""
+    X = plane_map.to_2d(predicted) if len(predicted) else np.zeros((0, 2))
+    return triangulate_planar(loop_points, predicted, plane_map.to_2d(loop_points), X, clearance, edge_clearance,
+                              stats, long_edge)
+
+
+def split_forbidden_edges(V, F, forbidden_edges):
+    """Split every patch edge that duplicates a mesh edge between loop vertices at its midpoint.
+
+    The constrained triangulation knows only the loop, so it may join two loop vertices that
+    the surrounding mesh already joins (which would make a non-manifold edge); the midpoint
+    becomes a new free vertex and the two triangles on the edge become four.
+
+    Returns
+    -------
+    V : (n + s, 3) float64
+    F : (m + 2 s, 3) int64
+    splits : int
+    """
+    fb = np.asarray(forbidden_edges, np.int64).reshape(-1, 2)
+    if len(fb) == 0:
+        return V, F, 0
+    V = np.array(V, np.float64)
+    F = np.array(F, np.int64)
+    n = len(V)
+    keys = set((np.minimum(fb[:, 0], fb[:, 1]) * n + np.maximum(fb[:, 0], fb[:, 1])).tolist())
+    E, f1, c1, f2, c2 = interior_edges(F, n)
+    hit = [i for i, (a, b) in enumerate(E.tolist()) if min(a, b) * n + max(a, b) in keys]
+    new_faces = []
+    for i in hit:
+        a, b = E[i]
+        c = F[f1[i], (c1[i] + 2) % 3]
+        d = F[f2[i], (c2[i] + 2) % 3]
+        w = len(V)
+        V = np.vstack([V, 0.5 * (V[a] + V[b])])
+        F[f1[i]] = (a, w, c)
+        F[f2[i]] = (b, w, d)
+        new_faces += [(w, b, c), (w, a, d)]
+    if new_faces:
+        F = np.concatenate([F, np.asarray(new_faces, np.int64)])
+    return V, F, len(hit)

@@ -1,0 +1,1 @@
+"""algorithms.xu2013."""

@@ -1,0 +1,369 @@
+"""The comparison report: tables (Markdown and the same in HTML), JSON, CSV and charts.
+
+``write_report(comparison, directory)`` writes ``report.md``, ``report.html``,
+``results.json``, ``results.csv`` and the pictures (bar charts per metric, quality histograms
+per filter as in Hu et al. Fig. 10, error and time against hole size, and one rendered view
+per hole from :mod:`.render`).
+"""
+from __future__ import annotations
+
+import csv
+import html
+import json
+import os
+import time
+
+import numpy as np
+
+from ..reference_targets import targets_table
+
+# (key, heading, better: "low" | "high" | "one", aggregate: "mean" | "min" | "max" | "sum", format)
+METRICS = [
+    ("dist_patch_to_gt_mean_permille", "patch→GT mean ‰", "low", "mean", "{:.3f}"),
+    ("dist_patch_to_gt_max_permille", "patch→GT max ‰", "low", "max", "{:.2f}"),
+    ("dist_gt_to_patch_mean_permille", "GT→patch mean ‰", "low", "mean", "{:.3f}"),
+    ("normal_dev_mean_deg", "normal dev. mean °", "low", "mean", "{:.1f}"),
+    ("quality_mean", "quality mean", "high", "mean", "{:.3f}"),
+    ("quality_min", "quality min", "high", "min", "{:.3f}"),
+    ("quality_share07", "share q≥0.7", "high", "mean", "{:.2f}"),
+    ("edge_ratio", "edge ratio", "one", "mean", "{:.2f}"),
+    ("border_dihedral_mean_deg", "border crease °", "low", "mean", "{:.1f}"),
+    ("border_dihedral_excess_deg", "crease − GT's °", "low", "mean", "{:.1f}"),
+    ("intersecting_new_faces", "intersecting faces", "low", "sum", "{:d}"),
+    ("new_vertices", "new V", None, "sum", "{:d}"),
+    ("faces", "new F", None, "sum", "{:d}"),
+]
+CHART_METRICS = ["dist_patch_to_gt_mean_permille", "dist_gt_to_patch_mean_permille", "normal_dev_mean_deg",
+                 "quality_mean", "quality_min", "edge_ratio", "border_dihedral_excess_deg", "seconds"]
+HEADINGS = {m[0]: m[1] for m in METRICS} | {"seconds": "seconds per hole"}
+SIZE_ORDER = ["small", "medium", "large", "irregular", "given", "natural", "outline"]
+
+
+def short_label(label):
+    """Filter labels without the common ``meshing_close_holes_`` prefix (for charts)."""
+    return label.replace("meshing_close_holes_", "").replace("meshing_close_holes", "close_holes")
+
+
+def filler_colors(labels):
+    import matplotlib
+
+    cmap = matplotlib.colormaps["tab10"]
+    return {label: cmap(i % 10) for i, label in enumerate(labels)}
+
+
+def _values(rows, key):
+    return [r[key] for r in rows if r.get("closed") and isinstance(r.get(key), (int, float))
+            and r.get(key) is not None and np.isfinite(r[key])]
+
+
+def aggregate(rows, key, how):
+    vals = _values(rows, key)
+    if not vals:
+        return None
+    return {"mean": np.mean, "min": np.min, "max": np.max, "sum": np.sum}[how](vals).item()
+
+
+def _fmt(value, fmt):
+    if value is None:
+        return "–"
+    if fmt.endswith("d}"):
+        return fmt.format(int(round(value)))
+    return fmt.format(value)
+
+
+def _best(values, better):
+    """Index set of the best values (ties kept)."""
+    pairs = [(i, v) for i, v in enumerate(values) if v is not None]
+    if not pairs or better is None:
+        return set()
+    score = {"low": lambda v: v, "high": lambda v: -v, "one": lambda v: abs(np.log(max(v, 1e-9)))}[better]
+    top = min(score(v) for _, v in pairs)
+    return {i for i, v in pairs if abs(score(v) - top) <= 1e-12 * max(1.0, abs(top))}
+
+
+def hole_seconds(row):
+    """Seconds for one hole: the filter's own per-hole time, else the run time / holes in the run."""
+    return row.get("seconds") if row.get("seconds") is not None else row.get("_run_share")
+
+
+# -------------------------------------------------------------------------------- tables
+
+def wins(comparison):
+    """Per filler: holes where its patch→GT distance is the best (holes with ground truth)."""
+    out = {f.label: 0 for f in comparison.fillers}
+    for rows in _by_hole(comparison).values():
+        vals = [r.get("dist_patch_to_gt_mean_permille") if r.get("closed") else None for r in rows]
+        for i in _best(vals, "low"):
+            out[rows[i]["filler"]] += 1
+    return out
+
+
+def _by_hole(comparison):
+    groups = {}
+    for r in comparison.holes:
+        groups.setdefault((r["case"], r["hole"]), []).append(r)
+    return groups
+
+
+def summary_table(comparison):
+    """(header, rows, bold) of the per-filler summary over all holes."""
+    labels = [f.label for f in comparison.fillers]
+    rows_by = {lab: [r for r in comparison.holes if r["filler"] == lab] for lab in labels}
+    runs_by = {lab: [r for r in comparison.runs if r["filler"] == lab] for lab in labels}
+    win = wins(comparison)
+    keys = [m for m in METRICS if any(r.get(m[0]) is not None for r in comparison.holes)]
+    header = ["filter", "holes closed", "best distance on"] + [m[1] for m in keys] + ["originals changed",
+                                                                                         "seconds (all runs)"]
+    closed_counts = [sum(1 for r in rows_by[lab] if r.get("closed")) for lab in labels]
+    # Only fillers that closed (nearly) the most holes compete for bold: a mean over fewer, easier holes
+    # is no win; with a single contender nothing is bold.
+    eligible = [c >= 0.9 * max(closed_counts) for c in closed_counts]
+    if sum(eligible) < 2:
+        eligible = [False] * len(labels)
+    columns = []
+    for key, _, better, how, fmt in keys:
+        vals = [aggregate(rows_by[lab], key, how) for lab in labels]
+        columns.append(([_fmt(v, fmt) for v in vals], _best([v if ok else None for v, ok in zip(vals, eligible)],
+                                                            better)))
+    table, bold = [], []
+    for i, lab in enumerate(labels):
+        hr = rows_by[lab]
+        closed = sum(1 for r in hr if r.get("closed"))
+        line = [f"`{lab}`", f"{closed}/{len(hr)}", str(win[lab])] + [c[0][i] for c in columns]
+        line += [str(sum(r.get("originals_changed") or 0 for r in runs_by[lab])),
+                 f"{sum(r.get('seconds') or 0 for r in runs_by[lab]):.2f}"]
+        table.append(line)
+        bold.append({3 + j for j, c in enumerate(columns) if i in c[1]})
+    return header, table, bold
+
+
+def size_table(comparison, key="dist_patch_to_gt_mean_permille", fmt="{:.3f}", better="low"):
+    """Rows = size classes, columns = fillers: mean of ``key`` over closed holes (closed/total)."""
+    labels = [f.label for f in comparison.fillers]
+    sizes = [s for s in SIZE_ORDER if any(r["size_class"] == s and (r["ground_truth"] or not key.startswith("dist"))
+                                          for r in comparison.holes)]
+    header = ["holes"] + [f"`{short_label(lab)}`" for lab in labels]
+    table, bold = [], []
+    for s in sizes:
+        cells, vals = [], []
+        for lab in labels:
+            rs = [r for r in comparison.holes if r["filler"] == lab and r["size_class"] == s]
+            v = aggregate(rs, key, "mean")
+            vals.append(v)
+            cells.append(f"{_fmt(v, fmt)} ({sum(1 for r in rs if r.get('closed'))}/{len(rs)})")
+        n = len({(r["case"], r["hole"]) for r in comparison.holes if r["size_class"] == s})
+        table.append([f"{s} ({n})"] + cells)
+        bold.append({1 + i for i in _best(vals, better)})
+    return header, table, bold
+
+
+def hole_table(comparison):
+    """Rows = holes, columns = fillers: patch→GT mean ‰ (or quality mean without ground truth)."""
+    labels = [f.label for f in comparison.fillers]
+    header = (["mesh", "hole", "size", "shape", "edges", "corner q bound", "measure"]
+              + [f"`{short_label(lab)}`" for lab in labels])
+    table, bold = [], []
+    for (case, hole), rows in _by_hole(comparison).items():
+        by = {r["filler"]: r for r in rows}
+        gt = rows[0]["ground_truth"]
+        key, fmt, better = (("dist_patch_to_gt_mean_permille", "{:.3f}", "low") if gt
+                            else ("quality_mean", "{:.3f}", "high"))
+        vals, cells = [], []
+        for lab in labels:
+            r = by.get(lab, {})
+            v = r.get(key) if r.get("closed") else None
+            vals.append(v)
+            cells.append(_fmt(v, fmt) if r.get("closed") else "open: " + _short_reason(r.get("reason", "")))
+        r0 = rows[0]
+        table.append([case, str(hole), r0["size_class"], r0["shape"], str(r0["boundary_edges"]),
+                      f"{r0.get('quality_bound', 1.0):.2f}", "patch→GT ‰" if gt else "quality"] + cells)
+        bold.append({7 + i for i in _best(vals, better)})
+    return header, table, bold
+
+
+def _short_reason(reason):
+    reason = reason or "?"
+    return reason if len(reason) <= 48 else reason[:45] + "..."
+
+
+def failures(comparison):
+    lines = []
+    for r in comparison.runs:
+        if r["status"] != "ok":
+            lines.append(f"{r['case']} / `{r['filler']}`: **{r['status']}**: {r.get('error')}")
+    for r in comparison.holes:
+        if not r.get("closed") and not r.get("reason", "").startswith(("timeout", "crashed", "error")):
+            lines.append(f"{r['case']} hole {r['hole']} ({r['boundary_edges']} edges) / `{r['filler']}`: {r['reason']}")
+    return lines
+
+
+# ------------------------------------------------------------------------------- document
+
+def _md_table(header, rows, bold=None):
+    bold = bold or [set()] * len(rows)
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for row, b in zip(rows, bold):
+        out.append("| " + " | ".join(f"**{c}**" if j in b else c for j, c in enumerate(row)) + " |")
+    return "\n".join(out)
+
+
+def _inline_html(text):
+    text = html.escape(text)
+    parts = text.split("`")
+    text = "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
+    parts = text.split("**")
+    return "".join(f"<b>{p}</b>" if i % 2 else p for i, p in enumerate(parts))
+
+
+def _html_table(header, rows, bold=None):
+    bold = bold or [set()] * len(rows)
+    out = ["<table>", "<tr>" + "".join(f"<th>{_inline_html(h)}</th>" for h in header) + "</tr>"]
+    for row, b in zip(rows, bold):
+        out.append("<tr>" + "".join(f"<td class='best'>{_inline_html(c)}</td>" if j in b else f"<td>{_inline_html(c)}</td>"
+                                    for j, c in enumerate(row)) + "</tr>")
+    return "\n".join(out + ["</table>"])
+
+
+def to_markdown(blocks):
+    out = []
+    for kind, *args in blocks:
+        if kind == "h":
+            out.append("#" * args[0] + " " + args[1])
+        elif kind == "p":
+            out.append(args[0])
+        elif kind == "list":
+            out.append("\n".join(f"- {x}" for x in args[0]))
+        elif kind == "table":
+            out.append(_md_table(*args))
+        elif kind == "img":
+            out.append(f"![{args[1]}]({args[0]})")
+    return "\n\n".join(out) + "\n"
+
+
+def to_html(blocks, title):
+    css = ("body{font-family:sans-serif;max-width:1400px;margin:auto;padding:1em}table{border-collapse:collapse;"
+           "margin:1em 0;font-size:90%}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}"
+           "td:first-child,th:first-child{text-align:left}td.best{background:#d8f5d0;font-weight:bold}"
+           "img{max-width:100%;border:1px solid #eee}code{font-size:95%}")
+    out = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
+           f"<style>{css}</style></head><body>"]
+    for kind, *args in blocks:
+        if kind == "h":
+            out.append(f"<h{args[0]}>{_inline_html(args[1])}</h{args[0]}>")
+        elif kind == "p":
+            out.append(f"<p>{_inline_html(args[0])}</p>")
+        elif kind == "list":
+            out.append("<ul>" + "".join(f"<li>{_inline_html(x)}</li>" for x in args[0]) + "</ul>")
+        elif kind == "table":
+            out.append(_html_table(*args))
+        elif kind == "img":
+            out.append(f"<figure><img src='{html.escape(args[0])}' alt='{html.escape(args[1])}'>"
+                       f"<figcaption>{_inline_html(args[1])}</figcaption></figure>")
+    return "\n".join(out + ["</body></html>"])
+
+
+def summary_blocks(comparison):
+    """The summary (also the README's Results section): settings line, summary and size tables."""
+    blocks = [("table", *summary_table(comparison))]
+    if any(r["ground_truth"] for r in comparison.holes):
+        blocks += [("p", "Mean patch→ground-truth distance (‰ of the bounding-box diagonal) per hole size, over "
+                         "the holes each filter closed (closed/total):"),
+                   ("table", *size_table(comparison))]
+    blocks += [("p", "Mean triangle quality 2r/R of the new faces per hole size:"),
+               ("table", *size_table(comparison, "quality_mean", "{:.3f}", "high"))]
+    baseline = "meshing_close_holes (all holes)"
+    if any(f.label == baseline for f in comparison.fillers):
+        header, rows, bold = targets_table(comparison, baseline)
+        if rows:
+            blocks += [("p", f"The issues' targets (acceptance.py), against `{baseline}`; ✓ met, ✗ not met. A hole's "
+                             "minimum quality is judged against min(0.3, the best a patch can reach at its sharpest "
+                             "convex border corner); 'natural' excludes loops that outline a whole island of the scan:"),
+                       ("table", header, rows, bold)]
+    return blocks
+
+
+def report_blocks(comparison, pictures, command=None):
+    settings = comparison.settings
+    cases = ", ".join(f"{c['case']} ({c['faces']} faces, {len(c['holes'])} {c['kind']})" for c in comparison.cases)
+    blocks = [("h", 1, "Hole filler comparison"),
+              ("p", f"{time.strftime('%Y-%m-%d %H:%M')}, {settings['cores']} cores, "
+                    f"{comparison.wall_seconds:.1f} s wall time (runs and metrics). Meshes: {cases}. "
+                    + (f"Command: `{command}`." if command else "")),
+              ("p", "Distances are in per mille (‰) of the mesh's bounding-box diagonal, between the patch and the "
+                    "removed ground-truth surface: 20,000 points spread by area over one surface (seeded, so a "
+                    "figure depends only on the two surfaces), each at its exact distance from the other surface "
+                    "(MeshLab's per-vertex distance filter). Quality is Field's "
+                    "2r/R (1 = equilateral). Edge ratio = mean new edge length / mean edge length around the hole. "
+                    "Border crease = angle between the normals of the mesh face and the patch face at each hole "
+                    "border edge; 'crease − GT's' compares it with the ground truth's. Means are over the holes each "
+                    "filter closed; in the summary the best value per column is bold among the filters that closed "
+                    "at least 90 % as many holes as the best one."),
+              ("h", 2, "Summary"), *summary_blocks(comparison),
+              ("h", 2, "Per hole"),
+              ("p", "Patch→GT mean distance (‰) where the hole has ground truth, else the mean quality of the new "
+                    "triangles; the best filter per hole in bold."),
+              ("table", *hole_table(comparison))]
+    fails = failures(comparison)
+    blocks += [("h", 2, "Failures and open holes"), ("list", fails) if fails else ("p", "None.")]
+    notes = [f"{c['case']}: {n}" for c in comparison.cases for n in c["notes"]]
+    if notes:
+        blocks += [("h", 2, "Notes"), ("list", notes)]
+    blocks += [("h", 2, "Pictures")]
+    for path, caption in pictures:
+        blocks.append(("img", path, caption))
+    blocks += [("h", 2, "Settings"),
+               ("list", [f"`{f['label']}`: `{f['filter']}` {json.dumps(f['params'])}" for f in settings["fillers"]]
+                + [f"holes per closed mesh: {settings['holes']}, sizes {settings['sizes']}, seed {settings['seed']}, "
+                   f"timeout {settings['timeout']} s per run"]),
+              ("p", "All numbers per hole and filter: `results.csv`, `results.json`.")]
+    return blocks
+
+
+# ---------------------------------------------------------------------------------- files
+
+def _scalar_rows(comparison):
+    rows = []
+    for r in comparison.holes:
+        row = {k: v for k, v in r.items() if not isinstance(v, (list, dict))}
+        rows.append(row)
+    return rows
+
+
+def write_json(comparison, path):
+    data = {"settings": comparison.settings, "wall_seconds": comparison.wall_seconds, "cases": comparison.cases,
+            "runs": comparison.runs, "holes": comparison.holes}
+    with open(path, "w") as fh:
+        json.dump(data, fh, indent=1, default=lambda o: o.item() if hasattr(o, "item") else str(o))
+
+
+def write_csv(comparison, path):
+    rows = _scalar_rows(comparison)
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    with open(path, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=keys)
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def write_report(comparison, directory, pictures=True, command=None):
+    """Write the whole report into ``directory`` (created); returns the report.md path."""
+    os.makedirs(directory, exist_ok=True)
+    for run in comparison.runs:  # per-hole time for filters that give none: the run split over its holes
+        holes = [r for r in comparison.holes if r["case"] == run["case"] and r["filler"] == run["filler"]]
+        for r in holes:
+            r["_run_share"] = (run.get("seconds") or 0.0) / max(len(holes), 1)
+    write_json(comparison, os.path.join(directory, "results.json"))
+    write_csv(comparison, os.path.join(directory, "results.csv"))
+    pics = []
+    if pictures:
+        from .plots import chart_pictures
+        from .render import hole_pictures
+
+        pics += chart_pictures(comparison, directory)
+        pics += hole_pictures(comparison, directory)
+    blocks = report_blocks(comparison, pics, command)
+    with open(os.path.join(directory, "report.md"), "w") as fh:
+        fh.write(to_markdown(blocks))
+    with open(os.path.join(directory, "report.html"), "w") as fh:
+        fh.write(to_html(blocks, "Hole filler comparison"))
+    return os.path.join(directory, "report.md")

@@ -1,0 +1,369 @@
+"""MeshLab .mlx filter scripts that mix MeshLab's built-in filters with this package's.
+
+pymeshlab's ``load_filter_script`` / ``apply_filter_script`` run in C++: they cannot reach a
+Python filter, and a filter name they do not know fails only when it is reached, after the
+filters before it have changed the meshes. This module reads the same XML, checks all of it
+first, and runs each step through :func:`meshlab_holefill.apply_filter`, the door that knows
+both kinds of filter (:mod:`.pymeshlab_doors` sends pymeshlab's two calls here for scripts
+that name our filters).
+
+Reading (:func:`read_filter_script`, :func:`run_filter_script`)
+    ``<filter name="...">`` names a filter by its MeshLab display name ("Close Holes",
+    "Close Holes: Minimum Angle + Bilateral"), or by a python name, or by a pre-2022 display
+    or python name (pymeshlab's ``keys.txt``); see :func:`mlx_names.resolve_filter`.
+    ``<Param name="..." type="..." .../>`` is translated by MeshLab's rule
+    (:func:`mlx_names.python_param_name`) for built-ins, and by ``ParamSpec.mlx`` for ours.
+    Values by type: RichInt, RichFloat, RichBool ("true"/"false"), RichString, RichAbsPerc
+    and RichPercentage (absolute values, passed as ``pymeshlab.PureValue``), RichDynamicFloat,
+    RichEnum (the index), RichColor (r, g, b, a), RichPosition / RichDirection / RichPoint3f
+    (x, y, z), RichMatrix44f (val0..val15, row-major), RichMesh (a mesh id of the MeshSet),
+    RichOpenFile / RichSaveFile (a path; relative paths are looked up in the working directory,
+    then next to the script). MeshLab 2016's ``<xmlfilter>``/``<xmlparam>`` (untyped values)
+    are read too. Parameters a script leaves out take the filter's defaults.
+
+Validation
+    Everything is checked before the first filter runs: XML well-formed, every filter known,
+    every parameter known to its filter, every value parsable and of a type the parameter
+    accepts, our filters' ranges and choices, input files present. All problems are reported
+    together in one :class:`MlxScriptError`, each naming the line, the filter and the
+    parameter; the MeshSet is untouched. What only the run can reveal (a filter's own
+    precondition, e.g. "needs a raster", a bounded float out of its mesh-dependent bounds)
+    raises :class:`MlxRunError`, naming the step, after the earlier steps ran.
+
+Recording (:func:`save_filter_script`, :func:`filter_script_xml`)
+    Writing the filters applied to a MeshSet back as a script lives in :mod:`mlx_write`;
+    both functions are imported here so that ``meshlab_holefill.meshlab.mlx.script`` stays the one module
+    for .mlx scripts.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+from typing import Any
+from xml.parsers import expat
+
+from . import names as mlx_names
+from .. import registration as registry
+from .values import ParamValueError, builtin_param_value, our_param_value
+from ..meshset_io import current_mesh_exists
+from .write import filter_script_xml, save_filter_script
+
+__all__ = [
+    "FilterScript", "MlxRunError", "MlxScriptError", "ScriptParam", "ScriptProblem", "ScriptStep",
+    "filter_script_xml", "pymeshlab_last_filter", "read_filter_script", "run_filter_script",
+    "save_filter_script",
+]
+
+
+class MlxScriptError(ValueError):
+    """A filter script cannot be run; nothing was applied.
+
+    Attributes
+    ----------
+    problems : list of ScriptProblem
+        Every problem found, each with its line, filter and parameter.
+    """
+
+    def __init__(self, message, problems=()):
+        super().__init__(message)
+        self.problems = list(problems)
+
+
+class MlxRunError(MlxScriptError):
+    """A step of a validated script failed while running; the steps before it were applied.
+
+    Attributes
+    ----------
+    step : ScriptStep
+    results : list of dict
+        Results of the steps that ran.
+    """
+
+    def __init__(self, message, step, results):
+        super().__init__(message)
+        self.step = step
+        self.results = results
+
+
+@dataclass
+class ScriptProblem:
+    source: str
+    line: int | None
+    filter: str | None
+    parameter: str | None
+    message: str
+
+    def __str__(self):
+        where = f"{self.source}:{self.line}" if self.line else self.source
+        parts = [where]
+        if self.filter is not None:
+            parts.append(f"filter '{self.filter}'")
+        if self.parameter is not None:
+            parts.append(f"parameter '{self.parameter}'")
+        return ": ".join(parts + [self.message])
+
+
+@dataclass
+class _Element:
+    """An XML element of the script with its line number."""
+
+    tag: str
+    line: int
+    attrs: dict
+    children: list = field(default_factory=list)
+
+    @property
+    def name(self):
+        return self.attrs.get("name")
+
+
+@dataclass
+class ScriptParam:
+    mlx_name: str
+    mlx_type: str | None
+    line: int
+    name: str          # python keyword
+    value: Any         # ready to pass to apply_filter
+
+
+@dataclass
+class ScriptStep:
+    """One validated filter of a script.
+
+    Attributes
+    ----------
+    index : int
+        1-based position in the script.
+    line : int
+    mlx_name : str
+        The filter name as written.
+    filter : str
+        Python filter name.
+    ours : bool
+    how : str
+        How the name was understood ('display name', 'old python name', ...).
+    params : list of ScriptParam
+    """
+
+    index: int
+    line: int
+    mlx_name: str
+    filter: str
+    ours: bool
+    how: str
+    params: list
+
+    @property
+    def kwargs(self):
+        return {p.name: p.value for p in self.params}
+
+
+@dataclass
+class FilterScript:
+    """A parsed and validated filter script: run it with :func:`run_filter_script`."""
+
+    steps: list
+    source: str = "<string>"
+
+
+# --- reading ------------------------------------------------------------------------------
+
+
+def _parse_xml(data, source):
+    """Parse FilterScript XML into _Element trees (root's children: filters, theirs: params)."""
+    parser = expat.ParserCreate()
+    stack = []
+    root = []
+
+    def start(tag, attrs):
+        element = _Element(tag, parser.CurrentLineNumber, dict(attrs))
+        if stack:
+            stack[-1].children.append(element)
+        else:
+            root.append(element)
+        stack.append(element)
+
+    def end(tag):
+        stack.pop()
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        problem = ScriptProblem(source, exc.lineno, None, None,
+                                f"malformed XML: {expat.ErrorString(exc.code)} (column {exc.offset + 1})")
+        raise MlxScriptError(str(problem), [problem]) from None
+    top = root[0]
+    if top.tag != "FilterScript":
+        problem = ScriptProblem(source, top.line, None, None,
+                                f"not a MeshLab filter script: the root element is <{top.tag}>, not <FilterScript>")
+        raise MlxScriptError(str(problem), [problem])
+    return top
+
+
+def pymeshlab_last_filter(ms, python_name):
+    """pymeshlab's own record of the last filter it applied to ``ms``, if it is ``python_name``.
+
+    pymeshlab keeps every built-in filter applied to a MeshSet, with all its parameters in
+    MeshLab form; this reads the last one back through ``ms.save_filter_script``.
+
+    Returns
+    -------
+    _Element or None
+        The ``<filter>`` element, or None when the last record is another filter.
+    """
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "record.mlx")
+        ms.save_filter_script(path)
+        with open(path, "rb") as f:
+            data = f.read()
+    filters = [e for e in _parse_xml(data, path).children if e.tag == "filter"]
+    if not filters:
+        return None
+    understood = mlx_names.resolve_filter(filters[-1].name or "")
+    if understood is None or understood.python_name != python_name:
+        return None
+    return filters[-1]
+
+
+def _validate(root, source, base_dir):
+    steps, problems, index = [], [], 0
+    for element in root.children:
+        if element.tag not in ("filter", "xmlfilter"):
+            problems.append(ScriptProblem(source, element.line, None, None,
+                                          f"unexpected element <{element.tag}> (expected <filter>)"))
+            continue
+        name = element.name
+        index += 1
+        if not name:
+            problems.append(ScriptProblem(source, element.line, None, None, "<filter> without a name attribute"))
+            continue
+        understood = mlx_names.resolve_filter(name)
+        if understood is None:
+            hint = mlx_names.suggest_filters(name)
+            problems.append(ScriptProblem(
+                source, element.line, name, None,
+                "unknown filter: neither one of meshlab_holefill's "
+                f"({', '.join(s.display_name for s in registry.FILTERS.values())}) nor a pymeshlab built-in"
+                + (f"; did you mean {' or '.join(map(repr, hint))}?" if hint else "")))
+            continue
+        spec = registry.FILTERS.get(understood.python_name) if understood.ours else None
+        kinds = None if understood.ours else mlx_names.builtin_param_kinds(understood.python_name)
+        params, seen = [], {}
+        for child in element.children:
+            param_name = child.name
+            if child.tag not in ("Param", "xmlparam"):
+                problems.append(ScriptProblem(source, child.line, name, None,
+                                              f"unexpected element <{child.tag}> (expected <Param>)"))
+                continue
+            if not param_name:
+                problems.append(ScriptProblem(source, child.line, name, None, "<Param> without a name attribute"))
+                continue
+            mlx_type = child.attrs.get("type") if child.tag == "Param" else None
+            if child.tag == "Param" and not mlx_type:
+                problems.append(ScriptProblem(source, child.line, name, param_name, "<Param> without a type attribute"))
+                continue
+            try:
+                if understood.ours:
+                    python_name, value = our_param_value(spec, child, param_name, mlx_type, base_dir)
+                else:
+                    python_name, value = builtin_param_value(kinds, child, param_name, mlx_type, base_dir)
+            except ParamValueError as exc:
+                problems.append(ScriptProblem(source, child.line, name, param_name, str(exc)))
+                continue
+            if python_name in seen:
+                problems.append(ScriptProblem(source, child.line, name, param_name,
+                                              f"given twice (first on line {seen[python_name]})"))
+                continue
+            seen[python_name] = child.line
+            params.append(ScriptParam(param_name, mlx_type, child.line, python_name, value))
+        steps.append(ScriptStep(index, element.line, name, understood.python_name, understood.ours,
+                                understood.how, params))
+    if problems:
+        lines = "\n  ".join(map(str, problems))
+        raise MlxScriptError(f"{len(problems)} problem(s) in filter script {source}; nothing was run:\n  {lines}",
+                             problems)
+    return FilterScript(steps, source)
+
+
+def read_filter_script(path_or_xml):
+    """Read and validate a MeshLab filter script.
+
+    Parameters
+    ----------
+    path_or_xml : str, os.PathLike, bytes or FilterScript
+        A path to an .mlx file, or the XML text itself (a string starting with '<').
+
+    Returns
+    -------
+    FilterScript
+
+    Raises
+    ------
+    MlxScriptError
+        Missing file, malformed XML, unknown filter or parameter, unparsable value, missing
+        input file: all problems, each with its line, filter and parameter.
+    """
+    if isinstance(path_or_xml, FilterScript):
+        return path_or_xml
+    if isinstance(path_or_xml, bytes) or (isinstance(path_or_xml, str) and path_or_xml.lstrip().startswith("<")):
+        data, source, base_dir = path_or_xml, "<string>", None
+    else:
+        path = os.fspath(path_or_xml)
+        if not os.path.isfile(path):
+            problem = ScriptProblem(path, None, None, None, "filter script file not found")
+            raise MlxScriptError(str(problem), [problem])
+        with open(path, "rb") as f:
+            data = f.read()
+        source, base_dir = path, os.path.dirname(os.path.abspath(path))
+    return _validate(_parse_xml(data, source), source, base_dir)
+
+
+def run_filter_script(ms, path_or_xml):
+    """Run a MeshLab filter script (built-in filters and ours) on a MeshSet.
+
+    The whole script is validated first (:func:`read_filter_script`); then each filter runs
+    through :func:`meshlab_holefill.apply_filter`, so it is recorded like any other call.
+
+    Parameters
+    ----------
+    ms : pymeshlab.MeshSet
+    path_or_xml : str, os.PathLike, bytes or FilterScript
+
+    Returns
+    -------
+    list of dict
+        One result dictionary per filter ({} for built-ins that return nothing).
+
+    Raises
+    ------
+    MlxScriptError
+        The script is invalid; the MeshSet is untouched.
+    MlxRunError
+        A filter failed while running; the filters before it were applied (``.results``).
+    """
+    script = read_filter_script(path_or_xml)
+    results = []
+    for step in script.steps:
+        where = f"{script.source}:{step.line}: filter #{step.index} '{step.mlx_name}' ({step.filter})"
+        done = f"; {len(results)} earlier filter(s) of the script were applied" if results else ""
+        problem = _runtime_problem(ms, step)
+        if problem:
+            raise MlxRunError(f"{where}: {problem}{done}", step, results)
+        try:
+            results.append(registry.apply_filter(ms, step.filter, **step.kwargs))
+        except Exception as exc:
+            raise MlxRunError(f"{where} failed: {exc}{done}", step, results) from exc
+    return results
+
+
+def _runtime_problem(ms, step):
+    """What would crash pymeshlab instead of raising (DESIGN.md: missing current mesh id)."""
+    if ms.mesh_number() > 0 and not current_mesh_exists(ms):
+        return "the MeshSet's current mesh does not exist"
+    for p in step.params:
+        if p.mlx_type == "RichMesh" and not ms.mesh_id_exists(p.value):
+            return f"parameter '{p.mlx_name}': no mesh with id {p.value} in the MeshSet"
+    return None
