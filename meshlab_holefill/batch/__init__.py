@@ -112,7 +112,7 @@ def batch(inputs, out, filter=None, mlx=None, client=None, *, scheduler=None, n_
     interrupted = False
     try:
         if todo:
-            _run(todo, settings, records, client, scheduler, n_workers, memory_limit, progress, on_start)
+            _execute(todo, settings, records, client, scheduler, n_workers, memory_limit, progress, on_start)
     except KeyboardInterrupt:
         interrupted = True
     finally:
@@ -177,7 +177,7 @@ def _job(item, settings, run_id, on_start):
             "timeout": settings["timeout"], "on_start": on_start}
 
 
-def _run(todo, settings, records, client, scheduler, n_workers, memory_limit, progress, on_start):
+def _execute(todo, settings, records, client, scheduler, n_workers, memory_limit, progress, on_start):
     import uuid
 
     from ._run import open_client, run_jobs
