@@ -7,7 +7,6 @@ retry, and a file that timed out is not run again.
 """
 from __future__ import annotations
 
-import gc
 import json
 import os
 import socket
@@ -65,7 +64,6 @@ def _reset_peak():
     belongs to this file and not to whatever the long-lived worker did before. Elsewhere only
     the process's lifetime peak is known.
     """
-    gc.collect()
     try:
         with open("/proc/self/clear_refs", "w") as fh:
             fh.write("5")
