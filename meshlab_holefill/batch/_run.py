@@ -102,14 +102,21 @@ def run_jobs(client, jobs, on_record, progress=False):
         for future in done:
             pending.discard(future)
             job = job_of[future.key]
-            record = _outcome(client, future, job, retry_allowed=future.key not in resubmitted)
-            if record is None:
+            record = _outcome(future, job, retry_allowed=future.key not in resubmitted)
+            if record is _WAIT:
+                pending.add(future)
+                done.add(future)
+                continue
+            if record is _RESUBMIT:
                 again = client.submit(run_file, job, key=future.key + "-r", pure=False)
                 job_of[again.key] = job
                 resubmitted.add(again.key)
                 pending.add(again)
                 done.add(again)
                 continue
+            if record is _FAILED:
+                record = _failed(client, future, job)
+            future.release()
             on_record(record)
             bar.update(1)
             if record["status"] == "failed":
@@ -121,24 +128,52 @@ def run_jobs(client, jobs, on_record, progress=False):
         bar.close()
 
 
-def _outcome(client, future, job, retry_allowed):
-    """The file's final record, or None when its task should be submitted again."""
-    if future.status == "finished":
+_WAIT, _RESUBMIT, _FAILED = object(), object(), object()
+
+
+def _outcome(future, job, retry_allowed):
+    """The file's final record, ``_WAIT`` (its task runs again), ``_RESUBMIT`` (submit it once more) or
+    ``_FAILED`` (see :func:`_failed`).
+
+    The record is read from the result JSON the task wrote, not gathered from the worker: a
+    finished task's return value lives in its worker's memory and is lost (and the task run
+    again) when that worker dies before the client fetches it.
+    """
+    record = read_result(job["result"]) or {}
+    if record.get("run_id") == job["run_id"] and record.get("status") in ("ok", "failed"):
+        return record
+    if future.status == "finished":  # a shared file system that shows the worker's write late
         return future.result()
+    if future.status in ("pending", "lost"):  # lost with a dead worker; the scheduler runs it again
+        return _WAIT
+    if future.status != "error":
+        return _FAILED
     from distributed import KilledWorker
 
-    exc = future.exception()
+    killed = isinstance(future.exception(), KilledWorker) and record.get("status") != "timeout"
+    return _RESUBMIT if killed and _starts(record, job) < MAX_STARTS and retry_allowed else _FAILED
+
+
+def _starts(trail, job):
+    same_run = trail.get("run_id") == job["run_id"]
+    return int(trail.get("starts", 0)) if same_run and trail.get("status") in ("running", "timeout") else 0
+
+
+def _failed(client, future, job):
+    """The record of a file whose task ended in error (its worker died, or the task could not run)."""
+    from distributed import KilledWorker
+
+    exc = future.exception() if future.status == "error" else None
     trail = read_result(job["result"]) or {}
     same_run = trail.get("run_id") == job["run_id"]
-    starts = int(trail.get("starts", 0)) if same_run and trail.get("status") in ("running", "timeout") else 0
-    if isinstance(exc, KilledWorker):
-        if same_run and trail.get("status") == "timeout":
-            error = trail.get("error")
-        elif starts < MAX_STARTS and retry_allowed:
-            return None
-        else:
-            error = _death_reason(client, trail, starts)
-    else:  # the task could not run at all (e.g. the worker cannot import this package)
+    starts = _starts(trail, job)
+    if same_run and trail.get("status") == "timeout":
+        error = trail.get("error")
+    elif isinstance(exc, KilledWorker):
+        error = _death_reason(client, trail, starts)
+    elif exc is None:
+        error = f"its task was {future.status} by the cluster"
+    else:  # e.g. the worker cannot import this package
         error = f"{type(exc).__name__}: {exc}"
     record = base_record(job)
     record.update(status="failed", error=error, starts=starts, worker=trail.get("worker"))
@@ -160,7 +195,7 @@ def _death_reason(client, trail, starts):
     for _, event in events:
         if pid is not None and event.get("pid") == pid:
             return (f"killed its worker (pid {pid}) by going over the worker memory limit "
-                    f"({event.get('rss', 0) / 2**20:.0f} MB resident) {where}; {starts} start(s)")
+                    f"({event.get('rss', 0) / 2**20:.0f} MiB resident) {where}; {starts} start(s)")
     if starts == 0:
         return "its worker died repeatedly while the file waited to start (another file crashed it)"
     return (f"killed its worker (pid {pid} on {worker.get('host')}) {where} on each of {starts} start(s): "
