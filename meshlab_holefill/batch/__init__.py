@@ -127,7 +127,7 @@ def batch(inputs, out, filter=None, mlx=None, client=None, *, scheduler=None, n_
 def _prepare(inputs, out, filter, mlx, client, scheduler, n_workers, timeout, format, params):
     """Check every option and plan the outputs; nothing is written yet."""
     from ..meshlab.file_job import check_filter, check_script, encode_params
-    from .. import __version__
+    from .._version import __version__
 
     if filter is not None and mlx is not None:
         raise BatchInputError("give a filter or an .mlx script, not both")

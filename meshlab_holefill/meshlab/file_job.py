@@ -85,31 +85,31 @@ def check_filter(name, params):
     """
     import pymeshlab
 
-    import meshlab_holefill
+    from ..errors import FilterParameterError
+    from .registration import FILTERS, apply_filter, filter_list
 
     params = decode_params(params)
-    if name in meshlab_holefill.FILTERS:
-        meshlab_holefill.apply_filter(_tetrahedron(), name, **params)
+    if name in FILTERS:
+        apply_filter(_tetrahedron(), name, **params)
         return
     if name not in pymeshlab.filter_list():
-        raise meshlab_holefill.FilterParameterError(
-            f"unknown filter '{name}': not one of ours ({', '.join(meshlab_holefill.filter_list())}) "
-            "nor a pymeshlab filter")
+        raise FilterParameterError(
+            f"unknown filter '{name}': not one of ours ({', '.join(filter_list())}) nor a pymeshlab filter")
     try:
         known = _tetrahedron().filter_parameter_values(name)
     except Exception:  # a filter whose defaults need more than a bare mesh: the run will tell
         return
     unknown = sorted(set(params) - set(known))
     if unknown:
-        raise meshlab_holefill.FilterParameterError(
+        raise FilterParameterError(
             f"filter '{name}' has no parameter {', '.join(map(repr, unknown))}; valid parameters: {', '.join(known)}")
 
 
 def check_script(path):
     """Validate a MeshLab .mlx script (raises ``meshlab_holefill.MlxScriptError``); returns its step count."""
-    import meshlab_holefill
+    from .mlx.script import read_filter_script
 
-    return len(meshlab_holefill.read_filter_script(path).steps)
+    return len(read_filter_script(path).steps)
 
 
 def fill_file(input_path, output_path, filter=None, params=None, mlx=None, on_stage=None):
@@ -120,11 +120,11 @@ def fill_file(input_path, output_path, filter=None, params=None, mlx=None, on_st
     input_path, output_path : str
         Any format pymeshlab reads; the output format follows the output's extension.
     filter : str, optional
-        A filter name (ours or a pymeshlab built-in), run through ``meshlab_holefill.apply_filter``.
+        A filter name (ours or a pymeshlab built-in), run through ``apply_filter`` as ``fill`` does.
     params : dict, optional
         Its parameters as produced by :func:`encode_params`.
     mlx : str, optional
-        A .mlx script run through ``meshlab_holefill.run_filter_script`` instead of ``filter``.
+        A .mlx script run through ``run_filter_script`` (as ``meshlab-holefill run`` does) instead of ``filter``.
     on_stage : callable, optional
         Called with ``"load"``, ``"fill"`` and ``"save"`` as each stage starts.
 
@@ -137,7 +137,8 @@ def fill_file(input_path, output_path, filter=None, params=None, mlx=None, on_st
     """
     import pymeshlab
 
-    import meshlab_holefill
+    from .mlx.script import run_filter_script
+    from .registration import apply_filter
 
     stage = on_stage or (lambda name: None)
     seconds = {}
@@ -148,9 +149,9 @@ def fill_file(input_path, output_path, filter=None, params=None, mlx=None, on_st
     seconds["load"], t = time.perf_counter() - t, time.perf_counter()
     stage("fill")
     if mlx is not None:
-        result = {"steps": meshlab_holefill.run_filter_script(ms, os.fspath(mlx))}
+        result = {"steps": run_filter_script(ms, os.fspath(mlx))}
     else:
-        result = meshlab_holefill.apply_filter(ms, filter, **decode_params(params or {}))
+        result = apply_filter(ms, filter, **decode_params(params or {}))
     seconds["fill"], t = time.perf_counter() - t, time.perf_counter()
     stage("save")
     ms.save_current_mesh(os.fspath(output_path))

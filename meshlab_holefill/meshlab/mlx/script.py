@@ -43,79 +43,21 @@ from dataclasses import dataclass, field
 from typing import Any
 from xml.parsers import expat
 
+import pymeshlab
+
 from . import names as mlx_names
+from . import versions as mlx_versions
 from .. import registration as registry
 from .values import ParamValueError, builtin_param_value, our_param_value
 from ..meshset_io import current_mesh_exists
+from .parse import MlxRunError, MlxScriptError, ScriptProblem, parse_xml
 from .write import filter_script_xml, save_filter_script
 
 __all__ = [
     "FilterScript", "MlxRunError", "MlxScriptError", "ScriptParam", "ScriptProblem", "ScriptStep",
-    "filter_script_xml", "pymeshlab_last_filter", "read_filter_script", "run_filter_script",
+    "filter_script_xml", "read_filter_script", "run_filter_script",
     "save_filter_script",
 ]
-
-
-class MlxScriptError(ValueError):
-    """A filter script cannot be run; nothing was applied.
-
-    Attributes
-    ----------
-    problems : list of ScriptProblem
-        Every problem found, each with its line, filter and parameter.
-    """
-
-    def __init__(self, message, problems=()):
-        super().__init__(message)
-        self.problems = list(problems)
-
-
-class MlxRunError(MlxScriptError):
-    """A step of a validated script failed while running; the steps before it were applied.
-
-    Attributes
-    ----------
-    step : ScriptStep
-    results : list of dict
-        Results of the steps that ran.
-    """
-
-    def __init__(self, message, step, results):
-        super().__init__(message)
-        self.step = step
-        self.results = results
-
-
-@dataclass
-class ScriptProblem:
-    source: str
-    line: int | None
-    filter: str | None
-    parameter: str | None
-    message: str
-
-    def __str__(self):
-        where = f"{self.source}:{self.line}" if self.line else self.source
-        parts = [where]
-        if self.filter is not None:
-            parts.append(f"filter '{self.filter}'")
-        if self.parameter is not None:
-            parts.append(f"parameter '{self.parameter}'")
-        return ": ".join(parts + [self.message])
-
-
-@dataclass
-class _Element:
-    """An XML element of the script with its line number."""
-
-    tag: str
-    line: int
-    attrs: dict
-    children: list = field(default_factory=list)
-
-    @property
-    def name(self):
-        return self.attrs.get("name")
 
 
 @dataclass
@@ -170,64 +112,6 @@ class FilterScript:
 # --- reading ------------------------------------------------------------------------------
 
 
-def _parse_xml(data, source):
-    """Parse FilterScript XML into _Element trees (root's children: filters, theirs: params)."""
-    parser = expat.ParserCreate()
-    stack = []
-    root = []
-
-    def start(tag, attrs):
-        element = _Element(tag, parser.CurrentLineNumber, dict(attrs))
-        if stack:
-            stack[-1].children.append(element)
-        else:
-            root.append(element)
-        stack.append(element)
-
-    def end(tag):
-        stack.pop()
-
-    parser.StartElementHandler = start
-    parser.EndElementHandler = end
-    try:
-        parser.Parse(data, True)
-    except expat.ExpatError as exc:
-        problem = ScriptProblem(source, exc.lineno, None, None,
-                                f"malformed XML: {expat.ErrorString(exc.code)} (column {exc.offset + 1})")
-        raise MlxScriptError(str(problem), [problem]) from None
-    top = root[0]
-    if top.tag != "FilterScript":
-        problem = ScriptProblem(source, top.line, None, None,
-                                f"not a MeshLab filter script: the root element is <{top.tag}>, not <FilterScript>")
-        raise MlxScriptError(str(problem), [problem])
-    return top
-
-
-def pymeshlab_last_filter(ms, python_name):
-    """pymeshlab's own record of the last filter it applied to ``ms``, if it is ``python_name``.
-
-    pymeshlab keeps every built-in filter applied to a MeshSet, with all its parameters in
-    MeshLab form; this reads the last one back through ``ms.save_filter_script``.
-
-    Returns
-    -------
-    _Element or None
-        The ``<filter>`` element, or None when the last record is another filter.
-    """
-    with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "record.mlx")
-        ms.save_filter_script(path)
-        with open(path, "rb") as f:
-            data = f.read()
-    filters = [e for e in _parse_xml(data, path).children if e.tag == "filter"]
-    if not filters:
-        return None
-    understood = mlx_names.resolve_filter(filters[-1].name or "")
-    if understood is None or understood.python_name != python_name:
-        return None
-    return filters[-1]
-
-
 def _validate(root, source, base_dir):
     steps, problems, index = [], [], 0
     for element in root.children:
@@ -241,6 +125,11 @@ def _validate(root, source, base_dir):
             problems.append(ScriptProblem(source, element.line, None, None, "<filter> without a name attribute"))
             continue
         understood = mlx_names.resolve_filter(name)
+        removed = mlx_versions.filter_2020(name) if understood is None else None
+        if removed is not None:
+            problems.append(ScriptProblem(source, element.line, name, None,
+                                          f"a MeshLab 2020.09 filter that current MeshLab does not have: {removed.note}"))
+            continue
         if understood is None:
             hint = mlx_names.suggest_filters(name)
             problems.append(ScriptProblem(
@@ -268,8 +157,11 @@ def _validate(root, source, base_dir):
             try:
                 if understood.ours:
                     python_name, value = our_param_value(spec, child, param_name, mlx_type, base_dir)
+                elif _dropped_2020_param(understood, kinds, child):
+                    continue
                 else:
-                    python_name, value = builtin_param_value(kinds, child, param_name, mlx_type, base_dir)
+                    python_name, value = builtin_param_value(kinds, child, _param_name_2020(understood, param_name),
+                                                             mlx_type, base_dir)
             except ParamValueError as exc:
                 problems.append(ScriptProblem(source, child.line, name, param_name, str(exc)))
                 continue
@@ -279,6 +171,7 @@ def _validate(root, source, base_dir):
                 continue
             seen[python_name] = child.line
             params.append(ScriptParam(param_name, mlx_type, child.line, python_name, value))
+        problems.extend(_add_implied_params(understood, params, seen, source, element.line, name))
         steps.append(ScriptStep(index, element.line, name, understood.python_name, understood.ours,
                                 understood.how, params))
     if problems:
@@ -286,6 +179,41 @@ def _validate(root, source, base_dir):
         raise MlxScriptError(f"{len(problems)} problem(s) in filter script {source}; nothing was run:\n  {lines}",
                              problems)
     return FilterScript(steps, source)
+
+
+def _param_name_2020(understood, param_name):
+    """The name to look a parameter up by: a renamed MeshLab 2020.09 parameter gets its current name."""
+    f2020 = understood.meshlab_2020
+    return f2020.renamed.get(param_name, param_name) if f2020 is not None else param_name
+
+
+def _dropped_2020_param(understood, kinds, element):
+    """Is this a MeshLab 2020.09 parameter that current MeshLab dropped, given at its default?
+
+    Raises ParamValueError when it is one with another value.
+    """
+    f2020 = understood.meshlab_2020
+    if f2020 is None or kinds is None or f2020.python_param(element.name) in kinds:
+        return False
+    problem = mlx_versions.dropped_param_problem(f2020, element.name, element.attrs)
+    if problem:
+        raise ParamValueError(problem)
+    return problem == ""
+
+
+def _add_implied_params(understood, params, seen, source, line, name):
+    """Add the parameter values a MeshLab 2020.09 filter name implies; problems if the script contradicts them."""
+    f2020 = understood.meshlab_2020
+    if f2020 is None or understood.how != "MeshLab 2020.09 name":
+        return []
+    problems = []
+    for python_name, value in f2020.implied.items():
+        if python_name in seen:
+            problems.append(ScriptProblem(source, seen[python_name], name, python_name,
+                                          f"set by the MeshLab 2020.09 filter name itself ({python_name}={value!r})"))
+            continue
+        params.append(ScriptParam(python_name, None, line, python_name, value))
+    return problems
 
 
 def read_filter_script(path_or_xml):
@@ -318,7 +246,7 @@ def read_filter_script(path_or_xml):
         with open(path, "rb") as f:
             data = f.read()
         source, base_dir = path, os.path.dirname(os.path.abspath(path))
-    return _validate(_parse_xml(data, source), source, base_dir)
+    return _validate(parse_xml(data, source), source, base_dir)
 
 
 def run_filter_script(ms, path_or_xml):
