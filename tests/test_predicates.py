@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
-from meshlab_holefill.algorithms.xu2013.front_predicates import point_triangle_distance, segments_cross
+from meshlab_holefill.algorithms.xu2013._front_predicates import point_triangle_distance, segments_cross
 from meshlab_holefill.geometry.segments import is_simple_polygon
 
 

@@ -6,6 +6,8 @@ import numpy as np
 from .quality import corner_angles, cross_rows, face_normals
 from .topology import interior_edges, undirected_keys
 
+__all__ = ["circumcenters", "min_angle_scores", "relax_edges"]
+
 
 def circumcenters(V, F):
     """Circumcentres and circumradii of 3D triangles.

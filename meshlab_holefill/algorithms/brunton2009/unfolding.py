@@ -21,7 +21,7 @@ Readings of what Sec. 3.1 leaves open:
   direction" after an accepted improving step: every vertex remembers the direction of its
   last move; if that move was accepted and lowered E_PE, its next direction is drawn within a
   10 degree cone around it, otherwise uniformly on the sphere.
-* **Schedule.** Acceptance ``exp(-dE / (k T))`` (Metropolis). The paper calls k < 1 the rate of
+* **Schedule.** Metropolis rule: a move is kept with probability ``exp(-dE / (k T))``. The paper calls k < 1 the rate of
   cooling and T the start temperature; as in Press et al.'s schedule the temperature drops by
   the factor k after each stage, ``T <- k T``, a stage being one sweep (every vertex one move).
 * **Stopping rule.** At the start of every stage the loop's projection is tested; a run ends
@@ -61,6 +61,9 @@ import numpy as np
 from ...geometry.pca import fit_plane, plane_frame
 from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
 from ...errors import HoleFillError
+
+__all__ = ["triple_normals", "planarity_terms", "planarity_energy", "colour_classes", "anneal_loop",
+           "project_to_best_plane", "linear_motion_is_simple", "unfold_loop"]
 
 TEMPERATURE_FLOOR = 1e-3  # a run ends when k T < TEMPERATURE_FLOOR * T_start
 CONE_DEGREES = 10.0  # Sec. 3.1: next direction within 10 degrees of the previous one

@@ -39,7 +39,7 @@ Readings of passages the paper leaves open (each documented at the function that
   Prediction points outside the projected boundary polygon or within 0.25 EdgeLen
   of it are left out; beyond the paper, also a point that the triangulation makes the apex
   of a triangle on a loop edge of length L > 2 EdgeLen while within 0.35 L of that edge
-  (``hpde_steps.EDGE_CLEARANCE``, ``LONG_EDGE``; the rest is then triangulated again): range-scan
+  (``triangulation.EDGE_CLEARANCE``, ``LONG_EDGE``; the rest is then triangulated again): range-scan
   borders have loop edges of 2-4 EdgeLen, and such an apex makes a sliver (angle ~145
   degrees, 2r/R 0.1-0.25) that the decimation and the swaps of Sec. 4.7 cannot remove (with
   the pass of ``quality_floor``, face000.ply natural holes 3, 13, 23: min quality 0.098 /
@@ -53,8 +53,8 @@ Readings of passages the paper leaves open (each documented at the function that
   swaps and local relaxation repair what they can, prediction points left on folds are
   dropped for up to 4 rounds. A loop-only triangulation with Liepa's weights is the last
   resort. A chord duplicating a mesh edge is split at its midpoint.
-* Sec. 4.7. NumSmooth = 60 passes of Taubin's non-shrinking lambda|mu filter (ref. [26], as
-  issue #5 asks; the paper names no operator for step 7) on the new vertices, loop fixed,
+* Sec. 4.7. NumSmooth = 60 passes of Taubin's non-shrinking lambda|mu filter (ref. [26]: the
+  paper names no operator for step 7, and Taubin's filter does not shrink the patch) on the new vertices, loop fixed,
   lambda = 0.33 (Taubin's example) and mu from the pass band k_PB = 1/lambda + 1/mu set to
   the patch's lowest Dirichlet frequency k_1 (``taubin_pass_band=0``), so the smoothest
   shape of the patch passes with gain 1 and no mode is amplified. Taubin's closed-surface
@@ -65,14 +65,15 @@ Readings of passages the paper leaves open (each documented at the function that
   (Kobbelt 1998) on the patch glued to its surrounding rings, whose fixed points have the
   uniform turning angles of Sec. 5.2.2, anchored to the predictions (``smoothing_anchor``
   0.15; free passes converge on narrow holes to the thin-plate fill of the loop): closer to
-  the removed surface (0.200 / 1.682 / 1.591), but not the filter the issue names. Edges
+  the removed surface (0.200 / 1.682 / 1.591), but a fit to the predictions over the patch and its
+  rings rather than the smoothing filter of the patch that step 7 describes. Edges
   shorter than ``decimation_rate`` (0.6) * EdgeLen collapse to their midpoint, onto the loop
   vertex when one end is on the loop; min-angle swaps keep each new triangle within 60
   degrees of the old pair's normal. ``relax`` (beyond the paper, on by
   default for the quality target): obtuse-edge splits, collapse of slivers on the loop and
   tangential relaxation, then moves of the free vertices of triangles below quality 0.5
   (improve_worst_vertices), undone if it folds. ``quality_floor`` (beyond the paper, 0.4 by
-  default): the final guarded pass of hpde_quality on the triangles below the floor, the
+  default): the final guarded pass of quality_pass on the triangles below the floor, the
   paper's swaps and collapses plus vertex moves, each kept only if it raises the smallest
   quality of the triangles it changes, keeps them unfolded, and the patch does not cross the
   rings (benchmark, with the clearance above: the 14 natural / large holes below 0.3 and
@@ -142,12 +143,12 @@ PARAMS = [
     ParamSpec("quality_floor", "float", 0.4,
               "Beyond the paper: triangles of 2r/R below this floor are improved at the end of Sec. 4.7 by "
               "guarded edge swaps, vertex moves in the tangent plane and edge collapses, each kept only if it "
-              "raises the smallest quality of the triangles it changes without folding them (hpde_quality); "
+              "raises the smallest quality of the triangles it changes without folding them; "
               "0 = off.", minimum=0.0, maximum=1.0),
     ParamSpec("relax", "int", 10,
               "Beyond the paper: passes of tangential relaxation (then min-angle swaps) after the mesh "
-              "optimisation, evening out the triangles without changing the shape; on by default to meet the "
-              "quality target (2r/R mean >= 0.85, min >= 0.3); 0 = the paper.",
+              "optimisation, evening out the triangles without changing the shape; on by default for triangle "
+              "quality; 0 = the paper.",
               minimum=0, maximum=1000),
 ]
 
@@ -209,7 +210,7 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
 
     Examples
     --------
-    A round hole in the middle of a bowl-shaped grid:
+    A round hole in the middle of a bowl-shaped grid, filled from its HoleContext:
 
     >>> import numpy as np
     >>> from meshlab_holefill.core.holes import boundary_loops, hole_context
@@ -223,7 +224,7 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
     >>> ctx = hole_context(V, F, loop, rings=RINGS)
     >>> patch = fill(ctx)
     >>> validate_patch(patch, ctx.points, ctx.forbidden_edges)  # closes the loop exactly once
-    >>> bool(np.all(patch.vertices[:, 2] < 0.2 * 0.45 ** 2 + 0.05))  # near the bowl's bottom
+    >>> len(patch.faces) == 2 * len(patch.vertices) + len(loop) - 2  # a disc (Euler)
     True
     """
     return patch_hole(

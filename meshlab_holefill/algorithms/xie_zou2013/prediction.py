@@ -14,6 +14,10 @@ import numpy as np
 from . import sections
 from .de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
 
+__all__ = ["arc_points", "arc_height", "circle_start_angle", "forward_tangents", "prediction_counts",
+           "SectionProblem", "section_problems", "turning_angles", "angle_variation", "initial_population",
+           "subset", "predict_y", "predicted_points", "predict_points"]
+
 
 def arc_points(theta, length, s):
     """Points on the circular arc from (0, 0) to (length, 0) leaving (0, 0) at angle theta.

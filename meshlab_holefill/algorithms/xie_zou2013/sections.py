@@ -12,6 +12,11 @@ import numpy as np
 
 from ...geometry.quality import mean_edge_length
 
+__all__ = ["BasePoints", "base_points", "ring_edge_length", "base_point_normals", "pca_segmentation",
+           "dihedral_angle", "segment_boundary", "boundary_frames", "intersection_angle", "best_start",
+           "pair_chain", "correspondences", "pairing_coverage", "section_normals", "border_third_vertices",
+           "ring_intersections"]
+
 # Dihedral comparisons (Sec. 4.2) allow this rounding slack, so that the cube of Fig. 15(b),
 # whose two faces meet at exactly A_c = pi/2, is segmented as the paper reports.
 ANGLE_SLACK = 1e-6

@@ -4,7 +4,7 @@ The boundary and prediction points are projected to the PCA plane of the boundar
 segmented boundary, to the two fitted planes unfolded into one about their common line
 (Fig. 1); Triangle's constrained Delaunay triangulation keeps every boundary edge and its
 topology is applied to the 3D points. A disc layout is the fallback beyond the paper for holes
-no plane can flatten; fold-overs are handled in :mod:`hpde_folds`.
+no plane can flatten; fold-overs are handled in :mod:`.folds`.
 """
 from __future__ import annotations
 
@@ -17,6 +17,10 @@ from ...geometry.triangulate import polygon_signed_area, triangulate_polygon
 from ...errors import HoleFillError
 from . import folds
 from . import sections
+
+__all__ = ["PlaneMap", "points_in_polygon", "distance_to_polygon", "disc_coordinates", "inside_boundary",
+           "lateral_offsets", "triangulate_planar", "edge_sliver_apexes", "triangulate_projection",
+           "split_forbidden_edges", "fitting_plane", "plane_map_for", "triangulate_layout"]
 
 EDGE_CLEARANCE = 0.35  # beyond the paper: a sliver apex nearer than this * L to a loop edge of length L ...
 LONG_EDGE = 2.0  # ... longer than this * EdgeLen is left out (triangulate_planar)
@@ -153,7 +157,7 @@ def inside_boundary(X, BP, inward, clearance):
 
     A point is kept when it is at least ``clearance`` from every base point and its offset
     from the nearest base point has a positive component along that point's into-hole
-    direction (:func:`hpde_sections.boundary_frames`).
+    direction (:func:`.sections.boundary_frames`).
     """
     if len(X) == 0:
         return np.zeros(0, bool)
