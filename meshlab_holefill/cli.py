@@ -8,7 +8,8 @@ import sys
 
 import numpy as np
 
-from .meshlab.registration import parse_text_value
+from .meshlab.meshset_io import load_meshset
+from .meshlab.registration import parse_text_value, shown_value
 
 
 def _params_from_unknown(unknown):
@@ -32,18 +33,10 @@ def _params_from_unknown(unknown):
     return params
 
 
-def _load(path):
-    import pymeshlab
-
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(path)
-    return ms
-
-
 def cmd_fill(args, extra):
-    from . import apply_filter
+    from .meshlab.registration import apply_filter
 
-    ms = _load(args.input)
+    ms = load_meshset(args.input)
     result = apply_filter(ms, args.filter, **_params_from_unknown(extra))
     ms.save_current_mesh(args.output)
     if args.json:
@@ -66,7 +59,7 @@ def _hole_status_table(result):
 def cmd_holes(args, extra):
     from .core.holes import OUTLINE_RATIO, boundary_loops, loop_measures, outline_ratios
 
-    ms = _load(args.input)
+    ms = load_meshset(args.input)
     m = ms.current_mesh()
     V, F = m.vertex_matrix(), m.face_matrix()
     loops = boundary_loops(F)
@@ -135,14 +128,14 @@ def cmd_run(args, extra):
     script = read_filter_script(args.script)  # all problems reported before the mesh is even loaded
     if args.check:
         for step in script.steps:
-            params = ", ".join(f"{k}={_show_value(v)}" for k, v in step.kwargs.items())
+            params = ", ".join(f"{k}={shown_value(v)}" for k, v in step.kwargs.items())
             print(f"#{step.index} line {step.line}: {step.mlx_name!r} -> {step.filter}"
                   f"{' (meshlab_holefill)' if step.ours else ''}({params})")
         print(f"{script.source}: {len(script.steps)} filter(s), no problems")
         return 0
     if args.input is None or args.output is None:
         raise SystemExit("meshlab-holefill run: INPUT and OUTPUT are required (unless --check)")
-    ms = _load(args.input)
+    ms = load_meshset(args.input)
     results = run_filter_script(ms, script)
     ms.save_current_mesh(args.output)
     if args.record:
@@ -156,18 +149,6 @@ def cmd_run(args, extra):
             print(f"#{step.index} {step.mlx_name}" + (f": {summary}" if summary else ""))
     failed = sum(r.get("failed_holes", 0) for r in results)
     return 0 if failed == 0 else 1
-
-
-def _show_value(value):
-    import pymeshlab
-
-    if isinstance(value, (pymeshlab.PureValue, pymeshlab.PercentageValue)):
-        return f"{type(value).__name__}({value.value():g})"
-    if isinstance(value, pymeshlab.Color):
-        return f"Color({value.red()}, {value.green()}, {value.blue()}, {value.alpha()})"
-    if isinstance(value, np.ndarray):
-        return repr(value.tolist())
-    return repr(value)
 
 
 def _register_run(sub):
@@ -187,8 +168,9 @@ _SUBCOMMANDS.append(_register_run)
 def cmd_compare(args, extra):
     import shlex
 
-    from .evaluation.cut_holes import compare
-    from .evaluation.report.tables import _md_table, summary_table, write_report
+    from .evaluation.compare import compare
+    from .evaluation.report.tables import markdown_table as _md_table, summary_table
+    from .evaluation.report.write import write_report
 
     result = compare(args.meshes, holes=args.holes, sizes=args.sizes.split(","), seed=args.seed,
                      filters=args.filters, refinehole=args.refinehole, timeout=args.timeout,

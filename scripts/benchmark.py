@@ -28,14 +28,20 @@ import pymeshlab
 
 import meshlab_holefill
 from meshlab_holefill.evaluation.comparison import BASELINE, MeshCase, parse_fillers, prepare_case, run_comparison
-from meshlab_holefill.evaluation.report.tables import _md_table, short_label, summary_blocks, to_markdown, write_report
+from meshlab_holefill.evaluation.cut_holes import cut_holes
+from meshlab_holefill.evaluation.isolation import IsolatedRunner
+from meshlab_holefill.evaluation.papers import hpde_sphere
+from meshlab_holefill.evaluation.report.labels import filler_colors, short_label
+from meshlab_holefill.evaluation.report.tables import markdown_table, summary_blocks, to_markdown
+from meshlab_holefill.evaluation.report.write import write_report
+from meshlab_holefill.meshlab.mesh_files import load_mesh, mesh_arrays
 
 SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
 CLOSED = ["bunny.obj", "bone.ply", "cow.obj", "airplane.obj", "sphere", "torus"]
 NATURAL = ["bunny10k_textured.obj", "face000.ply"]
 CASES = CLOSED + NATURAL
-# Ours with defaults; the variants the issues ask to measure (Xu et al.'s Table 1 membrane comparison,
-# Hu's optional fairing); MeshLab's Close Holes with its defaults and with every hole allowed.
+# Ours with defaults; two measured variants (Xu et al.'s Table 1 membrane comparison, Hu's optional
+# fairing); MeshLab's Close Holes with its defaults and with every hole allowed.
 DEFAULT_FILTERS = ("ours,lssvm_poisson:laplacian_prediction=zero,min_angle_bilateral:fairing=thinplate:iterations=0:smoothing=10,"
                    "baseline")
 
@@ -50,21 +56,19 @@ def _torus_distance(X, R=1.0, r=0.4):
 
 def load_case(name):
     """The suite's meshes as MeshCase (analytic distance functions for the sphere and torus)."""
-    ms = pymeshlab.MeshSet()
     analytic = area = None
-    if name == "sphere":
-        ms.create_sphere(subdiv=5)
-        analytic, area = _sphere_distance, 4 * np.pi
-    elif name == "torus":
-        ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=192, vsubdiv=96)
-        analytic, area = _torus_distance, 4 * np.pi ** 2 * 1.0 * 0.4
-    elif name == "face000.ply":
-        ms.load_new_mesh(os.path.join(SAMPLES, "rangemaps", name))
+    if name in ("sphere", "torus"):
+        ms = pymeshlab.MeshSet()
+        if name == "sphere":
+            ms.create_sphere(subdiv=5)
+            analytic, area = _sphere_distance, 4 * np.pi
+        else:
+            ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=192, vsubdiv=96)
+            analytic, area = _torus_distance, 4 * np.pi ** 2 * 1.0 * 0.4
+        V, F = mesh_arrays(ms)
     else:
-        ms.load_new_mesh(os.path.join(SAMPLES, name))
-    m = ms.current_mesh()
-    return MeshCase(name, np.asarray(m.vertex_matrix(), np.float64), np.asarray(m.face_matrix(), np.int64),
-                    analytic=analytic, surface_area=area)
+        V, F = load_mesh(os.path.join(SAMPLES, "rangemaps", name) if name == "face000.ply" else os.path.join(SAMPLES, name))
+    return MeshCase(name, V, F, analytic=analytic, surface_area=area)
 
 
 # ----------------------------------------------------------------------------- scaling run
@@ -78,19 +82,16 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALIN
 
     The holes are grown from the same centres with the same boundary-size targets at every
     level, so each filter faces holes of the same boundary complexity in ever larger meshes.
-    ``sizes`` are compare.SIZE_CLASSES keys (all holes compact); levels before
+    ``sizes`` are cut_holes.SIZE_CLASSES keys (all holes compact); levels before
     ``first_level`` are subdivided but not run (the speed case runs level 1 only).
 
     Returns
     -------
     list of dict rows: faces, filter, run seconds, per-hole seconds (filters that report them)
     """
-    from meshlab_holefill.evaluation.cut_holes import cut_holes
-
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(os.path.join(SAMPLES, "bunny.obj"))
-    base = ms.current_mesh()
-    V, F = np.asarray(base.vertex_matrix(), np.float64), np.asarray(base.face_matrix(), np.int64)
+    V, F = mesh_arrays(ms)
     _, holes = cut_holes(V, F, sizes=sizes, shapes=["compact"] * len(sizes), seed=seed)
     centers = np.array([h.center for h in holes])
     rows = []
@@ -99,13 +100,10 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALIN
             ms.meshing_surface_subdivision_loop(iterations=1, threshold=pymeshlab.PercentageValue(0))
         if level < first_level:
             continue
-        m = ms.current_mesh()
-        case = MeshCase(f"bunny_{m.face_number() // 1000}k", np.asarray(m.vertex_matrix(), np.float64),
-                        np.asarray(m.face_matrix(), np.int64))
+        V_level, F_level = mesh_arrays(ms)
+        case = MeshCase(f"bunny_{len(F_level) // 1000}k", V_level, F_level)
         t0 = time.perf_counter()
-        from meshlab_holefill.evaluation.cut_holes import cut_holes as cut
-
-        _, cut_h = cut(case.V, case.F, sizes=sizes, shapes=["compact"] * len(sizes), centers=centers, seed=seed)
+        _, cut_h = cut_holes(case.V, case.F, sizes=sizes, shapes=["compact"] * len(sizes), centers=centers, seed=seed)
         removed = np.zeros(len(case.F), bool)
         removed[np.concatenate([h.face_indices for h in cut_h])] = True
         prepared = prepare_case(MeshCase(case.name, case.V, case.F, removed=removed))
@@ -132,8 +130,6 @@ def scaling_plot(rows, path):
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from meshlab_holefill.evaluation.report.tables import filler_colors
 
     labels = list(dict.fromkeys(r["filler"] for r in rows))
     colors = filler_colors(labels)
@@ -262,16 +258,9 @@ def papers_table(result, command, seed=0, timeout=600.0):
     lines += ["", f"**{title}** — `{name}`", "",
               "| | NP | NOT | NHT | MPE | APE | RT (s) |", "|---|---|---|---|---|---|---|",
               "| paper (MATLAB, 2.8 GHz) | 1600 | 3040 | 1210 | 1.77E-02 | 7.35E-03 | 9.3 |"]
-    try:
-        from meshlab_holefill.evaluation.papers import hpde_sphere as hpde_experiment  # noqa: F401
-        present = hasattr(hpde_experiment, "sphere_experiment")
-    except ImportError:
-        present = False
-    if name not in registered or not present:
+    if name not in registered:
         lines.append("| ours | not registered | | | | | |")
     else:
-        from meshlab_holefill.evaluation.comparison import IsolatedRunner
-
         with IsolatedRunner() as runner:
             reply = runner.run({"kind": "call", "function": "meshlab_holefill.evaluation.papers.hpde_sphere.sphere_experiment",
                                 "kwargs": {"seed": seed}}, timeout)
@@ -287,12 +276,10 @@ def papers_table(result, command, seed=0, timeout=600.0):
 
 def xie_all_fillers(fillers, seed, timeout):
     """Eq. 17 (MPE/APE over the new vertices of both holes) on the paper's sphere, for every filler."""
-    from meshlab_holefill.evaluation.papers.hpde_sphere import SPHERE_HOLES, ellipse_hole, uv_sphere
-
-    V, F = uv_sphere()
+    V, F = hpde_sphere.uv_sphere()
     removed = np.zeros(len(F), bool)
-    for hole in SPHERE_HOLES:
-        removed |= ellipse_hole(V, F, *hole)
+    for hole in hpde_sphere.SPHERE_HOLES:
+        removed |= hpde_sphere.ellipse_hole(V, F, *hole)
     res = run_comparison(None, cases=[prepare_case(MeshCase("paper sphere", V, F, removed=removed))],
                          filters=fillers, timeout=timeout, progress=False)
     out = []
@@ -333,7 +320,7 @@ def main(argv=None):
     ap.add_argument("--scaling-levels", type=int, default=4)
     ap.add_argument("--papers", action="store_true", help="also the papers-vs-ours table")
     ap.add_argument("--speed-case", action="store_true",
-                    help="also issue #2's speed case: holes of ~50/200/250 edges in a ~200k-face mesh")
+                    help="also the speed case: holes of ~50/200/250 edges in a ~200k-face mesh")
     ap.add_argument("--update-readme", action="store_true",
                     help="replace the README's Results section with this run's tables")
     args = ap.parse_args(argv)
@@ -365,15 +352,15 @@ def main(argv=None):
         text += ("\n**Scaling** (the same three holes, ~20/60/150 boundary edges, in the bunny subdivided; "
                  "'filling the holes' is the filters' own per-hole time, the rest is the O(n) boundary search, "
                  "mesh transfer and merge; 'peak MB' is the worker's peak resident memory while it builds the "
-                 "MeshSet and runs the filter, above its memory before):\n\n" + _md_table(*scaling_table(rows)) + f"\n\nPlot: `{args.out}/scaling.png`.\n")
+                 "MeshSet and runs the filter, above its memory before):\n\n" + markdown_table(*scaling_table(rows)) + f"\n\nPlot: `{args.out}/scaling.png`.\n")
     if args.speed_case:
         rows = scaling_run(plain, args.seed, 2, max(args.timeout, 180.0), None, SPEED_CASE_SIZES, first_level=1)
         with open(os.path.join(args.out, "speed_case.json"), "w") as fh:
             json.dump(rows, fh, indent=1)
         edges = "/".join(str(e) for e in rows[0]["hole_edges"]) if rows else "?"
-        text += (f"\n**Speed case** (issue #2: three holes of about 50, 200 and 250 boundary edges, here {edges}, in the "
-                 "bunny Loop-subdivided once; target for `min_angle_bilateral`: whole run under 1.5 s):\n\n"
-                 + _md_table(*scaling_table(rows)) + "\n")
+        text += (f"\n**Speed case** (three holes of about 50, 200 and 250 boundary edges, here {edges}, in the "
+                 "bunny Loop-subdivided once; reference for `min_angle_bilateral`: whole run under 1.5 s):\n\n"
+                 + markdown_table(*scaling_table(rows)) + "\n")
     if args.papers and result is not None:
         papers = papers_table(result, command, args.seed, max(args.timeout, 180.0))
         with open(os.path.join(args.out, "papers.md"), "w") as fh:

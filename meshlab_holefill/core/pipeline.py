@@ -1,9 +1,11 @@
-"""The pipeline every hole-filling filter shares: find holes, fill each, validate, merge.
+"""The per-hole pipeline every filter shares, on arrays: find holes, fill each, validate, check, merge.
 
 An algorithm only provides ``fill(ctx, **params) -> Patch`` on one :class:`HoleContext`;
-this module does the rest of the filter contract (DESIGN.md): hole selection by size and
-selection, all-or-nothing per hole, patch validation, the optional self-intersection
-check, bit-exact originals, attributes, and the result dictionary.
+this module does the rest of the filter contract: hole selection by size and selection,
+all-or-nothing per hole, patch validation, the optional self-intersection check, bit-exact
+originals, attributes carried over, and the per-hole report. The MeshSet filters
+(meshlab.close_holes) and the array API (:func:`meshlab_holefill.fill_holes`) both call
+:func:`fill_mesh_holes`.
 """
 from __future__ import annotations
 
@@ -12,11 +14,16 @@ import time
 
 import numpy as np
 
-from ..geometry.intersections import faces_intersecting
+from dataclasses import dataclass
+
+from ..errors import HoleFillError
+from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
+from .crossings import clashing_patches, crossing_patches, face_boxes_near, patch_box, patch_intersections
 from .holes import OUTLINE_RATIO, boundary_loops, edge_summary, hole_context, outline_ratios, vertex_face_incidence
-from ..meshlab.meshset_io import check_manifold_edges, current_mesh_arrays, extend_attributes, refine_mesh_arrays, replace_current_mesh
-from .patch import HoleFillError, merge_patches, validate_patch
 from .parameters import ParamSpec
+from .patch import merge_patches, validate_patch
+
+__all__ = ["COMMON_PARAMS", "FilledMesh", "fill_mesh_holes"]
 
 COMMON_PARAMS = [
     ParamSpec("maxholesize", "int", 1000,
@@ -35,88 +42,41 @@ COMMON_PARAMS = [
 ]
 
 
-def face_boxes_near(V, F, boxes):
-    """Mesh faces whose bounding box overlaps at least one of ``boxes``, found in one pass.
+@dataclass
+class FilledMesh:
+    """A mesh after :func:`fill_mesh_holes`: originals first (bit-exact), then the new elements.
 
-    The self-intersection check needs, per patch, the mesh faces near it. Scanning every
-    face's box per hole costs O(m) per hole (0.2 s per hole at 3.6M faces); instead every
-    vertex gets an outcode (Cohen-Sutherland: one bit per side of the union of the patch
-    boxes it lies beyond), a face misses the union box exactly when its three vertices share
-    a bit, and only the few faces left get their boxes for the per-patch test. The outcodes
-    cost one byte per vertex and one gather of bytes per face (no (m, 3, 3) float temporary).
-
-    Parameters
+    Attributes
     ----------
-    V : (n, 3) float
-    F : (m, 3) int
-    boxes : (h, 2, 3) float
-        Lower and upper corners of the query boxes (already padded).
-
-    Returns
-    -------
-    near : (c,) int64
-        Candidate face indices (overlapping the union box).
-    lo, hi : (c, 3) float
-        Their boxes, for the per-patch test.
+    source : MeshArrays
+        The mesh the holes were filled in (after any border refinement).
+    V : (n2, 3) float64
+    F : (m2, 3) int64
+    vertex_attrs, face_attrs : dict name -> array  (rows for V, F)
+    wedge_texcoords : (3 m2, 2) float64 or None
+    select_faces : (k,) int64 or None
+        Rows of F to select (the new faces, with ``newfaceselected``).
+    changed : bool
+        Whether anything differs from the mesh given (a patch merged or a border refined).
     """
-    union_lo, union_hi = boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)
-    code = np.zeros(len(V), np.uint8)
-    for axis in range(3):
-        code |= (V[:, axis] < union_lo[axis]).astype(np.uint8) << (2 * axis)
-        code |= (V[:, axis] > union_hi[axis]).astype(np.uint8) << (2 * axis + 1)
-    near = np.flatnonzero((code[F[:, 0]] & code[F[:, 1]] & code[F[:, 2]]) == 0)
-    corners = V[F[near]]
-    lo, hi = corners.min(axis=1), corners.max(axis=1)
-    return near, lo, hi
+
+    source: MeshArrays
+    V: np.ndarray
+    F: np.ndarray
+    vertex_attrs: dict
+    face_attrs: dict
+    wedge_texcoords: np.ndarray | None
+    select_faces: np.ndarray | None
+    changed: bool
 
 
-def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, loop):
-    """Indices of patch faces that intersect the existing mesh near the hole, or the patch itself.
-
-    Parameters
-    ----------
-    patch_points : (k + p, 3) float
-        Loop points then new vertices (``Patch.all_points``).
-    patch_faces : (q, 3) int
-        In loop-local numbering.
-    mesh_V, mesh_F : arrays of the mesh.
-    candidates : tuple ``(near, lo, hi)`` from :func:`face_boxes_near`
-        Mesh faces that may be near any patch; those overlapping this patch's box are tested.
-    loop : (k,) int
-        Mesh vertex ids of the loop (shared vertices are not intersections).
-    """
-    near_all, face_lo, face_hi = candidates
-    lo, hi = patch_points.min(axis=0), patch_points.max(axis=0)
-    pad = 1e-9 * float(np.linalg.norm(hi - lo))
-    near = near_all[np.all(face_hi >= lo - pad, axis=1) & np.all(face_lo <= hi + pad, axis=1)]
-    used = np.unique(mesh_F[near].ravel()) if len(near) else np.zeros(0, np.int64)
-    # Local vertex array: loop vertices keep their loop-local numbers so shared vertices
-    # between patch and mesh faces are recognised as shared.
-    others = np.setdiff1d(used, loop)
-    k, p = len(loop), len(patch_points) - len(loop)
-    X = np.concatenate([patch_points, mesh_V[others]])
-    ids = np.concatenate([loop, others])
-    sorter = np.argsort(ids)
-    local_mesh = sorter[np.searchsorted(ids, mesh_F[near], sorter=sorter)].reshape(-1, 3)
-    local_mesh = np.where(local_mesh >= k, local_mesh + p, local_mesh)
-    allF = np.concatenate([patch_faces, local_mesh])
-    q = len(patch_faces)
-    hits = faces_intersecting(X, allF, np.arange(q), np.arange(len(allF)))
-    return hits
-
-
-def _patch_box(points):
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    pad = 1e-9 * float(np.linalg.norm(hi - lo))
-    return np.stack([lo - pad, hi + pad])
-
-
-def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None):
-    """Run one hole-filling algorithm on every eligible hole of the current mesh.
+def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepare=None):
+    """Run one hole-filling algorithm on every eligible hole of a mesh given as arrays.
 
     Parameters
     ----------
-    ms : pymeshlab.MeshSet
+    arrays : MeshArrays
+        The mesh and its attributes (``face_attrs['selected']`` for ``selected``).
     fill : callable ``fill(ctx, **algorithm_params) -> Patch``
     params : dict
         Validated filter parameters (common ones and the algorithm's).
@@ -131,20 +91,21 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
         original vertices keep positions and order). ``refinement`` has ``V``, ``F``
         (originals first, split faces' second children after the m original rows),
         ``loops`` (the refined loops, in the order given), ``edge_vertices``,
-        ``edge_weights``, ``face_parents`` (see :func:`meshset_io.refine_mesh_arrays`) and
+        ``edge_weights``, ``face_parents`` (see :func:`.attributes.refine_mesh_arrays`) and
         ``split_counts``. When a hole with a refined border fails, the holes are filled
         again without it, so its border is left as it was.
 
     Returns
     -------
-    dict
+    filled : FilledMesh
+        The filled mesh and its attributes.
+    result : dict
         ``closed_holes``, ``new_faces``, ``new_vertices``, ``skipped_holes``,
         ``failed_holes``, ``holes`` (per-hole dicts) and ``seconds``; with ``prepare`` also
         ``split_boundary_edges`` (new faces and vertices then count the patches only; the
         split faces' second children are rows m .. m + split_boundary_edges - 1).
     """
     t_start = time.perf_counter()
-    arrays = current_mesh_arrays(ms)
     V, F = arrays.V, arrays.F
     he, he_faces, bad_edges = edge_summary(F)
     check_manifold_edges(F, arrays.label, bad_edges)
@@ -179,14 +140,13 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
             base[2][i] = dict(report[i], split_boundary_edges=0)
         todo = [i for i in todo if i not in undo]
     n_new_faces = len(F2) - len(F)
-    if n_new_faces or refinement is not None:
-        if n_new_faces:
-            vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops,
-                                                      [len(p.vertices) for p in patches])
-        else:  # borders refined, no hole closed
-            vattrs, fattrs, wedge = arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords
-        select = np.arange(len(F), len(F2)) if params["newfaceselected"] else None
-        replace_current_mesh(ms, arrays, V2, F2, vattrs, fattrs, wedge, select_faces=select)
+    if n_new_faces:
+        vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops, [len(p.vertices) for p in patches])
+    else:  # borders refined, or nothing closed
+        vattrs, fattrs, wedge = arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords
+    select = np.arange(len(F), len(F2)) if params["newfaceselected"] else None
+    filled = FilledMesh(arrays, V2, F2, vattrs, fattrs, wedge, select,
+                        changed=bool(n_new_faces) or refinement is not None)
     statuses = [h["status"] for h in report]
     result = {
         "closed_holes": statuses.count("closed"),
@@ -199,7 +159,7 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
     }
     if prepare is not None:
         result["split_boundary_edges"] = int(len(refinement.edge_weights)) if refinement is not None else 0
-    return result
+    return filled, result
 
 
 def _context_key(ctx):
@@ -274,7 +234,7 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills):
             continue
         filled.append((i, ctx, outcome, seconds))
     if params["selfintersection"] and filled:
-        candidates = face_boxes_near(V, F, np.stack([_patch_box(p.all_points(c.points)) for _, c, p, _ in filled]))
+        candidates = face_boxes_near(V, F, np.stack([patch_box(p.all_points(c.points)) for _, c, p, _ in filled]))
     done_loops, patches, closed_ids, crossing = [], [], [], []
     for i, ctx, patch, seconds in filled:
         entry = report[i]
@@ -296,7 +256,7 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills):
         _explain_outlines(V, F, crossing, report)
     V2, F2 = merge_patches(V, F, done_loops, patches)
     # Patches checked one by one can still meet one another: withdraw the later ones.
-    checks = ([_crossing_patches] if params["selfintersection"] else []) + [_clashing_patches]
+    checks = ([crossing_patches] if params["selfintersection"] else []) + [clashing_patches]
     for check in checks:
         kept = check(V2, F, F2, done_loops, patches, report, closed_ids)
         if len(kept) < len(patches):
@@ -304,96 +264,6 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills):
                                                [closed_ids[j] for j in kept])
             V2, F2 = merge_patches(V, F, done_loops, patches)
     return arrays, V, F, V2, F2, done_loops, patches, refinement, report
-
-
-def _withdraw(entry, reason):
-    """Report a hole whose validated patch is taken back as failed."""
-    entry.update(status="failed", reason=reason)
-    for name in ("new_vertices", "new_faces"):
-        entry.pop(name, None)
-
-
-def _crossing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
-    """Patches each clear of the mesh can still cross one another (two holes close together).
-
-    Only patches whose bounding boxes overlap are tested, face against face. Taken in hole
-    order, a patch crossing one already kept is withdrawn and its hole reported failed.
-
-    Returns
-    -------
-    list of int  positions in ``patches`` of the patches kept
-    """
-    from ..geometry.intersections import intersecting_pairs
-
-    if len(patches) < 2:
-        return list(range(len(patches)))
-    sizes = [len(p.faces) for p in patches]
-    start = len(F) + np.concatenate([[0], np.cumsum(sizes)])
-    boxes = np.stack([_patch_box(V2[np.unique(F2[start[j]:start[j + 1]])]) for j in range(len(patches))])
-    overlap = np.all((boxes[:, None, 0] <= boxes[None, :, 1]) & (boxes[None, :, 0] <= boxes[:, None, 1]), axis=2)
-    np.fill_diagonal(overlap, False)
-    near = np.flatnonzero(overlap.any(axis=1))
-    if len(near) == 0:
-        return list(range(len(patches)))
-    faces = np.concatenate([np.arange(start[j], start[j + 1]) for j in near])
-    pairs = intersecting_pairs(V2, F2, faces, faces)
-    owner = np.searchsorted(start, pairs, side="right") - 1
-    crossing = {tuple(sorted(p)) for p in owner[owner[:, 0] != owner[:, 1]].tolist()}
-    kept = []
-    for j in range(len(patches)):
-        other = next((i for i in kept if (min(i, j), max(i, j)) in crossing), None)
-        if other is None:
-            kept.append(j)
-            continue
-        _withdraw(report[closed_ids[j]], f"patch would intersect the patch of hole {closed_ids[other]}")
-    return kept
-
-
-def _clashing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
-    """Patches validated alone can still clash where two holes share a pinched vertex.
-
-    When the merged mesh F2 has non-manifold edges, the patches are taken back in hole
-    order and each is kept only if its faces, with the original faces and the patches kept
-    so far, leave every such edge with at most two faces; the others are withdrawn and their
-    holes reported failed. The first of two clashing patches is kept, and no hole is ever
-    left half-filled.
-
-    Returns
-    -------
-    list of int  positions in ``patches`` of the patches kept
-    """
-    from .holes import nonmanifold_edges
-
-    shared = np.concatenate(done_loops) if done_loops else np.zeros(0, np.int64)
-    if len(F2) == len(F) or len(np.unique(shared)) == len(shared):
-        return list(range(len(patches)))  # no two patches meet: nothing can clash
-    bad = nonmanifold_edges(F2)
-    if len(bad) == 0:
-        return list(range(len(patches)))
-    n = int(F2.max()) + 1
-    E = np.sort(np.stack([F2[:, [0, 1]], F2[:, [1, 2]], F2[:, [2, 0]]], axis=1).reshape(-1, 2), axis=1)
-    key = E[:, 0] * n + E[:, 1]
-    face = np.repeat(np.arange(len(F2)), 3)
-    on_bad = np.isin(key, bad[:, 0] * n + bad[:, 1])
-    key, face = key[on_bad], face[on_bad]
-    used = {}
-    for k in key[face < len(F)].tolist():
-        used[k] = used.get(k, 0) + 1
-    owner = np.repeat(np.arange(len(patches)), [len(p.faces) for p in patches])
-    patch_of = owner[face[face >= len(F)] - len(F)]
-    patch_keys = key[face >= len(F)]
-    keep = []
-    for j in range(len(patches)):
-        mine = {}
-        for k in patch_keys[patch_of == j].tolist():
-            mine[k] = mine.get(k, 0) + 1
-        if all(used.get(k, 0) + c <= 2 for k, c in mine.items()):
-            keep.append(j)
-            for k, c in mine.items():
-                used[k] = used.get(k, 0) + c
-        else:
-            _withdraw(report[closed_ids[j]], "patch clashes with another patch at a shared vertex")
-    return keep
 
 
 def _explain_outlines(V, F, crossing, report):

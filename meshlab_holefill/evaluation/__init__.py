@@ -1,1 +1,17 @@
-"""evaluation."""
+"""Comparing the hole fillers: holes with ground truth, isolated runs, metrics, reference figures, the report.
+
+The evaluation layer sits above ``meshlab`` (it runs the registered filters and MeshLab's own
+through :mod:`meshlab_holefill.meshlab`, the only package that imports pymeshlab) and below
+the command line (``cli``); nothing below it imports it. Modules:
+
+- :mod:`.compare`: ``compare()``, the one call (cases -> runs -> metrics -> report);
+- :mod:`.cut_holes`: holes with known ground truth cut into closed meshes;
+- :mod:`.comparison`: cases, fillers, running each filler on each case, the hole rows;
+- :mod:`.isolation`: the worker processes with timeouts;
+- :mod:`.metrics`: distances, quality, normals, creases, the corner quality bound;
+- :mod:`.reference_targets`: reference figures and where each filter stands against them;
+- :mod:`.report`: tables, charts, per-hole pictures and the report files;
+- :mod:`.papers`: the papers' own experiments (Xie and Zou's sphere).
+"""
+
+__all__ = ["compare", "comparison", "cut_holes", "isolation", "metrics", "papers", "reference_targets", "report"]

@@ -2,7 +2,7 @@
 
 Each filler runs on each case in a spawned worker (:mod:`.isolation`), so one filter crashing
 or hanging is reported and the others still run. Only arrays travel to and from the worker.
-All metrics are computed here in the parent, by :func:`compare.hole_metrics`.
+All metrics are computed here in the parent, by :func:`.metrics.hole_metrics`.
 """
 from __future__ import annotations
 
@@ -11,11 +11,18 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.sparse.csgraph import connected_components
 
-from .cut_holes import SIZE_CLASSES, assign_patches, compact_mesh, cut_holes, hole_metrics, hole_plan, mesh_checks
 from ..core.holes import OUTLINE_RATIO, boundary_halfedges, boundary_loops, outline_ratios
-from .metrics import corner_quality_bound
-from .isolation import IsolatedRunner, _json_safe, execute_task  # noqa: F401  (execute_task: public API)
+from ..geometry.topology import face_adjacency
+from ..meshlab.mesh_files import is_mesh, load_mesh, mesh_arrays
+from ..meshlab.registration import filter_list, is_builtin_filter, parse_text_value
+from .cut_holes import SIZE_CLASSES, cut_holes, hole_plan
+from .isolation import IsolatedRunner, json_safe
+from .metrics import assign_patches, compact_mesh, corner_quality_bound, hole_metrics, mesh_checks
+
+__all__ = ["BASELINE", "Comparison", "Filler", "Hole", "MeshCase", "PreparedCase", "as_case", "default_fillers",
+           "evaluate_run", "parse_fillers", "prepare_case", "resolve_params", "run_comparison"]
 
 BASELINE = "meshing_close_holes"
 
@@ -62,6 +69,20 @@ class Hole:
 
 @dataclass
 class PreparedCase:
+    """A case ready to run: the mesh with its holes (V0, F0), the evaluated holes, notes.
+
+    Attributes
+    ----------
+    name : str
+    kind : str  "cut holes", "natural holes" or "given holes"
+    V0 : (n0, 3) float64, F0 : (m0, 3) int64  the mesh the fillers get
+    diag : float  bounding-box diagonal of the source mesh (per-mille figures)
+    holes : list of Hole
+    notes : list of str  holes that could not be cut or are not evaluated, and why
+    analytic, surface_area : as in MeshCase
+    source_faces : int  faces of the source mesh before holes were cut
+    """
+
     name: str
     kind: str  # "cut holes" | "natural holes" | "given holes"
     V0: np.ndarray
@@ -82,18 +103,18 @@ class PreparedCase:
                           for h in self.holes]}
 
 
-def load_mesh(path):
-    """(V, F) float64 / int64 of a mesh file (via pymeshlab)."""
-    import pymeshlab
-
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(str(path))
-    m = ms.current_mesh()
-    return np.asarray(m.vertex_matrix(), np.float64), np.asarray(m.face_matrix(), np.int64)
-
-
 def as_case(mesh, index=0):
-    """A MeshCase from a path, pymeshlab.Mesh, (V, F) tuple or MeshCase."""
+    """A MeshCase from a path, pymeshlab.Mesh (or MeshSet: its current mesh), (V, F) tuple or MeshCase.
+
+    Parameters
+    ----------
+    mesh : str, os.PathLike, pymeshlab.Mesh, pymeshlab.MeshSet, ((n, 3) float, (m, 3) int) or MeshCase
+    index : int  names an unnamed mesh ``mesh{index}``
+
+    Returns
+    -------
+    MeshCase
+    """
     if isinstance(mesh, MeshCase):
         return mesh
     if isinstance(mesh, (str, os.PathLike)):
@@ -101,9 +122,8 @@ def as_case(mesh, index=0):
         return MeshCase(os.path.basename(str(mesh)), V, F)
     if isinstance(mesh, tuple) and len(mesh) == 2:
         return MeshCase(f"mesh{index}", np.asarray(mesh[0], np.float64), np.asarray(mesh[1], np.int64))
-    if hasattr(mesh, "vertex_matrix"):
-        return MeshCase(f"mesh{index}", np.asarray(mesh.vertex_matrix(), np.float64),
-                        np.asarray(mesh.face_matrix(), np.int64))
+    if is_mesh(mesh):
+        return MeshCase(f"mesh{index}", *mesh_arrays(mesh))
     raise TypeError(f"cannot compare on {type(mesh).__name__}: give a path, (V, F), pymeshlab.Mesh or MeshCase")
 
 
@@ -160,7 +180,7 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
     ----------
     case : MeshCase
     holes : int  holes to cut into a closed mesh (sizes cycle, compact and irregular shapes alternate)
-    sizes : sequence of str  keys of compare.SIZE_CLASSES
+    sizes : sequence of str  keys of cut_holes.SIZE_CLASSES
     seed : int
     maxholesize : int  natural holes with more boundary edges are not evaluated
 
@@ -175,10 +195,6 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
         if case.removed is not None:
             kind = "given holes"
             removed = np.flatnonzero(np.asarray(case.removed, bool))
-            from scipy.sparse.csgraph import connected_components
-
-            from .cut_holes import face_adjacency
-
             _, label = connected_components(face_adjacency(F[removed]), directed=False)
             groups = [removed[label == c] for c in np.unique(label)]
             specs = [("given", "given", None) for _ in groups]
@@ -241,15 +257,11 @@ class Filler:
 
 
 def _parse_value(text):
-    from ..meshlab.registration import parse_text_value
-
     # "all" (maxholesize covering every hole), enum names and "5%" stay text here.
     return parse_text_value(text, percentages=False)
 
 
 def _resolve_name(name):
-    from ..meshlab.registration import filter_list, is_builtin_filter
-
     ours = filter_list()
     if name in ours or name == BASELINE or is_builtin_filter(name):
         return name
@@ -265,9 +277,11 @@ def default_fillers(refinehole=False):
     ``meshing_close_holes`` runs with its defaults (holes up to 30 edges) and with a
     ``maxholesize`` covering every hole ("all", resolved per comparison), optionally also with
     ``refinehole=True``.
-    """
-    from ..meshlab.registration import filter_list
 
+    Returns
+    -------
+    list of Filler
+    """
     out = [Filler(name, name) for name in filter_list()]
     out += [Filler(f"{BASELINE} (default)", BASELINE),
             Filler(f"{BASELINE} (all holes)", BASELINE, {"maxholesize": "all"})]
@@ -289,8 +303,6 @@ def parse_fillers(spec, refinehole=False):
     -------
     list of Filler
     """
-    from ..meshlab.registration import filter_list
-
     if spec is None or spec == "" or spec == []:
         return default_fillers(refinehole)
     items = spec if isinstance(spec, (list, tuple)) else [spec]
@@ -368,10 +380,25 @@ def _context_faces(V0, F0, loop):
 
 
 def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
-    """Turn one worker reply into a run row, hole rows and picture data."""
+    """Turn one worker reply into a run row, hole rows and picture data.
+
+    Parameters
+    ----------
+    case : PreparedCase
+    filler : Filler
+    reply : dict  :func:`.isolation.execute_task`'s reply (``V_new``/``F_new`` or ``V``/``F``, ``result``)
+    resolved_params : dict  the parameters the filter ran with (:func:`resolve_params`)
+    full_metrics : bool  all metrics, or only closed/reason/time/counts
+
+    Returns
+    -------
+    run : dict  one row for the run
+    holes : list of dict  one row per hole of the case
+    pictures : dict  {hole index: {"V": (p, 3) float64, "F": (q, 3) int64, "quality": (q,), "face_distance": (q,)}}
+    """
     V0, F0 = case.V0, case.F0
     run = {"case": case.name, "filler": filler.label, "filter": filler.filter,
-           "params": _json_safe(resolved_params), "status": reply["status"], "error": reply.get("error"),
+           "params": json_safe(resolved_params), "status": reply["status"], "error": reply.get("error"),
            "seconds": reply.get("seconds"), "memory_mb": reply.get("memory_mb")}
     pictures = {}
     base = [{"case": case.name, "filler": filler.label, "filter": filler.filter, "hole": h.index,
@@ -436,7 +463,17 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
 
 
 def resolve_params(filler, cases):
-    """The filler's parameters for these cases ("all" -> a maxholesize covering every hole)."""
+    """The filler's parameters for these cases ("all" -> a maxholesize covering every hole).
+
+    Parameters
+    ----------
+    filler : Filler
+    cases : list of PreparedCase
+
+    Returns
+    -------
+    dict
+    """
     params = dict(filler.params)
     if params.get("maxholesize") == "all":
         largest = max([h.boundary_edges for c in cases for h in c.holes] or [3])
@@ -448,7 +485,7 @@ def run_comparison(meshes, holes=4, sizes=("small", "medium", "large"), seed=0, 
                    timeout=300.0, maxholesize=1000, progress=True, full_metrics=True, cases=None):
     """Prepare the cases, run every filler on each in an isolated worker, measure.
 
-    Parameters are those of :func:`meshlab_holefill.evaluation.cut_holes.compare`; ``cases`` may pass
+    Parameters are those of :func:`.compare.compare`; ``cases`` may pass
     already prepared cases (then ``meshes`` is ignored), ``full_metrics=False`` keeps only
     closed/reason/time/counts (for the scaling run).
 
@@ -494,7 +531,7 @@ def run_comparison(meshes, holes=4, sizes=("small", "medium", "large"), seed=0, 
         bar.close()
     settings = {"holes": holes, "sizes": list(sizes), "seed": seed, "timeout": timeout, "maxholesize": maxholesize,
                 "refinehole": refinehole, "fillers": [{"label": f.label, "filter": f.filter,
-                                                       "params": _json_safe(resolve_params(f, cases))}
+                                                       "params": json_safe(resolve_params(f, cases))}
                                                       for f in fillers],
                 "cores": os.cpu_count()}
     return Comparison([c.summary() for c in cases], fillers, runs, rows, settings,

@@ -1,30 +1,26 @@
-"""Compare hole fillers on a user's meshes: holes with known ground truth, metrics, one report.
+"""Holes with known ground truth cut into closed meshes: star-shaped face regions of a chosen boundary size.
 
-``compare(meshes, report="dir")`` is the one call (also ``meshlab-holefill compare``; this
-module is callable, so ``meshlab_holefill.evaluation.cut_holes(...)`` works): a closed mesh gets holes cut
-with ground truth (:func:`cut_holes`), a mesh with holes is filled as it is; every filler runs
-in an isolated worker (:mod:`.comparison`); :func:`hole_metrics` measures each patch; the
-report (:mod:`.report`, :mod:`.render`) has tables, charts and pictures.
-
-This module holds the hole cutting; the metrics are in :mod:`.metrics` (re-exported here).
+:func:`cut_holes` removes one face region per requested size class (``SIZE_CLASSES``: target
+boundary edges) and returns the removed faces as ground truth; :func:`hole_plan` says which
+size and shape each of a comparison's holes gets. The comparison (:mod:`.comparison`) measures
+every filler's patch against these removed faces.
 """
 from __future__ import annotations
 
-import sys
-import time
-import types
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
-from ..geometry.quality import edge_lengths, face_normals
 from ..core.holes import boundary_loops
-# The metrics live in .metrics; they are part of this module's API too.
-from .metrics import QUALITY_BINS, assign_patches, border_dihedrals, closest_faces, closest_point_on_triangles, compact_mesh, hausdorff_one_way, hole_metrics, mesh_checks, patch_metrics
+from ..geometry.pca import plane_frame
+from ..geometry.quality import edge_lengths, face_normals
+from ..geometry.topology import face_adjacency
 
-# Target boundary sizes (edges) of the hole classes ("irregular" is kept for old callers:
-# a large irregular hole).
+__all__ = ["IRREGULAR_SHAPE", "SIZE_CLASSES", "CutHole", "cut_holes", "hole_plan", "star_region"]
+
+# Target boundary sizes (edges) of the hole classes; an "irregular" hole is by default also
+# irregular in shape (IRREGULAR_SHAPE).
 SIZE_CLASSES = {"small": 20, "medium": 60, "large": 150, "irregular": 250}
 # Star outline of an irregular hole: radius modulated by 45 %, stretched 1.6 x along one axis.
 IRREGULAR_SHAPE = {"amplitude": 0.45, "stretch": 1.6}
@@ -52,19 +48,6 @@ class CutHole:
     face_indices: np.ndarray | None = None
 
 
-def face_adjacency(F):
-    """Sparse (m, m) face adjacency through shared edges."""
-    F = np.asarray(F, np.int64)
-    m = len(F)
-    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    keys = E[:, 0] * (F.max() + 1) + E[:, 1]
-    order = np.argsort(keys)
-    ks = keys[order]
-    same = np.flatnonzero(ks[1:] == ks[:-1])
-    a, b = order[same] % m, order[same + 1] % m
-    return sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(m, m)).tocsr()
-
-
 def _region_boundary(F, region):
     """Number of boundary edges of a face region and whether it is one simple loop."""
     loops = boundary_loops(F[region])
@@ -83,7 +66,12 @@ def star_region(F, centroids, adjacency, seed_face, normal, radius, amplitude=0.
     ----------
     F : (m, 3) int  (only its length is used)
     centroids : (m, 3) float64
-    adjacency : (m, m) sparse face adjacency
+    adjacency : (m, m) sparse face adjacency (:func:`geometry.topology.face_adjacency`)
+    seed_face : int
+    normal : (3,) float64  unit normal of the seed face (the outline lies in its tangent plane)
+    radius : float  mean radius of the outline
+    amplitude, lobes, phase : float, int, float  radius modulation amplitude * sin(lobes * theta + phase)
+    stretch : float  stretch of the outline along the tangent plane's first axis
     border : (m,) bool, optional
         For a local window of a larger mesh: faces with a neighbour outside the window. The
         complement components touching it are "outside"; the others are enclosed islands.
@@ -93,10 +81,6 @@ def star_region(F, centroids, adjacency, seed_face, normal, radius, amplitude=0.
     -------
     (r,) int64 face indices
     """
-    from scipy.sparse.csgraph import connected_components
-
-    from ..geometry.pca import plane_frame
-
     u, v = plane_frame(normal)
     D = centroids - centroids[seed_face]
     x, y, z = D @ u / stretch, D @ v, D @ normal
@@ -227,50 +211,3 @@ def cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, max
             if strict:
                 raise RuntimeError(f"could not cut a simple '{size}' hole after {max_tries} tries")
     return F[~removed], holes
-
-
-def run_filter_timed(ms, name, **params):
-    """Apply a filter (ours or built-in) and return (result, seconds)."""
-    from ..meshlab.registration import apply_filter
-
-    t0 = time.perf_counter()
-    res = apply_filter(ms, name, **params)
-    return res, time.perf_counter() - t0
-
-
-def compare(meshes, report=None, **options):
-    """Fill holes in meshes with every filler and measure them; optionally write a report.
-
-    Parameters
-    ----------
-    meshes : sequence of str (mesh files), pymeshlab.Mesh, (V, F) tuples or comparison.MeshCase
-    report : str, optional
-        Directory for report.md, report.html, results.json, results.csv and pictures.
-    **options
-        Passed on to :func:`meshlab_holefill.evaluation.comparison.run_comparison`: ``holes`` (per closed
-        mesh, default 4), ``sizes`` ("small", "medium", "large"), ``seed``, ``filters`` (names,
-        optionally ``name:param=value``), ``refinehole``, ``timeout`` (seconds per run),
-        ``maxholesize`` (largest natural hole evaluated), ``progress``.
-
-    Returns
-    -------
-    comparison.Comparison  (``runs``, ``holes`` rows, ``cases``, ``fillers``)
-    """
-    from .comparison import run_comparison
-
-    result = run_comparison(meshes, **options)
-    if report is not None:
-        from .report.tables import write_report
-
-        write_report(result, report)
-    return result
-
-
-class _CallableModule(types.ModuleType):
-    """Lets ``meshlab_holefill.evaluation.cut_holes(...)`` call :func:`compare` while the module stays importable."""
-
-    def __call__(self, *args, **kwargs):
-        return compare(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule

@@ -8,19 +8,29 @@ from __future__ import annotations
 
 import ctypes
 import gc
+import importlib
 import multiprocessing
 import time
 import traceback
 
 import numpy as np
 
+from ..meshlab import register_all
+from ..meshlab.mesh_files import mesh_arrays, meshset_from_arrays
+from ..meshlab.registration import apply_filter, parse_text_value
+
+__all__ = ["IsolatedRunner", "execute_task", "json_safe", "peak_memory_since", "reset_peak_memory"]
 
 
-def _json_safe(value):
+def json_safe(value):
+    """``value`` with numpy arrays and scalars turned into lists and Python numbers, dict keys into str.
+
+    Anything else that JSON cannot hold becomes its ``str``.
+    """
     if isinstance(value, dict):
-        return {str(k): _json_safe(v) for k, v in value.items()}
+        return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
+        return [json_safe(v) for v in value]
     if isinstance(value, np.ndarray):
         return value.tolist()
     if isinstance(value, np.generic):
@@ -31,14 +41,9 @@ def _json_safe(value):
 
 
 def _worker_params(params):
-    import pymeshlab
-
-    out = {}
-    for key, value in params.items():
-        if isinstance(value, str) and value.endswith("%"):
-            value = pymeshlab.PercentageValue(float(value[:-1]))
-        out[key] = value
-    return out
+    """Parameters as the filter takes them: a text ``"5%"`` becomes MeshLab's percentage value."""
+    return {key: parse_text_value(value) if isinstance(value, str) and value.endswith("%") else value
+            for key, value in params.items()}
 
 
 def _rss_mb(field):
@@ -90,21 +95,14 @@ def execute_task(task):
     the worker's memory before; None off Linux) and the mesh: ``V_new``/``F_new`` (appended
     elements, originals untouched) or ``V``/``F``.
     """
-    import pymeshlab
-
-    from ..meshlab.registration import apply_filter
-
     if task["kind"] == "call":
-        import importlib
-
         module, name = task["function"].rsplit(".", 1)
         t0 = time.perf_counter()
         value = getattr(importlib.import_module(module), name)(*task.get("args", []), **task.get("kwargs", {}))
-        return {"status": "ok", "value": _json_safe(value), "seconds": time.perf_counter() - t0}
+        return {"status": "ok", "value": json_safe(value), "seconds": time.perf_counter() - t0}
     V0, F0 = task["V"], task["F"]
     start_mb = reset_peak_memory()
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V0, face_matrix=F0.astype(np.int32)), task.get("label", "mesh"))
+    ms = meshset_from_arrays(V0, F0, task.get("label", "mesh"))
     t0 = time.perf_counter()
     try:
         result = apply_filter(ms, task["filter"], **_worker_params(task["params"]))
@@ -114,10 +112,9 @@ def execute_task(task):
                 "seconds": time.perf_counter() - t0, "memory_mb": peak_memory_since(start_mb)}
     seconds = time.perf_counter() - t0
     memory_mb = peak_memory_since(start_mb)
-    m = ms.current_mesh()
-    V1, F1 = np.asarray(m.vertex_matrix(), np.float64), np.asarray(m.face_matrix(), np.int64)
+    V1, F1 = mesh_arrays(ms)
     reply = {"status": "ok", "error": None, "seconds": seconds, "memory_mb": memory_mb,
-             "result": _json_safe(result or {})}
+             "result": json_safe(result or {})}
     n0, m0 = len(V0), len(F0)
     if len(V1) >= n0 and len(F1) >= m0 and np.array_equal(V1[:n0], V0) and np.array_equal(F1[:m0], F0):
         reply.update(V_new=V1[n0:], F_new=F1[m0:])
@@ -127,7 +124,7 @@ def execute_task(task):
 
 
 def _worker_loop(conn):
-    import meshlab_holefill  # noqa: F401  (registers the filters in the fresh interpreter)
+    register_all()  # the filters, in the fresh interpreter
 
     while True:
         try:

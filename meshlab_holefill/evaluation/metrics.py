@@ -1,17 +1,24 @@
 """Metrics of a filled hole against its ground truth and its surroundings.
 
-Distances via MeshLab's own Hausdorff sampler (both ways) and exact closest points, normal
-deviation, triangle quality 2r/R (Field; Hu et al. Sec. IV), density match (edge ratio),
+Distances (seeded area samples of one surface at their exact distance from the other, both
+ways; exact closest points), normal deviation, triangle quality 2r/R (Field; Hu et al. Sec. IV), density match (edge ratio),
 dihedral continuity across the hole border, intersections and changed originals.
 """
 from __future__ import annotations
 
 import numpy as np
-import pymeshlab
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
+from ..core.holes import boundary_loops, nonmanifold_edges
 from ..geometry.intersections import faces_intersecting
 from ..geometry.quality import edge_lengths, face_areas, face_normals, triangle_quality
-from ..core.holes import boundary_loops, nonmanifold_edges
+from ..geometry.topology import face_adjacency
+from ..meshlab import mesh_files
+
+__all__ = ["QUALITY_BINS", "assign_patches", "border_dihedrals", "closest_faces", "closest_point_on_triangles",
+           "compact_mesh", "corner_quality_bound", "fan_triangle_quality", "hausdorff_one_way", "hole_metrics",
+           "mesh_checks", "patch_metrics", "point_to_surface_distances", "sample_surface"]
 
 QUALITY_BINS = np.linspace(0.0, 1.0, 21)
 
@@ -68,6 +75,15 @@ def fan_triangle_quality(angle, rho):
     """2r/R of the triangle with sides 1 and ``rho`` enclosing ``angle`` (arrays broadcast).
 
     2r/R = (b + c - a)(c + a - b)(a + b - c) / (a b c) for sides a, b, c.
+
+    Parameters
+    ----------
+    angle : float or array  radians
+    rho : float or array  length of the second side (the first is 1)
+
+    Returns
+    -------
+    array of the broadcast shape, in [0, 1]
     """
     c = np.sqrt(np.maximum(1.0 + rho ** 2 - 2.0 * rho * np.cos(angle), 0.0))
     a, b = np.ones_like(c), rho * np.ones_like(c)
@@ -121,17 +137,7 @@ def point_to_surface_distances(X, V, F):
     -------
     (q,) float64
     """
-    X, V = np.asarray(X, np.float64), np.asarray(V, np.float64)
-    if len(X) == 0:
-        return np.empty(0)
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=X))
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=np.asarray(F, np.int32)))
-    both = np.concatenate([X, V])
-    reach = 10.0 * max(float(np.linalg.norm(both.max(axis=0) - both.min(axis=0))), 1.0)
-    ms.compute_scalar_by_distance_from_another_mesh_per_vertex(measuremesh=0, refmesh=1, signeddist=False,
-                                                              maxdist=pymeshlab.PureValue(reach))
-    return np.asarray(ms.mesh(0).vertex_scalar_array(), np.float64)
+    return mesh_files.point_to_surface_distances(X, V, F)
 
 
 def hausdorff_one_way(src_V, src_F, dst_V, dst_F, samples=20000, seed=0):
@@ -160,7 +166,17 @@ def hausdorff_one_way(src_V, src_F, dst_V, dst_F, samples=20000, seed=0):
 
 
 def compact_mesh(V, F):
-    """Keep only the vertices F uses; returns (V', F') with F' reindexed."""
+    """Keep only the vertices F uses, F reindexed.
+
+    Parameters
+    ----------
+    V : (n, 3) float, F : (m, 3) int
+
+    Returns
+    -------
+    V' : (u, 3), the u vertices F uses, in index order
+    F' : (m, 3) int64 indices into V'
+    """
     used = np.unique(np.asarray(F).ravel())
     remap = np.full(len(V), -1, np.int64)
     remap[used] = np.arange(len(used))
@@ -179,13 +195,9 @@ def assign_patches(F_new, loop_vertex_sets):
     -------
     list of (q_i,) int64 arrays: positions in F_new of the faces of each hole's patch
     """
-    from scipy.sparse.csgraph import connected_components
-
     q = len(F_new)
     if q == 0:
         return [np.zeros(0, np.int64) for _ in loop_vertex_sets]
-    from .cut_holes import face_adjacency
-
     n_comp, label = connected_components(face_adjacency(F_new), directed=False)
     owner = np.full(n_comp, -1)
     for h, verts in enumerate(loop_vertex_sets):
@@ -316,8 +328,6 @@ def closest_faces(X, V, F, candidates=32):
     if len(X) * len(F) <= 2_000_000 or len(F) <= candidates:
         cand = np.broadcast_to(np.arange(len(F)), (len(X), len(F)))
     else:
-        from scipy.spatial import cKDTree
-
         _, cand = cKDTree(T.mean(axis=1)).query(X, k=candidates)
     q, k = cand.shape
     rows = np.repeat(np.arange(q), k)

@@ -52,3 +52,25 @@ def undirected_keys(E, n):
 def edge_pair_set(E):
     """Set of sorted (a, b) tuples of an edge list E : (e, 2), for O(1) membership in Python loops."""
     return {tuple(e) for e in np.sort(np.asarray(E, np.int64).reshape(-1, 2), axis=1).tolist()}
+
+
+def face_adjacency(F):
+    """Faces sharing an edge, as a symmetric sparse matrix.
+
+    Parameters
+    ----------
+    F : (m, 3) int
+
+    Returns
+    -------
+    (m, m) scipy.sparse CSR float64, 1 where two faces share an edge
+    """
+    F = np.asarray(F, np.int64)
+    m = len(F)
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    keys = E[:, 0] * (F.max() + 1) + E[:, 1]
+    order = np.argsort(keys)
+    ks = keys[order]
+    same = np.flatnonzero(ks[1:] == ks[:-1])
+    a, b = order[same] % m, order[same + 1] % m
+    return sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(m, m)).tocsr()

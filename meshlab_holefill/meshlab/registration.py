@@ -6,6 +6,8 @@ the command line, and the MeshLab ``.mlx`` names.
 """
 from __future__ import annotations
 
+import os
+import tempfile
 import weakref
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -17,12 +19,14 @@ from ..core import parameters as _parameters
 from ..core.parameters import MLX_TYPES, FilterParameterError, ParamSpec, Percentage  # noqa: F401 (re-exported)
 from .meshset_io import current_mesh_exists
 
-def _shown(value):
+def shown_value(value):
     """A parameter value as a user wrote it (pymeshlab's value types have no readable repr)."""
-    if isinstance(value, pymeshlab.PercentageValue):
-        return f"PercentageValue({value.value()})"
-    if isinstance(value, pymeshlab.PureValue):
-        return f"PureValue({value.value()})"
+    if isinstance(value, (pymeshlab.PureValue, pymeshlab.PercentageValue)):
+        return f"{type(value).__name__}({value.value():g})"
+    if isinstance(value, pymeshlab.Color):
+        return f"Color({value.red()}, {value.green()}, {value.blue()}, {value.alpha()})"
+    if isinstance(value, np.ndarray):
+        return repr(value.tolist())
     return repr(value)
 
 
@@ -197,7 +201,7 @@ def apply_filter(ms, name, **kwargs):
         result = {} if result is None else result
         call = FilterCall(name, dict(kwargs), defaults=defaults)
         if _DEPTH == 0:
-            call.meshlab_record = _meshlab_record_of_last_call(ms, name)
+            call.meshlab_record = _meshlab_record_of_last_call(ms)
     else:
         raise FilterParameterError(f"unknown filter '{name}': not one of ours ({', '.join(filter_list())}) "
                                    "nor a pymeshlab filter")
@@ -221,9 +225,10 @@ class FilterCall:
     bbox_diagonal : float
         Our filters: bounding-box diagonal of the current mesh before the call (MeshLab writes
         it as the ``max`` of RichAbsPerc parameters).
-    meshlab_record : object or None
-        Built-in filters: pymeshlab's own record of the call (every parameter with its MeshLab
-        name, type and value), see :func:`meshlab_holefill.meshlab.mlx.script.pymeshlab_last_filter`.
+    meshlab_record : bytes or None
+        Built-in filters: pymeshlab's own record of the MeshSet's filters just after the call
+        (.mlx text; its last filter holds every parameter with its MeshLab name, type and
+        value), see :func:`meshlab_holefill.meshlab.mlx.parse.last_recorded_filter`.
     defaults : dict or None
         Built-in filters: ``ms.filter_parameter_values(name)`` just before the call, the
         mesh-dependent defaults at full precision (pymeshlab's record has 6 digits).
@@ -248,7 +253,7 @@ def _check_builtin_values(name, kwargs, defaults):
         numeric = isinstance(value, (bool, int, float, np.number, pymeshlab.PercentageValue, pymeshlab.PureValue))
         if isinstance(default, (bool, int, float)) and not numeric:
             kind = "a bool" if isinstance(default, bool) else "a number"
-            raise FilterParameterError(f"filter '{name}', parameter '{key}': expected {kind}, got {_shown(value)}")
+            raise FilterParameterError(f"filter '{name}', parameter '{key}': expected {kind}, got {shown_value(value)}")
 
 
 def _parameter_values(ms, name):
@@ -258,11 +263,14 @@ def _parameter_values(ms, name):
         return None
 
 
-def _meshlab_record_of_last_call(ms, name):
-    from .mlx.script import pymeshlab_last_filter  # mlx imports this module
-
+def _meshlab_record_of_last_call(ms):
+    """pymeshlab's own record of the filters applied to ``ms`` (.mlx bytes), read just after a built-in call."""
     try:
-        return pymeshlab_last_filter(ms, name)
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "record.mlx")
+            ms.save_filter_script(path)
+            with open(path, "rb") as f:
+                return f.read()
     except Exception:  # the record only makes the written .mlx complete; never fail a filter for it
         return None
 

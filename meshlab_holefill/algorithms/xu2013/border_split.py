@@ -8,7 +8,7 @@ geometrically identical: new vertices lie on the old edges and the two new trian
 exactly cover the old one. This module changes *original* faces, so it reports, for every
 new vertex, the original edge it lies on and, for every face, the original face it lies in,
 so that per-element attributes can be carried over (see
-:func:`meshlab_holefill.meshlab.meshset_io.refine_mesh_arrays`).
+:func:`meshlab_holefill.core.attributes.refine_mesh_arrays`).
 """
 from __future__ import annotations
 

@@ -11,7 +11,16 @@ and 124 edges.
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
+
+from ...algorithms.xie_zou2013.differential_evolution import RINGS, fill
+from ...core.holes import boundary_loops, hole_context, vertex_face_incidence
+from ...core.patch import validate_patch
+
+__all__ = ["PAPER_TABLE1_SPHERE", "SPHERE_HOLES", "ellipse_hole", "point_triangle_distances", "prediction_errors",
+           "sphere_experiment", "uv_sphere"]
 
 PAPER_TABLE1_SPHERE = {"MPE": 1.77e-2, "APE": 7.35e-3, "NHT": 1210, "M": (10, 7), "n": (106, 124),
                        "RT_seconds": 9.3}
@@ -53,6 +62,16 @@ def ellipse_hole(V, F, lat, lon, along, across):
     The ellipse is centred at (lat, lon), with semi-axes ``along`` (radians along the
     meridian) and ``across``; a centroid is inside when (a / along)^2 + (b / across)^2 < 1 for
     its azimuthal-equidistant coordinates (a, b) about the centre.
+
+    Parameters
+    ----------
+    V : (n, 3) float64  vertices on the unit sphere
+    F : (m, 3) int
+    lat, lon, along, across : float  radians
+
+    Returns
+    -------
+    (m,) bool
     """
     c = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
     north = np.array([-np.sin(lat) * np.cos(lon), -np.sin(lat) * np.sin(lon), np.cos(lat)])
@@ -130,12 +149,6 @@ def sphere_experiment(seed=0, holes=SPHERE_HOLES, **params):
     dict with ``MPE``, ``APE`` (ours), ``paper`` (Table 1 row), ``NHT``, ``K``, per-hole
     ``holes`` (boundary edges, n, M, Rate, seconds, segmented) and ``seconds``.
     """
-    import time
-
-    from ...core.holes import boundary_loops, hole_context, vertex_face_incidence
-    from ...core.patch import validate_patch
-    from ...algorithms.xie_zou2013.differential_evolution import RINGS, fill
-
     V, F = uv_sphere()
     removed = np.zeros(len(F), bool)
     for lat, lon, along, across in holes:

@@ -1,1 +1,7 @@
-"""evaluation.report."""
+"""The comparison report: tables and text (:mod:`.tables`), charts (:mod:`.plots`), per-hole pictures (:mod:`.render`), files (:mod:`.write`).
+
+``report.write.write_report(comparison, directory)`` writes everything; :mod:`.labels` holds
+the headings, size-class order, short labels, colours and aggregates the others share.
+"""
+
+__all__ = ["labels", "plots", "render", "tables", "write"]

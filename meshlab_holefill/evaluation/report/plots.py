@@ -9,7 +9,9 @@ import os
 import numpy as np
 
 from ..metrics import QUALITY_BINS
-from .tables import CHART_METRICS, HEADINGS, SIZE_ORDER, aggregate, filler_colors, hole_seconds, short_label
+from .labels import CHART_METRICS, HEADINGS, SIZE_ORDER, aggregate, filler_colors, hole_seconds, short_label
+
+__all__ = ["chart_pictures", "metric_bars", "quality_histograms", "size_trends"]
 
 
 def _pyplot():
@@ -144,5 +146,6 @@ def size_trends(comparison, directory, name="error_time_vs_size.png"):
 
 
 def chart_pictures(comparison, directory):
+    """All charts of a comparison written into ``directory``: [(relative path, caption)]."""
     return [metric_bars(comparison, directory), quality_histograms(comparison, directory),
             size_trends(comparison, directory)]

@@ -14,7 +14,9 @@ import numpy as np
 
 from ...geometry.pca import plane_frame
 from ...geometry.quality import face_normals, triangle_quality
-from .tables import short_label
+from .labels import short_label
+
+__all__ = ["draw_mesh", "hole_figure", "hole_pictures", "view_frame"]
 
 TILT_DEGREES = 20.0
 

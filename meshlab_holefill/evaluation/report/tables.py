@@ -1,67 +1,23 @@
-"""The comparison report: tables (Markdown and the same in HTML), JSON, CSV and charts.
+"""The report's tables and text: summary, per size class, per hole, failures, as Markdown and HTML.
 
-``write_report(comparison, directory)`` writes ``report.md``, ``report.html``,
-``results.json``, ``results.csv`` and the pictures (bar charts per metric, quality histograms
-per filter as in Hu et al. Fig. 10, error and time against hole size, and one rendered view
-per hole from :mod:`.render`).
+A report is a list of blocks (headings, paragraphs, lists, tables, images) that
+:func:`to_markdown` and :func:`to_html` render; :func:`report_blocks` builds the whole
+report, :func:`summary_blocks` the summary that the benchmark also writes into the README.
+:mod:`.write` writes the files.
 """
 from __future__ import annotations
 
-import csv
 import html
 import json
-import os
 import time
 
 import numpy as np
 
-from ..reference_targets import targets_table
+from ..reference_targets import reference_table
+from .labels import METRICS, SIZE_ORDER, aggregate, short_label
 
-# (key, heading, better: "low" | "high" | "one", aggregate: "mean" | "min" | "max" | "sum", format)
-METRICS = [
-    ("dist_patch_to_gt_mean_permille", "patch→GT mean ‰", "low", "mean", "{:.3f}"),
-    ("dist_patch_to_gt_max_permille", "patch→GT max ‰", "low", "max", "{:.2f}"),
-    ("dist_gt_to_patch_mean_permille", "GT→patch mean ‰", "low", "mean", "{:.3f}"),
-    ("normal_dev_mean_deg", "normal dev. mean °", "low", "mean", "{:.1f}"),
-    ("quality_mean", "quality mean", "high", "mean", "{:.3f}"),
-    ("quality_min", "quality min", "high", "min", "{:.3f}"),
-    ("quality_share07", "share q≥0.7", "high", "mean", "{:.2f}"),
-    ("edge_ratio", "edge ratio", "one", "mean", "{:.2f}"),
-    ("border_dihedral_mean_deg", "border crease °", "low", "mean", "{:.1f}"),
-    ("border_dihedral_excess_deg", "crease − GT's °", "low", "mean", "{:.1f}"),
-    ("intersecting_new_faces", "intersecting faces", "low", "sum", "{:d}"),
-    ("new_vertices", "new V", None, "sum", "{:d}"),
-    ("faces", "new F", None, "sum", "{:d}"),
-]
-CHART_METRICS = ["dist_patch_to_gt_mean_permille", "dist_gt_to_patch_mean_permille", "normal_dev_mean_deg",
-                 "quality_mean", "quality_min", "edge_ratio", "border_dihedral_excess_deg", "seconds"]
-HEADINGS = {m[0]: m[1] for m in METRICS} | {"seconds": "seconds per hole"}
-SIZE_ORDER = ["small", "medium", "large", "irregular", "given", "natural", "outline"]
-
-
-def short_label(label):
-    """Filter labels without the common ``meshing_close_holes_`` prefix (for charts)."""
-    return label.replace("meshing_close_holes_", "").replace("meshing_close_holes", "close_holes")
-
-
-def filler_colors(labels):
-    import matplotlib
-
-    cmap = matplotlib.colormaps["tab10"]
-    return {label: cmap(i % 10) for i, label in enumerate(labels)}
-
-
-def _values(rows, key):
-    return [r[key] for r in rows if r.get("closed") and isinstance(r.get(key), (int, float))
-            and r.get(key) is not None and np.isfinite(r[key])]
-
-
-def aggregate(rows, key, how):
-    vals = _values(rows, key)
-    if not vals:
-        return None
-    return {"mean": np.mean, "min": np.min, "max": np.max, "sum": np.sum}[how](vals).item()
-
+__all__ = ["failures", "hole_table", "markdown_table", "report_blocks", "size_table", "summary_blocks",
+           "summary_table", "to_html", "to_markdown", "wins"]
 
 def _fmt(value, fmt):
     if value is None:
@@ -81,15 +37,15 @@ def _best(values, better):
     return {i for i, v in pairs if abs(score(v) - top) <= 1e-12 * max(1.0, abs(top))}
 
 
-def hole_seconds(row):
-    """Seconds for one hole: the filter's own per-hole time, else the run time / holes in the run."""
-    return row.get("seconds") if row.get("seconds") is not None else row.get("_run_share")
-
-
 # -------------------------------------------------------------------------------- tables
 
 def wins(comparison):
-    """Per filler: holes where its patch→GT distance is the best (holes with ground truth)."""
+    """Per filler: holes where its patch→GT distance is the best (holes with ground truth).
+
+    Returns
+    -------
+    dict  {filler label: number of holes}
+    """
     out = {f.label: 0 for f in comparison.fillers}
     for rows in _by_hole(comparison).values():
         vals = [r.get("dist_patch_to_gt_mean_permille") if r.get("closed") else None for r in rows]
@@ -106,7 +62,18 @@ def _by_hole(comparison):
 
 
 def summary_table(comparison):
-    """(header, rows, bold) of the per-filler summary over all holes."""
+    """The per-filler summary over all holes: one row per filler, one column per metric.
+
+    Parameters
+    ----------
+    comparison : comparison.Comparison
+
+    Returns
+    -------
+    header : list of str
+    rows : list of list of str
+    bold : list of set of int  per row, the columns where the filler is best
+    """
     labels = [f.label for f in comparison.fillers]
     rows_by = {lab: [r for r in comparison.holes if r["filler"] == lab] for lab in labels}
     runs_by = {lab: [r for r in comparison.runs if r["filler"] == lab] for lab in labels}
@@ -138,7 +105,19 @@ def summary_table(comparison):
 
 
 def size_table(comparison, key="dist_patch_to_gt_mean_permille", fmt="{:.3f}", better="low"):
-    """Rows = size classes, columns = fillers: mean of ``key`` over closed holes (closed/total)."""
+    """Rows = size classes, columns = fillers: mean of ``key`` over closed holes (closed/total).
+
+    Parameters
+    ----------
+    comparison : comparison.Comparison
+    key : str  a hole-row metric
+    fmt : str  format of a value
+    better : "low" | "high" | "one"  which values are set in bold
+
+    Returns
+    -------
+    (header, rows, bold) as :func:`summary_table`
+    """
     labels = [f.label for f in comparison.fillers]
     sizes = [s for s in SIZE_ORDER if any(r["size_class"] == s and (r["ground_truth"] or not key.startswith("dist"))
                                           for r in comparison.holes)]
@@ -158,7 +137,12 @@ def size_table(comparison, key="dist_patch_to_gt_mean_permille", fmt="{:.3f}", b
 
 
 def hole_table(comparison):
-    """Rows = holes, columns = fillers: patch→GT mean ‰ (or quality mean without ground truth)."""
+    """Rows = holes, columns = fillers: patch→GT mean ‰ (or quality mean without ground truth).
+
+    Returns
+    -------
+    (header, rows, bold) as :func:`summary_table`
+    """
     labels = [f.label for f in comparison.fillers]
     header = (["mesh", "hole", "size", "shape", "edges", "corner q bound", "measure"]
               + [f"`{short_label(lab)}`" for lab in labels])
@@ -187,6 +171,7 @@ def _short_reason(reason):
 
 
 def failures(comparison):
+    """One Markdown line per failed run and per hole left open (other than by a failed run)."""
     lines = []
     for r in comparison.runs:
         if r["status"] != "ok":
@@ -199,7 +184,15 @@ def failures(comparison):
 
 # ------------------------------------------------------------------------------- document
 
-def _md_table(header, rows, bold=None):
+def markdown_table(header, rows, bold=None):
+    """A Markdown table; ``bold[i]`` holds the column indices of row i set in bold.
+
+    Parameters
+    ----------
+    header : list of str
+    rows : list of list of str
+    bold : list of set of int, optional
+    """
     bold = bold or [set()] * len(rows)
     out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for row, b in zip(rows, bold):
@@ -225,6 +218,8 @@ def _html_table(header, rows, bold=None):
 
 
 def to_markdown(blocks):
+    """Markdown of report blocks: ("h", level, text), ("p", text), ("list", items), ("table", header, rows,
+    bold), ("img", path, caption)."""
     out = []
     for kind, *args in blocks:
         if kind == "h":
@@ -234,13 +229,14 @@ def to_markdown(blocks):
         elif kind == "list":
             out.append("\n".join(f"- {x}" for x in args[0]))
         elif kind == "table":
-            out.append(_md_table(*args))
+            out.append(markdown_table(*args))
         elif kind == "img":
             out.append(f"![{args[1]}]({args[0]})")
     return "\n\n".join(out) + "\n"
 
 
 def to_html(blocks, title):
+    """A standalone HTML page of the same blocks as :func:`to_markdown`."""
     css = ("body{font-family:sans-serif;max-width:1400px;margin:auto;padding:1em}table{border-collapse:collapse;"
            "margin:1em 0;font-size:90%}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}"
            "td:first-child,th:first-child{text-align:left}td.best{background:#d8f5d0;font-weight:bold}"
@@ -273,16 +269,29 @@ def summary_blocks(comparison):
                ("table", *size_table(comparison, "quality_mean", "{:.3f}", "high"))]
     baseline = "meshing_close_holes (all holes)"
     if any(f.label == baseline for f in comparison.fillers):
-        header, rows, bold = targets_table(comparison, baseline)
+        header, rows, bold = reference_table(comparison, baseline)
         if rows:
-            blocks += [("p", f"The issues' targets (acceptance.py), against `{baseline}`; ✓ met, ✗ not met. A hole's "
-                             "minimum quality is judged against min(0.3, the best a patch can reach at its sharpest "
-                             "convex border corner); 'natural' excludes loops that outline a whole island of the scan:"),
+            blocks += [("p", f"Reference figures and where each filter stands against them (the baseline is `{baseline}`); "
+                             "✓ met, ✗ not met. A hole's minimum quality is judged against min(0.3, the best a patch "
+                             "can reach at its sharpest convex border corner); 'natural' excludes loops that outline "
+                             "a whole island of the scan:"),
                        ("table", header, rows, bold)]
     return blocks
 
 
 def report_blocks(comparison, pictures, command=None):
+    """Blocks of the whole report.
+
+    Parameters
+    ----------
+    comparison : comparison.Comparison
+    pictures : list of (relative path, caption)
+    command : str, optional  the command line that made the comparison
+
+    Returns
+    -------
+    list of blocks (see :func:`to_markdown`)
+    """
     settings = comparison.settings
     cases = ", ".join(f"{c['case']} ({c['faces']} faces, {len(c['holes'])} {c['kind']})" for c in comparison.cases)
     blocks = [("h", 1, "Hole filler comparison"),
@@ -317,53 +326,3 @@ def report_blocks(comparison, pictures, command=None):
                    f"timeout {settings['timeout']} s per run"]),
               ("p", "All numbers per hole and filter: `results.csv`, `results.json`.")]
     return blocks
-
-
-# ---------------------------------------------------------------------------------- files
-
-def _scalar_rows(comparison):
-    rows = []
-    for r in comparison.holes:
-        row = {k: v for k, v in r.items() if not isinstance(v, (list, dict))}
-        rows.append(row)
-    return rows
-
-
-def write_json(comparison, path):
-    data = {"settings": comparison.settings, "wall_seconds": comparison.wall_seconds, "cases": comparison.cases,
-            "runs": comparison.runs, "holes": comparison.holes}
-    with open(path, "w") as fh:
-        json.dump(data, fh, indent=1, default=lambda o: o.item() if hasattr(o, "item") else str(o))
-
-
-def write_csv(comparison, path):
-    rows = _scalar_rows(comparison)
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with open(path, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=keys)
-        writer.writeheader()
-        writer.writerows(rows)
-
-
-def write_report(comparison, directory, pictures=True, command=None):
-    """Write the whole report into ``directory`` (created); returns the report.md path."""
-    os.makedirs(directory, exist_ok=True)
-    for run in comparison.runs:  # per-hole time for filters that give none: the run split over its holes
-        holes = [r for r in comparison.holes if r["case"] == run["case"] and r["filler"] == run["filler"]]
-        for r in holes:
-            r["_run_share"] = (run.get("seconds") or 0.0) / max(len(holes), 1)
-    write_json(comparison, os.path.join(directory, "results.json"))
-    write_csv(comparison, os.path.join(directory, "results.csv"))
-    pics = []
-    if pictures:
-        from .plots import chart_pictures
-        from .render import hole_pictures
-
-        pics += chart_pictures(comparison, directory)
-        pics += hole_pictures(comparison, directory)
-    blocks = report_blocks(comparison, pics, command)
-    with open(os.path.join(directory, "report.md"), "w") as fh:
-        fh.write(to_markdown(blocks))
-    with open(os.path.join(directory, "report.html"), "w") as fh:
-        fh.write(to_html(blocks, "Hole filler comparison"))
-    return os.path.join(directory, "report.md")

@@ -47,75 +47,14 @@ from . import names as mlx_names
 from .. import registration as registry
 from .values import ParamValueError, builtin_param_value, our_param_value
 from ..meshset_io import current_mesh_exists
+from .parse import MlxRunError, MlxScriptError, ScriptProblem, parse_xml
 from .write import filter_script_xml, save_filter_script
 
 __all__ = [
     "FilterScript", "MlxRunError", "MlxScriptError", "ScriptParam", "ScriptProblem", "ScriptStep",
-    "filter_script_xml", "pymeshlab_last_filter", "read_filter_script", "run_filter_script",
+    "filter_script_xml", "read_filter_script", "run_filter_script",
     "save_filter_script",
 ]
-
-
-class MlxScriptError(ValueError):
-    """A filter script cannot be run; nothing was applied.
-
-    Attributes
-    ----------
-    problems : list of ScriptProblem
-        Every problem found, each with its line, filter and parameter.
-    """
-
-    def __init__(self, message, problems=()):
-        super().__init__(message)
-        self.problems = list(problems)
-
-
-class MlxRunError(MlxScriptError):
-    """A step of a validated script failed while running; the steps before it were applied.
-
-    Attributes
-    ----------
-    step : ScriptStep
-    results : list of dict
-        Results of the steps that ran.
-    """
-
-    def __init__(self, message, step, results):
-        super().__init__(message)
-        self.step = step
-        self.results = results
-
-
-@dataclass
-class ScriptProblem:
-    source: str
-    line: int | None
-    filter: str | None
-    parameter: str | None
-    message: str
-
-    def __str__(self):
-        where = f"{self.source}:{self.line}" if self.line else self.source
-        parts = [where]
-        if self.filter is not None:
-            parts.append(f"filter '{self.filter}'")
-        if self.parameter is not None:
-            parts.append(f"parameter '{self.parameter}'")
-        return ": ".join(parts + [self.message])
-
-
-@dataclass
-class _Element:
-    """An XML element of the script with its line number."""
-
-    tag: str
-    line: int
-    attrs: dict
-    children: list = field(default_factory=list)
-
-    @property
-    def name(self):
-        return self.attrs.get("name")
 
 
 @dataclass
@@ -168,64 +107,6 @@ class FilterScript:
 
 
 # --- reading ------------------------------------------------------------------------------
-
-
-def _parse_xml(data, source):
-    """Parse FilterScript XML into _Element trees (root's children: filters, theirs: params)."""
-    parser = expat.ParserCreate()
-    stack = []
-    root = []
-
-    def start(tag, attrs):
-        element = _Element(tag, parser.CurrentLineNumber, dict(attrs))
-        if stack:
-            stack[-1].children.append(element)
-        else:
-            root.append(element)
-        stack.append(element)
-
-    def end(tag):
-        stack.pop()
-
-    parser.StartElementHandler = start
-    parser.EndElementHandler = end
-    try:
-        parser.Parse(data, True)
-    except expat.ExpatError as exc:
-        problem = ScriptProblem(source, exc.lineno, None, None,
-                                f"malformed XML: {expat.ErrorString(exc.code)} (column {exc.offset + 1})")
-        raise MlxScriptError(str(problem), [problem]) from None
-    top = root[0]
-    if top.tag != "FilterScript":
-        problem = ScriptProblem(source, top.line, None, None,
-                                f"not a MeshLab filter script: the root element is <{top.tag}>, not <FilterScript>")
-        raise MlxScriptError(str(problem), [problem])
-    return top
-
-
-def pymeshlab_last_filter(ms, python_name):
-    """pymeshlab's own record of the last filter it applied to ``ms``, if it is ``python_name``.
-
-    pymeshlab keeps every built-in filter applied to a MeshSet, with all its parameters in
-    MeshLab form; this reads the last one back through ``ms.save_filter_script``.
-
-    Returns
-    -------
-    _Element or None
-        The ``<filter>`` element, or None when the last record is another filter.
-    """
-    with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "record.mlx")
-        ms.save_filter_script(path)
-        with open(path, "rb") as f:
-            data = f.read()
-    filters = [e for e in _parse_xml(data, path).children if e.tag == "filter"]
-    if not filters:
-        return None
-    understood = mlx_names.resolve_filter(filters[-1].name or "")
-    if understood is None or understood.python_name != python_name:
-        return None
-    return filters[-1]
 
 
 def _validate(root, source, base_dir):
@@ -318,7 +199,7 @@ def read_filter_script(path_or_xml):
         with open(path, "rb") as f:
             data = f.read()
         source, base_dir = path, os.path.dirname(os.path.abspath(path))
-    return _validate(_parse_xml(data, source), source, base_dir)
+    return _validate(parse_xml(data, source), source, base_dir)
 
 
 def run_filter_script(ms, path_or_xml):

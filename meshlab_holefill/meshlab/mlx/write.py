@@ -11,7 +11,7 @@ are MeshSet operations that are not filters (``load_new_mesh``, ``set_current_me
 The written script has MeshLab's types for our parameters (RichInt, RichFloat, RichBool,
 RichEnum with its values, RichAbsPerc absolute with min/max, RichString) and every parameter
 with the value actually used; built-in filters are written from pymeshlab's own record of the
-call (:func:`meshlab_holefill.meshlab.mlx.script.pymeshlab_last_filter`: all their parameters, MeshLab names
+call (:func:`meshlab_holefill.meshlab.mlx.parse.last_recorded_filter`: all their parameters, MeshLab names
 and types), real values written at full precision (the arguments given, and the defaults
 pymeshlab computed for the mesh just before the call); only a ``PercentageValue`` given to a
 built-in keeps pymeshlab's 6-digit absolute value. Replaying the script on the same input
@@ -28,6 +28,8 @@ import pymeshlab
 
 from . import names as mlx_names
 from .. import registration as registry
+from ..._version import __version__
+from .parse import last_recorded_filter
 from .values import POINT_TYPES
 
 
@@ -126,15 +128,25 @@ def _builtin_params_from_kwargs(call):
     return out
 
 
+def _recorded_element(call):
+    """The ``<filter>`` element of pymeshlab's record of a built-in call, or None."""
+    if call.meshlab_record is None:
+        return None
+    try:
+        return last_recorded_filter(call.meshlab_record, call.name)
+    except Exception:  # an unreadable record: write the call from its keyword arguments instead
+        return None
+
+
 def _filter_xml(call):
     lines = []
     if call.name in registry.FILTERS:
         display, params = registry.FILTERS[call.name].display_name, _our_filter_params(call)
-    elif call.meshlab_record is not None:
-        display, params = call.meshlab_record.name, []
+    elif (record := _recorded_element(call)) is not None:
+        display, params = record.name, []
         used = dict(call.defaults or {})
         used.update(call.kwargs)
-        for child in call.meshlab_record.children:
+        for child in record.children:
             attrs = dict(child.attrs)
             python_name = mlx_names.python_param_name(attrs.get("name", ""))
             if python_name in used:
@@ -158,7 +170,6 @@ def filter_script_xml(ms, comment=None):
     comment : str, optional
         Text of an XML comment written before the script.
     """
-    from ... import __version__
 
     if comment is None:
         comment = (f"Recorded by meshlab_holefill {__version__}. Run with meshlab_holefill.run_filter_script(ms, path) "

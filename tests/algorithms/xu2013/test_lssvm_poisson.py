@@ -106,7 +106,7 @@ def test_boundary_split_halves_long_edges_and_keeps_the_surface():
 
 
 def test_refined_mesh_attributes_interpolate_vertices_and_copy_faces():
-    from meshlab_holefill.meshlab.meshset_io import MeshArrays, refine_mesh_arrays
+    from meshlab_holefill.core.attributes import MeshArrays, refine_mesh_arrays
 
     V, F = annulus_with_long_hole_edge()
     hole = next(lp for lp in boundary_loops(F) if np.allclose(V[lp.vertices].min(axis=0)[:2], 0.3))

@@ -13,13 +13,13 @@ import meshlab_holefill
 from meshlab_holefill.meshlab.mlx import names as mlx_names
 from meshlab_holefill.meshlab import registration as registry
 from meshlab_holefill.cli import main
-from meshlab_holefill.meshlab.filter_specs import ALGORITHMS
+from meshlab_holefill.algorithms import ALGORITHMS
 from meshlab_holefill.core.holes import boundary_loops
 from meshlab_holefill.meshlab.mlx.script import MlxRunError, MlxScriptError, read_filter_script, run_filter_script
 
 from conftest import mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
 
-WORKFLOWS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "filters")
+WORKFLOWS = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "filters")
 BUNNY = sample("bunny10k_textured.obj")
 OURS = "Close Holes: Minimum Angle + Bilateral"
 
@@ -367,7 +367,7 @@ def assert_all_five_closed(result, who):
 
 def require_filter(python_name):
     if python_name not in meshlab_holefill.filter_list():
-        pytest.skip(f"{python_name} is not registered yet (add it to filter_specs.ALGORITHMS)")
+        pytest.skip(f"{python_name} is not registered yet (add it to meshlab_holefill.algorithms.ALGORITHMS)")
 
 
 # Presets: an algorithm's workflow with some of its options (beyond the paper) switched on.
@@ -387,10 +387,10 @@ def test_every_workflow_is_documented_and_every_filter_has_one():
         comment = re.search(r"<!--(.*?)-->", text, re.S)
         assert comment and name in comment.group(1) and "meshlab-holefill run" in comment.group(1)
     by_python_name = {python_name: workflow for workflow, python_name in ALGORITHM_WORKFLOWS.items()}
-    for _, python_name, display_name, _ in ALGORITHMS:  # a registered filter's workflow names it by its display name
-        assert python_name in by_python_name
-        step = read_filter_script(os.path.join(WORKFLOWS, by_python_name[python_name])).steps[-1]
-        assert (step.mlx_name, step.filter) == (display_name, python_name)
+    for row in ALGORITHMS:  # a registered filter's workflow names it by its display name
+        assert row.filter_name in by_python_name
+        step = read_filter_script(os.path.join(WORKFLOWS, by_python_name[row.filter_name])).steps[-1]
+        assert (step.mlx_name, step.filter) == (row.display_name, row.filter_name)
 
 
 @pytest.mark.parametrize("workflow", list(ALGORITHM_WORKFLOWS) + list(PRESET_WORKFLOWS))

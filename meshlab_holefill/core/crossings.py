@@ -1,0 +1,177 @@
+"""Crossing checks of patches: against the mesh near them, against each other, and at shared vertices.
+
+A patch validated alone (core.patch.validate_patch) can still cross the surrounding mesh,
+the patch of a nearby hole, or clash with another patch at a pinched vertex; these checks
+find such patches so that the pipeline reports their holes failed instead of merging them.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..geometry.intersections import faces_intersecting, intersecting_pairs
+from .holes import nonmanifold_edges
+
+__all__ = ["clashing_patches", "crossing_patches", "face_boxes_near", "patch_box", "patch_intersections",
+           "withdraw"]
+
+
+def face_boxes_near(V, F, boxes):
+    """Mesh faces whose bounding box overlaps at least one of ``boxes``, found in one pass.
+
+    The self-intersection check needs, per patch, the mesh faces near it. Scanning every
+    face's box per hole costs O(m) per hole (0.2 s per hole at 3.6M faces); instead every
+    vertex gets an outcode (Cohen-Sutherland: one bit per side of the union of the patch
+    boxes it lies beyond), a face misses the union box exactly when its three vertices share
+    a bit, and only the few faces left get their boxes for the per-patch test. The outcodes
+    cost one byte per vertex and one gather of bytes per face (no (m, 3, 3) float temporary).
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+    boxes : (h, 2, 3) float
+        Lower and upper corners of the query boxes (already padded).
+
+    Returns
+    -------
+    near : (c,) int64
+        Candidate face indices (overlapping the union box).
+    lo, hi : (c, 3) float
+        Their boxes, for the per-patch test.
+    """
+    union_lo, union_hi = boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)
+    code = np.zeros(len(V), np.uint8)
+    for axis in range(3):
+        code |= (V[:, axis] < union_lo[axis]).astype(np.uint8) << (2 * axis)
+        code |= (V[:, axis] > union_hi[axis]).astype(np.uint8) << (2 * axis + 1)
+    near = np.flatnonzero((code[F[:, 0]] & code[F[:, 1]] & code[F[:, 2]]) == 0)
+    corners = V[F[near]]
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    return near, lo, hi
+
+
+def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, loop):
+    """Indices of patch faces that intersect the existing mesh near the hole, or the patch itself.
+
+    Parameters
+    ----------
+    patch_points : (k + p, 3) float
+        Loop points then new vertices (``Patch.all_points``).
+    patch_faces : (q, 3) int
+        In loop-local numbering.
+    mesh_V, mesh_F : arrays of the mesh.
+    candidates : tuple ``(near, lo, hi)`` from :func:`face_boxes_near`
+        Mesh faces that may be near any patch; those overlapping this patch's box are tested.
+    loop : (k,) int
+        Mesh vertex ids of the loop (shared vertices are not intersections).
+    """
+    near_all, face_lo, face_hi = candidates
+    lo, hi = patch_points.min(axis=0), patch_points.max(axis=0)
+    pad = 1e-9 * float(np.linalg.norm(hi - lo))
+    near = near_all[np.all(face_hi >= lo - pad, axis=1) & np.all(face_lo <= hi + pad, axis=1)]
+    used = np.unique(mesh_F[near].ravel()) if len(near) else np.zeros(0, np.int64)
+    # Local vertex array: loop vertices keep their loop-local numbers so shared vertices
+    # between patch and mesh faces are recognised as shared.
+    others = np.setdiff1d(used, loop)
+    k, p = len(loop), len(patch_points) - len(loop)
+    X = np.concatenate([patch_points, mesh_V[others]])
+    ids = np.concatenate([loop, others])
+    sorter = np.argsort(ids)
+    local_mesh = sorter[np.searchsorted(ids, mesh_F[near], sorter=sorter)].reshape(-1, 3)
+    local_mesh = np.where(local_mesh >= k, local_mesh + p, local_mesh)
+    allF = np.concatenate([patch_faces, local_mesh])
+    q = len(patch_faces)
+    hits = faces_intersecting(X, allF, np.arange(q), np.arange(len(allF)))
+    return hits
+
+
+def patch_box(points):
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    pad = 1e-9 * float(np.linalg.norm(hi - lo))
+    return np.stack([lo - pad, hi + pad])
+
+
+def withdraw(entry, reason):
+    """Report a hole whose validated patch is taken back as failed."""
+    entry.update(status="failed", reason=reason)
+    for name in ("new_vertices", "new_faces"):
+        entry.pop(name, None)
+
+
+def crossing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
+    """Patches each clear of the mesh can still cross one another (two holes close together).
+
+    Only patches whose bounding boxes overlap are tested, face against face. Taken in hole
+    order, a patch crossing one already kept is withdrawn and its hole reported failed.
+
+    Returns
+    -------
+    list of int  positions in ``patches`` of the patches kept
+    """
+    if len(patches) < 2:
+        return list(range(len(patches)))
+    sizes = [len(p.faces) for p in patches]
+    start = len(F) + np.concatenate([[0], np.cumsum(sizes)])
+    boxes = np.stack([patch_box(V2[np.unique(F2[start[j]:start[j + 1]])]) for j in range(len(patches))])
+    overlap = np.all((boxes[:, None, 0] <= boxes[None, :, 1]) & (boxes[None, :, 0] <= boxes[:, None, 1]), axis=2)
+    np.fill_diagonal(overlap, False)
+    near = np.flatnonzero(overlap.any(axis=1))
+    if len(near) == 0:
+        return list(range(len(patches)))
+    faces = np.concatenate([np.arange(start[j], start[j + 1]) for j in near])
+    pairs = intersecting_pairs(V2, F2, faces, faces)
+    owner = np.searchsorted(start, pairs, side="right") - 1
+    crossing = {tuple(sorted(p)) for p in owner[owner[:, 0] != owner[:, 1]].tolist()}
+    kept = []
+    for j in range(len(patches)):
+        other = next((i for i in kept if (min(i, j), max(i, j)) in crossing), None)
+        if other is None:
+            kept.append(j)
+            continue
+        withdraw(report[closed_ids[j]], f"patch would intersect the patch of hole {closed_ids[other]}")
+    return kept
+
+
+def clashing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
+    """Patches validated alone can still clash where two holes share a pinched vertex.
+
+    When the merged mesh F2 has non-manifold edges, the patches are taken back in hole
+    order and each is kept only if its faces, with the original faces and the patches kept
+    so far, leave every such edge with at most two faces; the others are withdrawn and their
+    holes reported failed. The first of two clashing patches is kept, and no hole is ever
+    left half-filled.
+
+    Returns
+    -------
+    list of int  positions in ``patches`` of the patches kept
+    """
+    shared = np.concatenate(done_loops) if done_loops else np.zeros(0, np.int64)
+    if len(F2) == len(F) or len(np.unique(shared)) == len(shared):
+        return list(range(len(patches)))  # no two patches meet: nothing can clash
+    bad = nonmanifold_edges(F2)
+    if len(bad) == 0:
+        return list(range(len(patches)))
+    n = int(F2.max()) + 1
+    E = np.sort(np.stack([F2[:, [0, 1]], F2[:, [1, 2]], F2[:, [2, 0]]], axis=1).reshape(-1, 2), axis=1)
+    key = E[:, 0] * n + E[:, 1]
+    face = np.repeat(np.arange(len(F2)), 3)
+    on_bad = np.isin(key, bad[:, 0] * n + bad[:, 1])
+    key, face = key[on_bad], face[on_bad]
+    used = {}
+    for k in key[face < len(F)].tolist():
+        used[k] = used.get(k, 0) + 1
+    owner = np.repeat(np.arange(len(patches)), [len(p.faces) for p in patches])
+    patch_of = owner[face[face >= len(F)] - len(F)]
+    patch_keys = key[face >= len(F)]
+    keep = []
+    for j in range(len(patches)):
+        mine = {}
+        for k in patch_keys[patch_of == j].tolist():
+            mine[k] = mine.get(k, 0) + 1
+        if all(used.get(k, 0) + c <= 2 for k, c in mine.items()):
+            keep.append(j)
+            for k, c in mine.items():
+                used[k] = used.get(k, 0) + c
+        else:
+            withdraw(report[closed_ids[j]], "patch clashes with another patch at a shared vertex")
+    return keep

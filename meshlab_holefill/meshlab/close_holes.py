@@ -1,0 +1,42 @@
+"""A hole-filling algorithm as a MeshSet filter: the current layer to arrays, the pipeline, the filled layer back."""
+from __future__ import annotations
+
+import time
+
+from ..core.pipeline import fill_mesh_holes
+from .meshset_io import current_mesh_arrays, replace_current_mesh
+
+__all__ = ["close_holes"]
+
+
+def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None):
+    """Run one hole-filling algorithm on every eligible hole of the MeshSet's current mesh.
+
+    Parameters
+    ----------
+    ms : pymeshlab.MeshSet
+    fill, params, algorithm_params, rings, prepare
+        As for :func:`meshlab_holefill.core.pipeline.fill_mesh_holes`.
+
+    Returns
+    -------
+    dict
+        The pipeline's result; ``seconds`` includes reading and writing the layer.
+
+    Raises
+    ------
+    TypeError
+        ``ms`` is not a MeshSet.
+    ValueError
+        Empty MeshSet, point cloud, NaN/inf coordinates, non-manifold edges
+        (:class:`meshlab_holefill.MeshTopologyError`).
+    """
+    t_start = time.perf_counter()
+    arrays = current_mesh_arrays(ms)
+    filled, result = fill_mesh_holes(arrays, fill, params, algorithm_params=algorithm_params, rings=rings,
+                                     prepare=prepare)
+    if filled.changed:
+        replace_current_mesh(ms, filled.source, filled.V, filled.F, filled.vertex_attrs, filled.face_attrs,
+                             filled.wedge_texcoords, select_faces=filled.select_faces)
+    result["seconds"] = time.perf_counter() - t_start
+    return result

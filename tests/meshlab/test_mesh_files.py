@@ -1,0 +1,32 @@
+"""meshlab.mesh_files: arrays to and from pymeshlab, and MeshLab's point-to-surface distance."""
+import numpy as np
+import pytest
+
+from meshlab_holefill.meshlab.mesh_files import (is_mesh, load_mesh, mesh_arrays, meshset_from_arrays,
+                                                 point_to_surface_distances)
+
+from conftest import sample
+
+
+def test_arrays_round_trip_through_a_meshset_and_a_file(tmp_path):
+    V, F = load_mesh(sample("bone.ply"))
+    assert V.dtype == np.float64 and F.dtype == np.int64 and V.shape[1] == F.shape[1] == 3
+    ms = meshset_from_arrays(V, F, "bone")
+    assert ms.current_mesh().label() == "bone" and is_mesh(ms) and is_mesh(ms.current_mesh())
+    for source in (ms, ms.current_mesh()):
+        V1, F1 = mesh_arrays(source)
+        assert np.array_equal(V1, V) and np.array_equal(F1, F)
+    ms.save_current_mesh(str(tmp_path / "bone.ply"))
+    V2, F2 = load_mesh(tmp_path / "bone.ply")
+    assert np.allclose(V2, V, atol=1e-6) and np.array_equal(F2, F)
+    assert not is_mesh((V, F))
+    with pytest.raises(TypeError, match="pymeshlab.Mesh"):
+        mesh_arrays((V, F))
+
+
+def test_point_to_surface_distances_of_a_unit_square():
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    X = np.array([[0.5, 0.5, 2.0], [2.0, 0.5, 0.0], [-3.0, -4.0, 0.0]])
+    assert point_to_surface_distances(X, V, F) == pytest.approx([2.0, 1.0, 5.0], abs=1e-6)
+    assert point_to_surface_distances(np.empty((0, 3)), V, F).shape == (0,)

@@ -1,0 +1,68 @@
+"""meshlab_holefill.fill_holes: the pipeline on (V, F) arrays, the same meshes as the MeshSet filters."""
+import numpy as np
+import pytest
+
+import meshlab_holefill
+from conftest import meshset_from_arrays, sphere_with_holes
+from meshlab_holefill.core.holes import boundary_loops
+
+
+@pytest.fixture(scope="module")
+def holed_sphere():
+    V, F, _ = sphere_with_holes(subdiv=3)
+    return V, F
+
+
+@pytest.mark.parametrize("name", meshlab_holefill.algorithm_names())
+def test_the_arrays_get_the_same_mesh_as_the_meshset_filter(holed_sphere, name):
+    V, F = holed_sphere
+    V2, F2, result = meshlab_holefill.fill_holes(V, F, name)
+    assert result["closed_holes"] == 2 and len(boundary_loops(F2)) == 0
+    np.testing.assert_array_equal(V2[:len(V)], V)
+    ms = meshset_from_arrays(V, F)
+    getattr(ms, meshlab_holefill.algorithms.find_algorithm(name).filter_name)()
+    np.testing.assert_array_equal(ms.current_mesh().vertex_matrix(), V2)
+    np.testing.assert_array_equal(ms.current_mesh().face_matrix(), F2)
+
+
+def test_the_filter_name_is_accepted_too_and_parameters_are_validated(holed_sphere):
+    V, F = holed_sphere
+    _, _, result = meshlab_holefill.fill_holes(V, F, "meshing_close_holes_curve_unfolding", maxholesize=5)
+    assert [h["status"] for h in result["holes"]] == ["skipped", "skipped"]
+    with pytest.raises(meshlab_holefill.FilterParameterError, match="has no parameter 'sigma'"):
+        meshlab_holefill.fill_holes(V, F, "min_angle_bilateral", sigma=1)
+    with pytest.raises(meshlab_holefill.FilterParameterError, match="unknown algorithm 'liepa'; valid: min_angle"):
+        meshlab_holefill.fill_holes(V, F, "liepa")
+
+
+def test_selected_faces_choose_the_holes(holed_sphere):
+    V, F = holed_sphere
+    loops = boundary_loops(F)
+    selected = np.zeros(len(F), bool)
+    selected[loops[0].border_faces] = True
+    _, _, result = meshlab_holefill.fill_holes(V, F, selected_faces=selected, selected=True)
+    assert [h["status"] for h in result["holes"]] == ["closed", "skipped"]
+    with pytest.raises(ValueError, match="selected_faces has 3 entries"):
+        meshlab_holefill.fill_holes(V, F, selected_faces=[True, False, True])
+
+
+@pytest.mark.parametrize("V, F, message", [
+    (np.zeros((4, 2)), np.array([[0, 1, 2]]), r"V must be an \(n, 3\) array"),
+    (np.zeros((4, 3)), np.array([[0, 1]]), r"F must be an \(m, 3\) array"),
+    (np.zeros((4, 3)), np.zeros((0, 3), int), "no faces"),
+    (np.zeros((4, 3)), np.array([[0, 1, 7]]), "F refers to vertex 7, outside 0..3"),
+    (np.array([[0, 0, 0], [1, 0, 0], [np.nan, 1, 0]]), np.array([[0, 1, 2]]), "1 vertices with NaN"),
+    (np.zeros((4, 3)), np.array([[0.0, 1.0, 2.0]]), "vertex indices"),
+])
+def test_bad_arrays_are_refused_naming_the_problem(V, F, message):
+    with pytest.raises(ValueError, match=message):
+        meshlab_holefill.fill_holes(V, F)
+
+
+def test_non_manifold_edges_are_refused_and_the_arrays_are_untouched():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1.0]])
+    F = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    before = F.copy()
+    with pytest.raises(meshlab_holefill.MeshTopologyError, match="non-manifold edges"):
+        meshlab_holefill.fill_holes(V, F)
+    np.testing.assert_array_equal(F, before)
