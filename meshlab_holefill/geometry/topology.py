@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["interior_edges", "one_ring_matrix", "undirected_keys", "edge_pair_set"]
+__all__ = ["interior_edges", "one_ring_matrix", "undirected_keys", "edge_pair_set", "face_adjacency"]
 
 
 def interior_edges(F, n):
