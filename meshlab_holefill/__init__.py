@@ -65,11 +65,11 @@ else:
 def compare(meshes, report=None, **options):
     """Fill holes in meshes with every filler, measure them, and optionally write a report.
 
-    See :func:`meshlab_holefill.evaluation.cut_holes.compare` for the options.
+    See :func:`meshlab_holefill.evaluation.compare.compare` for the options.
     """
     if PYMESHLAB_ERROR is not None:
         raise ImportError(f"meshlab_holefill.compare needs pymeshlab, which cannot be imported ({PYMESHLAB_ERROR})")
-    from .evaluation.cut_holes import compare as run
+    from .evaluation.compare import compare as run
 
     return run(meshes, report=report, **options)
 

@@ -14,3 +14,10 @@ if [ ! -f "$stamp" ]; then
     .venv/bin/python -m pip install --quiet -e ".[test,bench]"
     touch "$stamp"
 fi
+# MeshLab 2020.09's meshlabserver (Debian package meshlab) and xvfb-run, for the tests that run
+# scripts through the real MeshLab: installed when running as root with apt-get and missing.
+if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1 \
+        && ! { command -v meshlabserver && command -v xvfb-run; } >/dev/null 2>&1; then
+    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq meshlab xvfb; } \
+        >/dev/null 2>&1 || echo "scripts/_setup.sh: could not install meshlab and xvfb; the meshlabserver tests are skipped" >&2
+fi

@@ -10,10 +10,14 @@ other name or script goes to pymeshlab's own method, unchanged.
 """
 from __future__ import annotations
 
+import re
 import weakref
+from xml.sax.saxutils import unescape
 
 import pymeshlab
 
+from . import listing_doors
+from .mlx import names as mlx_names
 from .mlx import script as mlx
 from . import registration as registry
 
@@ -49,33 +53,46 @@ def print_filter_parameter_list(filter_name):
         _PRINT_PARAMETERS(filter_name)
 
 
-def _names_our_filter(path):
-    """Does the script at ``path`` name one of our filters (python or MeshLab display name)?"""
+_FILTER_NAME = re.compile(r"""<(?:xml)?filter\b[^>]*\bname=(?:"([^"]*)"|'([^']*)')""")
+
+
+def _needs_our_reader(path):
+    """Does the script at ``path`` name a filter pymeshlab cannot run by that name?
+
+    That is one of our filters, or a built-in named otherwise than by its current display
+    name (a MeshLab 2020.09 name such as "Repair non Manifold Edges by removing faces", a
+    pre-2022 or a python name). Unknown names stay pymeshlab's business.
+    """
     try:
         with open(path, "rb") as fh:
             text = fh.read().decode("utf-8", "replace")
     except OSError:
         return False
-    names = {spec.name for spec in registry.FILTERS.values()} | {spec.display_name for spec in registry.FILTERS.values()}
-    return any(f'"{name}"' in text for name in names)
+    for match in _FILTER_NAME.finditer(text):
+        understood = mlx_names.resolve_filter(unescape(match.group(1) or match.group(2) or ""))
+        if understood is not None and (understood.ours or understood.how != "display name"
+                                       or understood.meshlab_2020 is not None and understood.meshlab_2020.implied):
+            return True
+    return False
 
 
 def load_filter_script(self, file_path):
-    """``MeshSet.load_filter_script``; a script naming our filters is read and checked here too.
+    """``MeshSet.load_filter_script``; a script naming our filters or old names is read and checked here too.
 
-    pymeshlab loads such a script without complaint; it is also parsed and validated by
+    pymeshlab loads such a script (ours, or one written for MeshLab 2020.09) without complaint
+    and fails when applying it; it is also parsed and validated by
     :func:`.mlx.read_filter_script` (an invalid one raises :class:`.mlx.MlxScriptError` now,
     naming every problem), and :func:`apply_filter_script` then runs that.
     """
     result = _LOAD_SCRIPT(self, file_path)
     _LOADED.pop(self, None)
-    if _names_our_filter(file_path):
+    if _needs_our_reader(file_path):
         _LOADED[self] = mlx.read_filter_script(file_path)
     return result
 
 
 def apply_filter_script(self):
-    """``MeshSet.apply_filter_script``: a loaded script naming our filters runs through :func:`.mlx.run_filter_script`.
+    """``MeshSet.apply_filter_script``: a script loaded by our reader runs through :func:`.mlx.run_filter_script`.
 
     Filters applied after the script was loaded are not appended to it then (pymeshlab
     appends them to its own script).
@@ -103,3 +120,4 @@ def extend():
             (pymeshlab.MeshSet, "clear_filter_script", clear_filter_script, _CLEAR_SCRIPT)):
         wrapper.pymeshlab_original = original
         setattr(owner, name, wrapper)
+    listing_doors.extend()

@@ -17,6 +17,7 @@ import pymeshlab
 
 from ..core import parameters as _parameters
 from ..core.parameters import MLX_TYPES, FilterParameterError, ParamSpec, Percentage  # noqa: F401 (re-exported)
+from .exceptions import pymeshlab_filter_list, raises_meshset_errors
 from .meshset_io import current_mesh_exists
 
 def shown_value(value):
@@ -133,7 +134,7 @@ def filter_list():
 
 
 def is_builtin_filter(name):
-    return name in set(pymeshlab.filter_list())
+    return name in set(pymeshlab_filter_list())
 
 
 def filter_help(name):
@@ -157,6 +158,7 @@ def filter_help(name):
     return "\n".join(lines)
 
 
+@raises_meshset_errors
 def print_filter_parameter_list(name):
     """Print the parameters of a filter (ours, or pymeshlab's for a built-in name)."""
     if name in FILTERS:
@@ -167,6 +169,7 @@ def print_filter_parameter_list(name):
         raise FilterParameterError(f"unknown filter '{name}'")
 
 
+@raises_meshset_errors
 def apply_filter(ms, name, **kwargs):
     """Run a filter by name: one of ours, or any pymeshlab built-in filter.
 

@@ -6,7 +6,7 @@ from hypothesis import given, settings, strategies as st
 
 import meshlab_holefill  # noqa: F401  (registers the filters)
 from meshlab_holefill.geometry.intersections import faces_intersecting
-from meshlab_holefill.core.crossings import patch_intersections
+from meshlab_holefill.core.crossings import face_boxes_near, patch_intersections
 from meshlab_holefill.meshlab.close_holes import close_holes
 from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops, nonmanifold_edges
 from meshlab_holefill.core.patch import Patch, validate_patch

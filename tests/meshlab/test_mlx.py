@@ -130,7 +130,8 @@ def test_meshlab_parameter_name_rule():
 
 
 @pytest.mark.parametrize("name, python_name, how", [
-    ("Re-Orient all faces coherentely", "meshing_re_orient_faces_coherently", "old display name"),
+    ("Re-Orient all faces coherentely", "meshing_re_orient_faces_coherently", "MeshLab 2020.09 name"),
+    ("re-orient all faces coherentely", "meshing_re_orient_faces_coherently", "old display name"),
     ("remove_duplicate_vertices", "meshing_remove_duplicate_vertices", "old python name"),
     ("laplacian_smooth", "apply_coord_laplacian_smoothing", "old python name"),
     ("snapshot", "save_snapshot", "old python name"),
@@ -379,7 +380,8 @@ PRESET_WORKFLOWS = {
 
 def test_every_workflow_is_documented_and_every_filter_has_one():
     files = sorted(f for f in os.listdir(WORKFLOWS) if f.endswith(".mlx"))
-    assert (set(ALGORITHM_WORKFLOWS) | set(PRESET_WORKFLOWS) | {"scan_repair.mlx", "meshlab_close_holes.mlx"}
+    assert (set(ALGORITHM_WORKFLOWS) | set(PRESET_WORKFLOWS)
+            | {"scan_repair.mlx", "meshlab_close_holes.mlx", "meshlab_close_holes_2020.09.mlx"}
             == set(files))
     for name in files:
         with open(os.path.join(WORKFLOWS, name)) as f:

@@ -34,34 +34,10 @@ from importlib import resources
 import pymeshlab
 
 from .. import registration as registry
+from .python_names import python_param_name
+from .versions import filter_2020
 
 TABLE_FILE = "meshlab_filter_names.tsv"
-
-# pymeshlab's computePythonName appends '_' to these (its list, including its missing comma
-# that leaves out "def" and "from", so that the names agree with pymeshlab's).
-_PYMESHLAB_KEYWORDS = {
-    "False", "await", "else", "import", "pass", "None", "break", "except", "in", "raise", "True", "class",
-    "finally", "is", "return", "and", "continue", "for", "lambda", "try", "as", "def\tfrom", "nonlocal",
-    "while", "assert", "del", "global", "not", "with", "async", "elif", "if", "or", "yield",
-}
-_REMOVED_CHARACTERS = re.compile(r"""[()\[\].,'":+]+""")
-
-
-def python_param_name(mlx_name):
-    """MeshLab's rule from a MeshLab name to the pymeshlab python name.
-
-    Lower case; ``' '``, ``'/'`` and ``'-'`` become ``'_'``; the characters ``()[].,'":+``
-    are removed; a python keyword gets a trailing ``'_'`` ("lambda" -> "lambda_"). This is
-    pymeshlab's ``computePythonName`` (which also produced the pre-2022 filter names from
-    display names); pymeshlab's regular expression does not remove ``[]``, this one does,
-    so that the result is always an identifier (no MeshLab name contains them).
-    """
-    name = mlx_name.lower().replace(" ", "_").replace("/", "_").replace("-", "_")
-    name = _REMOVED_CHARACTERS.sub("", name)
-    if name in _PYMESHLAB_KEYWORDS:
-        name += "_"
-    return name
-
 
 @functools.lru_cache(maxsize=None)
 def builtin_display_names():
@@ -78,7 +54,9 @@ def builtin_display_names():
 
 @functools.lru_cache(maxsize=None)
 def _builtin_names():
-    return frozenset(pymeshlab.filter_list())
+    from ..exceptions import pymeshlab_filter_list
+
+    return frozenset(pymeshlab_filter_list())
 
 
 def check_filter_table():
@@ -147,12 +125,16 @@ class FilterName:
     ours : bool
         True for a filter of this package, False for a pymeshlab built-in.
     how : str
-        'display name', 'python name', 'old display name' or 'old python name'.
+        'display name', 'python name', 'MeshLab 2020.09 name', 'old display name' or
+        'old python name'.
+    meshlab_2020 : versions.Filter2020 or None
+        The MeshLab 2020.09 filter of this name, when it is one and stands for this filter.
     """
 
     python_name: str
     ours: bool
     how: str
+    meshlab_2020: object = None
 
 
 @functools.lru_cache(maxsize=None)
@@ -171,14 +153,30 @@ def resolve_filter(name):
     Tried in order: a display name of ours, a python name of ours, a current built-in display
     name, a current built-in python name, an old (pre-2022) python name, a current display
     name compared by MeshLab's rule (ignoring case and punctuation), an old display name
-    (by the rule that made the old python names). Current names win over old ones
+    (by the rule that made the old python names); a MeshLab 2020.09 display name
+    (:mod:`.versions`) is tried right after the current names. Current names win over old ones
     ("Ambient Occlusion" is today the GPU filter; before 2022 it was
     ``compute_scalar_ambient_occlusion``).
+
+    A built-in filter named by its MeshLab 2020.09 name gets that filter's table entry
+    (``meshlab_2020``): its implied and renamed parameters, and the parameters current
+    MeshLab dropped.
 
     Returns
     -------
     FilterName or None
     """
+    understood = _resolve_filter(name)
+    if understood is None or understood.ours:
+        return understood
+    f2020 = filter_2020(name)
+    if f2020 is not None and f2020.python_name == understood.python_name:
+        return FilterName(understood.python_name, False, understood.how, f2020)
+    return understood
+
+
+def _resolve_filter(name):
+    """The filter a name stands for, without the MeshLab 2020.09 details."""
     for spec in registry.FILTERS.values():
         if name == spec.display_name:
             return FilterName(spec.name, True, "display name")
@@ -190,6 +188,9 @@ def resolve_filter(name):
         return FilterName(exact[name], False, "display name")
     if name in builtins:
         return FilterName(name, False, "python name")
+    f2020 = filter_2020(name)
+    if f2020 is not None and f2020.python_name in builtins:
+        return FilterName(f2020.python_name, False, "MeshLab 2020.09 name")
     old = old_python_names()
     if name in old:
         return FilterName(old[name], False, "old python name")

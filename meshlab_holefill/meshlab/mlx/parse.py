@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from xml.parsers import expat
 
-from ...errors import MlxRunError, MlxScriptError
+from ..exceptions import MlxRunError, MlxScriptError
 from . import names as mlx_names
 
 __all__ = ["MlxRunError", "MlxScriptError", "ScriptProblem", "last_recorded_filter", "parse_xml"]

@@ -43,7 +43,10 @@ from dataclasses import dataclass, field
 from typing import Any
 from xml.parsers import expat
 
+import pymeshlab
+
 from . import names as mlx_names
+from . import versions as mlx_versions
 from .. import registration as registry
 from .values import ParamValueError, builtin_param_value, our_param_value
 from ..meshset_io import current_mesh_exists
@@ -122,6 +125,11 @@ def _validate(root, source, base_dir):
             problems.append(ScriptProblem(source, element.line, None, None, "<filter> without a name attribute"))
             continue
         understood = mlx_names.resolve_filter(name)
+        removed = mlx_versions.filter_2020(name) if understood is None else None
+        if removed is not None:
+            problems.append(ScriptProblem(source, element.line, name, None,
+                                          f"a MeshLab 2020.09 filter that current MeshLab does not have: {removed.note}"))
+            continue
         if understood is None:
             hint = mlx_names.suggest_filters(name)
             problems.append(ScriptProblem(
@@ -149,8 +157,11 @@ def _validate(root, source, base_dir):
             try:
                 if understood.ours:
                     python_name, value = our_param_value(spec, child, param_name, mlx_type, base_dir)
+                elif _dropped_2020_param(understood, kinds, child):
+                    continue
                 else:
-                    python_name, value = builtin_param_value(kinds, child, param_name, mlx_type, base_dir)
+                    python_name, value = builtin_param_value(kinds, child, _param_name_2020(understood, param_name),
+                                                             mlx_type, base_dir)
             except ParamValueError as exc:
                 problems.append(ScriptProblem(source, child.line, name, param_name, str(exc)))
                 continue
@@ -160,6 +171,7 @@ def _validate(root, source, base_dir):
                 continue
             seen[python_name] = child.line
             params.append(ScriptParam(param_name, mlx_type, child.line, python_name, value))
+        problems.extend(_add_implied_params(understood, params, seen, source, element.line, name))
         steps.append(ScriptStep(index, element.line, name, understood.python_name, understood.ours,
                                 understood.how, params))
     if problems:
@@ -167,6 +179,41 @@ def _validate(root, source, base_dir):
         raise MlxScriptError(f"{len(problems)} problem(s) in filter script {source}; nothing was run:\n  {lines}",
                              problems)
     return FilterScript(steps, source)
+
+
+def _param_name_2020(understood, param_name):
+    """The name to look a parameter up by: a renamed MeshLab 2020.09 parameter gets its current name."""
+    f2020 = understood.meshlab_2020
+    return f2020.renamed.get(param_name, param_name) if f2020 is not None else param_name
+
+
+def _dropped_2020_param(understood, kinds, element):
+    """Is this a MeshLab 2020.09 parameter that current MeshLab dropped, given at its default?
+
+    Raises ParamValueError when it is one with another value.
+    """
+    f2020 = understood.meshlab_2020
+    if f2020 is None or kinds is None or f2020.python_param(element.name) in kinds:
+        return False
+    problem = mlx_versions.dropped_param_problem(f2020, element.name, element.attrs)
+    if problem:
+        raise ParamValueError(problem)
+    return problem == ""
+
+
+def _add_implied_params(understood, params, seen, source, line, name):
+    """Add the parameter values a MeshLab 2020.09 filter name implies; problems if the script contradicts them."""
+    f2020 = understood.meshlab_2020
+    if f2020 is None or understood.how != "MeshLab 2020.09 name":
+        return []
+    problems = []
+    for python_name, value in f2020.implied.items():
+        if python_name in seen:
+            problems.append(ScriptProblem(source, seen[python_name], name, python_name,
+                                          f"set by the MeshLab 2020.09 filter name itself ({python_name}={value!r})"))
+            continue
+        params.append(ScriptParam(python_name, None, line, python_name, value))
+    return problems
 
 
 def read_filter_script(path_or_xml):

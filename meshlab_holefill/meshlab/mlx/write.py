@@ -16,6 +16,9 @@ and types), real values written at full precision (the arguments given, and the 
 pymeshlab computed for the mesh just before the call); only a ``PercentageValue`` given to a
 built-in keeps pymeshlab's 6-digit absolute value. Replaying the script on the same input
 (:func:`meshlab_holefill.meshlab.mlx.script.run_filter_script`) gives the same mesh.
+
+``target="meshlab-2020.09"`` writes MeshLab 2020.09's names, parameter sets and types instead
+(:mod:`.versions`), for its ``meshlabserver``; it refuses our filters, which MeshLab cannot run.
 """
 from __future__ import annotations
 
@@ -27,6 +30,7 @@ import numpy as np
 import pymeshlab
 
 from . import names as mlx_names
+from . import versions as mlx_versions
 from .. import registration as registry
 from ..._version import __version__
 from .parse import last_recorded_filter
@@ -138,20 +142,45 @@ def _recorded_element(call):
         return None
 
 
-def _filter_xml(call):
+def _builtin_record_params(call, record):
+    """The parameters of pymeshlab's record of a built-in call, with the full-precision values used."""
+    params = []
+    used = dict(call.defaults or {})
+    used.update(call.kwargs)
+    for child in record.children:
+        attrs = dict(child.attrs)
+        python_name = mlx_names.python_param_name(attrs.get("name", ""))
+        if python_name in used:
+            _exact_builtin_value(attrs, used[python_name])
+        params.append(attrs)
+    return params
+
+
+def _filter_xml_2020(call):
+    """A recorded call as MeshLab 2020.09 writes it (see :func:`mlx_versions.filter_params_2020`)."""
+    if call.name in registry.FILTERS:
+        raise mlx_versions.MlxTargetError(
+            f"filter '{call.name}' ('{registry.FILTERS[call.name].display_name}') is a meshlab_holefill filter, "
+            "written in Python: MeshLab 2020.09 cannot run it. Save with target='meshlab' and run the script "
+            "with meshlab_holefill.run_filter_script or `meshlab-holefill run`")
+    record = _recorded_element(call)
+    if record is None:
+        raise mlx_versions.MlxTargetError(f"filter '{call.name}': pymeshlab's record of the call is not available, "
+                                          "and MeshLab 2020.09 needs every parameter")
+    display, params = mlx_versions.filter_params_2020(call, _builtin_record_params(call, record))
+    if not params:
+        return [f" <filter name={quoteattr(display)}/>"]
+    return [f" <filter name={quoteattr(display)}>"] + [_param_xml(a) for a in params] + [" </filter>"]
+
+
+def _filter_xml(call, target=mlx_versions.CURRENT):
+    if target == mlx_versions.MESHLAB_2020_09:
+        return _filter_xml_2020(call)
     lines = []
     if call.name in registry.FILTERS:
         display, params = registry.FILTERS[call.name].display_name, _our_filter_params(call)
     elif (record := _recorded_element(call)) is not None:
-        display, params = record.name, []
-        used = dict(call.defaults or {})
-        used.update(call.kwargs)
-        for child in record.children:
-            attrs = dict(child.attrs)
-            python_name = mlx_names.python_param_name(attrs.get("name", ""))
-            if python_name in used:
-                _exact_builtin_value(attrs, used[python_name])
-            params.append(attrs)
+        display, params = record.name, _builtin_record_params(call, record)
     else:
         display, params = mlx_names.display_name(call.name), _builtin_params_from_kwargs(call)
         lines.append(" <!-- parameters not listed keep their defaults (pymeshlab's record of this call was "
@@ -161,7 +190,16 @@ def _filter_xml(call):
     return lines + [f" <filter name={quoteattr(display)}>"] + [_param_xml(a) for a in params] + [" </filter>"]
 
 
-def filter_script_xml(ms, comment=None):
+def _default_comment(target):
+    if target == mlx_versions.MESHLAB_2020_09:
+        return (f"Recorded by meshlab_holefill {__version__} for MeshLab 2020.09: run with "
+                "meshlabserver -i in.ply -o out.ply -s this.mlx, or meshlab_holefill.run_filter_script(ms, path).")
+    return (f"Recorded by meshlab_holefill {__version__}. Run with meshlab_holefill.run_filter_script(ms, path) "
+            "or `meshlab-holefill run`; the 'Close Holes: ...' filters of meshlab_holefill are unknown to "
+            "MeshLab itself.")
+
+
+def filter_script_xml(ms, comment=None, target=mlx_versions.CURRENT):
     """The filters applied to ``ms`` through this package, as MeshLab FilterScript XML text.
 
     Parameters
@@ -169,30 +207,47 @@ def filter_script_xml(ms, comment=None):
     ms : pymeshlab.MeshSet
     comment : str, optional
         Text of an XML comment written before the script.
-    """
+    target : {'meshlab', 'meshlab-2020.09'}
+        Current MeshLab's names (pymeshlab's), or MeshLab 2020.09's names, parameter sets and
+        types, which its ``meshlabserver`` accepts (every parameter written, none it lacks).
 
+    Raises
+    ------
+    MlxTargetError
+        With target 'meshlab-2020.09': a filter of this package (Python, which MeshLab cannot
+        run), a filter MeshLab 2020.09 does not have, or a parameter it does not have set to
+        a non-default value; the message names the filter.
+    """
+    mlx_versions.check_target(target)
     if comment is None:
-        comment = (f"Recorded by meshlab_holefill {__version__}. Run with meshlab_holefill.run_filter_script(ms, path) "
-                   "or `meshlab-holefill run`; the 'Close Holes: ...' filters of meshlab_holefill are unknown to "
-                   "MeshLab itself.")
+        comment = _default_comment(target)
     lines = ["<!DOCTYPE FilterScript>", f"<!-- {escape(comment).replace('--', '- -')} -->", "<FilterScript>"]
     for call in registry.filter_calls(ms):
-        lines.extend(_filter_xml(call))
+        lines.extend(_filter_xml(call, target))
     lines.append("</FilterScript>")
     return "\n".join(lines) + "\n"
 
 
-def save_filter_script(ms, path, comment=None):
+def save_filter_script(ms, path, comment=None, target=mlx_versions.CURRENT):
     """Write the filters applied to ``ms`` through this package as a MeshLab .mlx script.
 
     Replaying it with :func:`run_filter_script` on the same input gives the same mesh.
+
+    Parameters
+    ----------
+    ms : pymeshlab.MeshSet
+    path : str or os.PathLike
+    comment : str, optional
+    target : {'meshlab', 'meshlab-2020.09'}
+        Whose names to write: current MeshLab's (default), or MeshLab 2020.09's, for its
+        ``meshlabserver`` (built-in filters only); see :func:`filter_script_xml`.
 
     Returns
     -------
     str
         The path written.
     """
-    text = filter_script_xml(ms, comment)
+    text = filter_script_xml(ms, comment, target)
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
     return os.fspath(path)
