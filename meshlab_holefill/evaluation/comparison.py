@@ -366,7 +366,9 @@ def _hole_entry(result, loop_index):
     return None
 
 
-_ENTRY_KEYS = {"hole", "boundary_edges", "pinched", "status", "reason", "seconds", "new_vertices", "new_faces"}
+# The pipeline's own entry fields (and the hole's measures), which are not the algorithm's figures.
+_ENTRY_KEYS = {"hole", "boundary_edges", "pinched", "status", "reason", "seconds", "new_vertices", "new_faces",
+               "centroid", "perimeter", "diameter", "area", "planarity", "size_class"}
 
 
 def _patch_info(entry):
