@@ -201,7 +201,10 @@ class IsolatedRunner:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join([_package_root()] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep)
                                                                    if p])
-        code = f"from meshlab_holefill.evaluation.isolation import worker_main; worker_main({child.fileno()})"
+        # -c puts the current directory first on sys.path; the worker imports only this package,
+        # so that entry goes (a mesh folder's own python files never shadow a library here).
+        code = ("import sys; sys.path[:1] = [] if sys.path[:1] == [''] else sys.path[:1]; "
+                f"from meshlab_holefill.evaluation.isolation import worker_main; worker_main({child.fileno()})")
         try:
             self._proc = subprocess.Popen([sys.executable, "-c", code], pass_fds=(child.fileno(),), env=env,
                                           stdin=subprocess.DEVNULL, close_fds=True)
