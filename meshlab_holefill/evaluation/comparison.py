@@ -6,7 +6,9 @@ All metrics are computed here in the parent, by :func:`.metrics.hole_metrics`.
 """
 from __future__ import annotations
 
+import logging
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -25,6 +27,10 @@ __all__ = ["BASELINE", "Comparison", "Filler", "Hole", "MeshCase", "PreparedCase
            "evaluate_run", "parse_fillers", "prepare_case", "resolve_params", "run_comparison"]
 
 BASELINE = "meshing_close_holes"
+
+#: One INFO record per run (case, filler, status, holes closed, seconds); a child of the package's
+#: ``logging.getLogger("meshlab_holefill")``.
+logger = logging.getLogger(__name__)
 
 
 # ----------------------------------------------------------------------------------- cases
@@ -56,12 +62,12 @@ class MeshCase:
 class Hole:
     """One evaluated hole of a prepared case."""
 
-    index: int
+    index: int  # the hole's number: its boundary loop index, as in `meshlab-holefill holes` and fill results
     size_class: str
     shape: str
     boundary_edges: int
     loop: np.ndarray  # (k,) ordered boundary vertices (indices into the case's V0)
-    loop_index: int  # position among boundary_loops(F0), as in our filters' result['holes']
+    loop_index: int  # position among boundary_loops(F0), as in our filters' result['holes'] (== index)
     border: tuple  # ((k, 2) int64 half-edges, (k,) int64 faces) in F0
     ground_truth: tuple | None = None  # ((n0 + g, 3), (r, 3)) indexed like a filled mesh
     quality_bound: float = 1.0  # metrics.corner_quality_bound: best reachable minimum quality
@@ -223,8 +229,9 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
             if lp is None:
                 notes.append(f"a {size} hole did not leave a simple boundary loop; left out")
                 continue
-            out.append(Hole(len(out), size, shape, len(lp), lp.vertices, li, _border(F0, he, hf, lp.vertices),
+            out.append(Hole(li, size, shape, len(lp), lp.vertices, li, _border(F0, he, hf, lp.vertices),
                             truth, corner_quality_bound(V0, F0, lp.vertices)))
+        out.sort(key=lambda h: h.index)  # numbered and listed as `meshlab-holefill holes` lists the loops
     else:
         kind = "natural holes"
         V0, F0 = V, F
@@ -240,7 +247,7 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
                 continue
             # An island's outline is listed apart: capping it folds over the island (holes.outline_ratios).
             kind_of = "outline" if outline[i] else "natural"
-            out.append(Hole(len(out), kind_of, kind_of, len(lp), lp.vertices, i,
+            out.append(Hole(i, kind_of, kind_of, len(lp), lp.vertices, i,
                             _border(F0, he, hf, lp.vertices), None, corner_quality_bound(V0, F0, lp.vertices)))
     return PreparedCase(case.name, kind, V0, F0, diag, out, notes, case.analytic, case.surface_area, len(F))
 
@@ -359,7 +366,9 @@ def _hole_entry(result, loop_index):
     return None
 
 
-_ENTRY_KEYS = {"hole", "boundary_edges", "pinched", "status", "reason", "seconds", "new_vertices", "new_faces"}
+# The pipeline's own entry fields (and the hole's measures), which are not the algorithm's figures.
+_ENTRY_KEYS = {"hole", "boundary_edges", "pinched", "status", "reason", "seconds", "new_vertices", "new_faces",
+               "centroid", "perimeter", "diameter", "area", "planarity", "size_class"}
 
 
 def _patch_info(entry):
@@ -429,10 +438,10 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
     patches = assign_patches(F1[first_patch_face:], [h.loop for h in case.holes])
     max_size = resolved_params.get("maxholesize", 30 if filler.filter == BASELINE else 1000)
     closed_count = 0
-    for h, row in zip(case.holes, base):
+    for position, (h, row) in enumerate(zip(case.holes, base)):
         entry = _hole_entry(result, h.loop_index)
         open_left = bool(np.isin(he1, h.loop).all(axis=1).any())
-        patch_idx = first_patch_face + patches[h.index]
+        patch_idx = first_patch_face + patches[position]
         closed = (not open_left) and len(patch_idx) > 0
         if entry is not None and entry.get("seconds") is not None:
             row["seconds"] = entry["seconds"]
@@ -462,6 +471,35 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
     return run, base, pictures
 
 
+def short_filler(label):
+    """A filler label without the common ``meshing_close_holes_`` prefix (for the progress bar)."""
+    return label.replace("meshing_close_holes_", "")
+
+
+def _progress_bar(total, progress):
+    """A tqdm bar over the runs on stderr, or None.
+
+    ``progress`` None (the default) shows it when stderr is a terminal, True always, False never.
+    """
+    if progress is None:
+        progress = bool(getattr(sys.stderr, "isatty", lambda: False)())
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="run", file=sys.stderr, dynamic_ncols=True)
+
+
+def _log_run(run, holes, number, total):
+    """One INFO record per run on the ``meshlab_holefill`` logger (its extra fields carry the run row)."""
+    seconds = run.get("seconds")
+    logger.info("compare run %d/%d: %s / %s: %s, %d/%d holes closed, %s s%s", number, total, run["case"],
+                run["filler"], run["status"], run.get("closed_holes", 0), holes,
+                "?" if seconds is None or seconds != seconds else f"{seconds:.2f}",
+                "" if run["status"] == "ok" else f" ({run.get('error')})",
+                extra={"comparison_run": {k: v for k, v in run.items()}})
+
+
 def resolve_params(filler, cases):
     """The filler's parameters for these cases ("all" -> a maxholesize covering every hole).
 
@@ -482,10 +520,11 @@ def resolve_params(filler, cases):
 
 
 def run_comparison(meshes, holes=4, sizes=("small", "medium", "large"), seed=0, filters=None, refinehole=False,
-                   timeout=300.0, maxholesize=1000, progress=True, full_metrics=True, cases=None):
+                   timeout=300.0, maxholesize=1000, progress=None, full_metrics=True, cases=None):
     """Prepare the cases, run every filler on each in an isolated worker, measure.
 
-    Parameters are those of :func:`.compare.compare`; ``cases`` may pass
+    Parameters are those of :func:`.compare.compare` (``progress``: a tqdm bar per run on stderr,
+    None = when stderr is a terminal; each run is also logged at INFO); ``cases`` may pass
     already prepared cases (then ``meshes`` is ignored), ``full_metrics=False`` keeps only
     closed/reason/time/counts (for the scaling run).
 
@@ -506,16 +545,12 @@ def run_comparison(meshes, holes=4, sizes=("small", "medium", "large"), seed=0, 
         for h in case.holes:
             render[(case.name, h.index)] = {"context": _context_faces(case.V0, case.F0, h.loop), "V0": case.V0,
                                             "ground_truth": h.ground_truth, "loop": h.loop, "patches": {}}
-    try:
-        from tqdm import tqdm
-    except ImportError:  # the progress bar is a nicety
-        tqdm = None
     jobs = [(c, f) for c in cases for f in fillers]
-    bar = tqdm(total=len(jobs), disable=not progress, unit="run") if tqdm else None
+    bar = _progress_bar(len(jobs), progress)
     with IsolatedRunner() as runner:
-        for case, filler in jobs:
+        for number, (case, filler) in enumerate(jobs, 1):
             if bar is not None:
-                bar.set_description(f"{case.name} | {filler.label}"[:60])
+                bar.set_description(f"{case.name} | {short_filler(filler.label)}"[:50])
             params = resolve_params(filler, cases)
             task = {"kind": "filter", "V": case.V0, "F": case.F0, "filter": filler.filter, "params": params,
                     "label": case.name}
@@ -525,7 +560,9 @@ def run_comparison(meshes, holes=4, sizes=("small", "medium", "large"), seed=0, 
             rows += hole_rows
             for index, pic in pictures.items():
                 render[(case.name, index)]["patches"][filler.label] = pic
+            _log_run(run, len(case.holes), number, len(jobs))
             if bar is not None:
+                bar.set_postfix_str(f"{run['status']}, {run['closed_holes']}/{len(case.holes)} closed", refresh=False)
                 bar.update()
     if bar is not None:
         bar.close()
