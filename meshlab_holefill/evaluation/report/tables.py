@@ -176,8 +176,9 @@ def failures(comparison):
     for r in comparison.runs:
         if r["status"] != "ok":
             lines.append(f"{r['case']} / `{r['filler']}`: **{r['status']}**: {r.get('error')}")
+    failed_runs = {(r["case"], r["filler"]) for r in comparison.runs if r["status"] != "ok"}
     for r in comparison.holes:
-        if not r.get("closed") and not r.get("reason", "").startswith(("timeout", "crashed", "error")):
+        if not r.get("closed") and (r["case"], r["filler"]) not in failed_runs:
             lines.append(f"{r['case']} hole {r['hole']} ({r['boundary_edges']} edges) / `{r['filler']}`: {r['reason']}")
     return lines
 
