@@ -43,6 +43,8 @@ class MeshCase:
     removed : (m,) bool, optional
         Faces to remove as holes with ground truth (instead of holes cut at random).
     surface_area : float, optional  area of the analytic surface (Xu et al.'s error normalisation)
+    given_class : str  size class of the ``removed`` holes in the report ("given"; the creased cases
+        of :mod:`.creased` use "crease" and "crossing")
     """
 
     name: str
@@ -51,6 +53,7 @@ class MeshCase:
     analytic: object = None
     removed: np.ndarray | None = None
     surface_area: float | None = None
+    given_class: str = "given"
 
 
 @dataclass
@@ -198,7 +201,7 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
             removed = np.flatnonzero(np.asarray(case.removed, bool))
             _, label = connected_components(face_adjacency(F[removed]), directed=False)
             groups = [removed[label == c] for c in np.unique(label)]
-            specs = [("given", "given", None) for _ in groups]
+            specs = [(case.given_class, "given", None) for _ in groups]
         else:
             kind = "cut holes"
             plan = hole_plan(holes, sizes)
