@@ -74,10 +74,20 @@ def compare(meshes, report=None, **options):
     return run(meshes, report=report, **options)
 
 
+def batch(inputs, out, **options):
+    """Repair many mesh files on dask (a local cluster or yours): see :func:`meshlab_holefill.batch.batch`.
+
+    Imported on first use, so ``import meshlab_holefill`` does not load dask.
+    """
+    from .batch import batch as run
+
+    return run(inputs, out, **options)
+
+
 __all__ = [
     "FILTERS", "FilterParameterError", "HoleContext", "HoleFillError", "MeshTopologyError", "MlxRunError",
     "MlxScriptError", "PYMESHLAB_ERROR", "Patch", "Percentage", "__version__", "algorithm_names", "apply_filter",
-    "boundary_loops", "clear_filter_history", "compare", "fill_holes", "filter_calls", "filter_history",
+    "batch", "boundary_loops", "clear_filter_history", "compare", "fill_holes", "filter_calls", "filter_history",
     "filter_list", "filter_script_xml", "hole_context", "print_filter_parameter_list", "read_filter_script",
     "run_filter_script", "save_filter_script",
 ]

@@ -209,10 +209,61 @@ def _register_compare(sub):
 _SUBCOMMANDS.append(_register_compare)
 
 
+def cmd_batch(args, extra):
+    from .batch import BatchInterrupted, batch
+
+    params = _params_from_unknown(extra)
+    try:
+        report = batch(args.inputs, args.out, filter=args.filter, mlx=args.mlx, scheduler=args.scheduler,
+                       n_workers=args.workers, memory_limit=args.memory_limit, timeout=args.timeout,
+                       format=args.format, force=args.force, progress=False if args.quiet else None, **params)
+    except BatchInterrupted as stop:
+        print(f"meshlab-holefill: interrupted; report of the finished files: {stop.report.paths['summary']}",
+              file=sys.stderr)
+        return 130
+    if not args.quiet:
+        counts = ", ".join(f"{n} {status}" for status, n in report.counts.items() if n)
+        print(f"{len(report.files)} files: {counts} ({report.seconds:.1f} s); report: {report.paths['summary']}")
+        for record in report.failed:
+            print(f"failed: {record['input']}: {record.get('error')}")
+    return 1 if args.strict and report.failed else 0
+
+
+def _register_batch(sub):
+    from .batch import OUTPUT_FORMATS
+
+    p = sub.add_parser("batch", help="repair many files on dask (a local cluster, or yours with --scheduler); "
+                                     "extra --name value pairs are filter parameters",
+                       description="Fill the holes of many mesh files, one dask task per file. Files whose "
+                                   "output is up to date (same input content, filter and parameters) are skipped; "
+                                   "a file that crashes or kills its worker is retried once, then reported failed. Filter "
+                                   "parameters (--name value) go after the inputs.")
+    p.add_argument("inputs", nargs="+", metavar="INPUT", help="mesh files, folders (searched recursively) or globs")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder: repaired meshes, a .json result beside each, batch.json/.csv, summary.md")
+    what = p.add_mutually_exclusive_group()
+    what.add_argument("--filter", help="filter name (ours or any pymeshlab filter; default "
+                                       "meshing_close_holes_min_angle_bilateral)")
+    what.add_argument("--mlx", metavar="SCRIPT", help="run a MeshLab .mlx filter script instead of one filter")
+    p.add_argument("--format", choices=OUTPUT_FORMATS, help="output format (default: each input's own)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="a running dask scheduler, e.g. tcp://host:8786 "
+                                                          "(default: a local cluster)")
+    p.add_argument("--workers", type=int, help="worker processes of the local cluster (default: one per core)")
+    p.add_argument("--memory-limit", default="auto", help="per-worker memory limit of the local cluster, e.g. 4GiB")
+    p.add_argument("--timeout", type=float, help="seconds per file before it is stopped and reported failed")
+    p.add_argument("--force", action="store_true", help="redo files whose output is up to date")
+    p.add_argument("--strict", action="store_true", help="exit with status 1 when any file failed")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary on the terminal")
+    p.set_defaults(func=cmd_batch)
+
+
+_SUBCOMMANDS.append(_register_batch)
+
+
 def main(argv=None):
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
-    if extra and args.command != "fill":
+    if extra and args.command not in ("fill", "batch"):
         parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         return args.func(args, extra)

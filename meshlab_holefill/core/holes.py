@@ -428,3 +428,83 @@ def outline_ratios(V, F, loops):
         area = component_area[label[ids[0]]]
         ratios[i] = vector_area / area if area > 0 else np.inf
     return ratios
+
+
+def vector_area(points):
+    """Area enclosed by a closed polyline: the norm of its vector area (exact for a planar loop).
+
+    Parameters
+    ----------
+    points : (k, 3) float
+
+    Returns
+    -------
+    float
+    """
+    P = np.asarray(points, np.float64)
+    return float(0.5 * np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)))
+
+
+def is_outline(V, F, loop, incidence, face_areas_of=None):
+    """Whether a loop outlines its whole connected component: :func:`outline_ratios` >= OUTLINE_RATIO.
+
+    The same answer as the ratio, without labelling the whole mesh: the component is grown
+    from the loop's border faces one ring of faces at a time, through shared vertices (the
+    same connectivity as :func:`outline_ratios`), until either it is exhausted (then the
+    ratio is exact) or its area exceeds the loop's vector area / OUTLINE_RATIO (then the loop
+    is a hole). The work is bounded by about 1.3 times the hole's own area of surrounding
+    faces, so a hole in a 4M-face mesh costs what it costs in a small one.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+    loop : BoundaryLoop
+    incidence : (n, m) sparse
+        :func:`vertex_face_incidence` of (F, n).
+    face_areas_of : callable, optional
+        ``face_areas_of(faces) -> (k,) float``; defaults to computing them from V and F.
+
+    Returns
+    -------
+    bool
+    """
+    from ..geometry.quality import face_areas
+
+    ids = np.asarray(loop.vertices, np.int64)
+    budget = vector_area(V[ids]) / OUTLINE_RATIO
+    areas_of = face_areas_of or (lambda faces: face_areas(V, F[faces]))
+    frontier = np.unique(np.asarray(loop.border_faces, np.int64))
+    seen = np.zeros(len(F), bool)
+    seen[frontier] = True
+    area = float(areas_of(frontier).sum())
+    while area <= budget:
+        near = incidence[np.unique(F[frontier])].indices
+        frontier = np.unique(near[~seen[near]])
+        if len(frontier) == 0:  # the whole component, and no larger than the budget
+            return True
+        seen[frontier] = True
+        area += float(areas_of(frontier).sum())
+    return False
+
+
+def hole_measures(V, loop):
+    """Where a hole is and how large: the per-hole entries of a filter's result.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    loop : BoundaryLoop
+
+    Returns
+    -------
+    dict
+        ``centroid`` (3 floats, mean of the loop's vertices), ``perimeter``, ``diameter``
+        (:func:`loop_measures`), ``area`` (the loop's vector area, an estimate of the missing
+        surface's area: exact for a planar hole, smaller for a curved one) and ``planarity``.
+    """
+    points = V[np.asarray(loop.vertices, np.int64)]
+    measures = loop_measures(points)
+    return {"centroid": points.mean(axis=0).tolist(), "perimeter": float(measures["perimeter"]),
+            "diameter": float(measures["diameter"]), "area": vector_area(points),
+            "planarity": float(measures["planarity"])}

@@ -16,11 +16,12 @@ import numpy as np
 
 from dataclasses import dataclass
 
-from ..errors import HoleFillError
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
 from .crossings import clashing_patches, crossing_patches, face_boxes_near, patch_box, patch_intersections
-from .holes import OUTLINE_RATIO, boundary_loops, edge_summary, hole_context, outline_ratios, vertex_face_incidence
-from .parameters import ParamSpec
+from .parallel import FILL_ERRORS, fill_contexts, reason_of
+from .holes import (OUTLINE_RATIO, boundary_loops, edge_summary, hole_context, hole_measures, is_outline,
+                    outline_ratios, vertex_face_incidence)
+from .parameters import ParamSpec, Percentage
 from .patch import merge_patches, validate_patch
 
 __all__ = ["COMMON_PARAMS", "FilledMesh", "fill_mesh_holes"]
@@ -30,6 +31,10 @@ COMMON_PARAMS = [
               "Largest hole to close, as its number of boundary edges; larger holes are skipped "
               "(MeshLab's Close Holes uses 30; these algorithms target large holes, hence 1000).",
               minimum=3, mlx_name="MaxHoleSize", display="Max size to be closed"),
+    ParamSpec("maxholediameter", "length", Percentage(100),
+              "Largest hole to close, as the diameter of its boundary loop (a length, or a percentage of the "
+              "bounding-box diagonal); larger holes are skipped. The default allows every hole.",
+              minimum=0.0, mlx_name="MaxHoleDiameter", display="Max diameter to be closed"),
     ParamSpec("selected", "bool", False,
               "Close only holes with at least one selected border face.",
               mlx_name="Selected", display="Close holes with selected faces"),
@@ -39,6 +44,18 @@ COMMON_PARAMS = [
     ParamSpec("selfintersection", "bool", True,
               "Reject a patch that intersects the existing mesh or itself; the hole is then reported failed.",
               mlx_name="SelfIntersection", display="Prevent creation of selfIntersecting faces"),
+    ParamSpec("filloutlines", "bool", False,
+              "Also cap loops that outline a whole connected component (an island of a range scan, a loose "
+              "fragment): such a loop is not a hole, and its cap would lie over the fragment, so by default it "
+              "is skipped.",
+              mlx_name="FillOutlines", display="Fill island outlines"),
+    ParamSpec("workers", "int", 0,
+              "Processes filling holes at once: 0, one per CPU; 1, in this process. The mesh is the same "
+              "whatever the number.",
+              minimum=0, mlx_name="Workers", display="Worker processes"),
+    ParamSpec("timelimit", "float", 0.0,
+              "Seconds one hole may take (0: no limit); a hole that takes longer is reported failed.",
+              minimum=0.0, mlx_name="TimeLimit", display="Time limit per hole (s)"),
 ]
 
 
@@ -70,7 +87,7 @@ class FilledMesh:
     changed: bool
 
 
-def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepare=None):
+def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepare=None, progress=None):
     """Run one hole-filling algorithm on every eligible hole of a mesh given as arrays.
 
     Parameters
@@ -110,27 +127,13 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     he, he_faces, bad_edges = edge_summary(F)
     check_manifold_edges(F, arrays.label, bad_edges)
     loops = boundary_loops(F, (he, he_faces))
-    selected_faces = arrays.face_attrs["selected"].ravel() > 0
-    report, todo = [], []
-    for i, loop in enumerate(loops):
-        entry = {"hole": i, "boundary_edges": loop.edge_count, "pinched": bool(loop.pinched)}
-        if not loop.closed:
-            entry.update(status="skipped", reason="open boundary chain (inconsistent face orientation)")
-        elif len(loop) < 3:
-            entry.update(status="skipped", reason="degenerate loop with fewer than 3 edges")
-        elif len(loop) > params["maxholesize"]:
-            entry.update(status="skipped", reason=f"too large ({len(loop)} > maxholesize {params['maxholesize']})")
-        elif params["selected"] and not selected_faces[loop.border_faces].any():
-            entry.update(status="skipped", reason="not selected")
-        else:
-            todo.append(i)
-        report.append(entry)
+    report, todo = _select_holes(V, F, loops, params, arrays.face_attrs["selected"].ravel() > 0)
     fill_kwargs = {name: params[name] for name in algorithm_params}
     base = (arrays, list(loops), [dict(entry) for entry in report])
     fills = {}  # hole -> outcome of its fill, reused by a later pass while its surroundings are the same
     while True:
         arrays, V, F, V2, F2, done_loops, patches, refinement, report = _fill_holes(
-            base, todo, params, fill, fill_kwargs, rings, prepare, fills)
+            base, todo, params, fill, fill_kwargs, rings, prepare, fills, progress)
         # A hole whose border was refined and which then failed would leave its split border
         # faces behind: fill again with that hole left out, so nothing of it is changed.
         undo = [i for i in todo if report[i]["status"] == "failed" and report[i].get("split_boundary_edges")]
@@ -162,6 +165,37 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     return filled, result
 
 
+def _select_holes(V, F, loops, params, selected_faces):
+    """Per-hole report entries with their measures, and the holes to fill (by the filter's parameters)."""
+    report, todo = [], []
+    incidence = None
+    for i, loop in enumerate(loops):
+        entry = {"hole": i, "boundary_edges": loop.edge_count, "pinched": bool(loop.pinched)}
+        if loop.closed and len(loop) >= 3:
+            if incidence is None:
+                incidence = vertex_face_incidence(F, len(V))
+            entry.update(hole_measures(V, loop))
+            entry["size_class"] = "outline" if is_outline(V, F, loop, incidence) else "hole"
+        if not loop.closed:
+            entry.update(status="skipped", reason="open boundary chain (inconsistent face orientation)")
+        elif len(loop) < 3:
+            entry.update(status="skipped", reason="degenerate loop with fewer than 3 edges")
+        elif len(loop) > params["maxholesize"]:
+            entry.update(status="skipped", reason=f"too large ({len(loop)} > maxholesize {params['maxholesize']})")
+        elif entry["diameter"] > params["maxholediameter"]:
+            entry.update(status="skipped", reason=f"too large (diameter {entry['diameter']:.6g} > maxholediameter "
+                                                  f"{params['maxholediameter']:.6g})")
+        elif params["selected"] and not selected_faces[loop.border_faces].any():
+            entry.update(status="skipped", reason="not selected")
+        elif entry["size_class"] == "outline" and not params["filloutlines"]:
+            entry.update(status="skipped", reason="island outline: the loop outlines its whole component, which it "
+                                                  "would cap with a second sheet (filloutlines=True fills it)")
+        else:
+            todo.append(i)
+        report.append(entry)
+    return report, todo
+
+
 def _context_key(ctx):
     """Fingerprint of everything a fill can see of its hole: the local vertices and faces.
 
@@ -177,24 +211,7 @@ def _context_key(ctx):
     return digest.digest()
 
 
-_FILL_ERRORS = (HoleFillError, np.linalg.LinAlgError, ArithmeticError, ValueError, RuntimeError)
-
-
-def _reason(exc):
-    return str(exc) if isinstance(exc, HoleFillError) else f"{type(exc).__name__}: {exc}"
-
-
-def _fill_or_reason(fill, ctx, fill_kwargs):
-    """The hole's validated patch, or the reason it cannot be filled (str)."""
-    try:
-        patch = fill(ctx, **fill_kwargs)
-        validate_patch(patch, ctx.points, ctx.forbidden_edges)
-    except _FILL_ERRORS as exc:
-        return _reason(exc)
-    return patch
-
-
-def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills):
+def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, progress=None):
     """One pass of :func:`close_holes` over the holes ``todo``: refine, fill, check, merge.
 
     ``base`` is (arrays, loops, report entries) of the mesh as given; nothing is written to
@@ -216,21 +233,27 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills):
         for i in todo:
             report[i]["split_boundary_edges"] = 0
     incidence = vertex_face_incidence(F, len(V)) if todo else None
-    filled = []  # (hole id, context, patch, seconds) of patches that passed validation
+    contexts, context_seconds = {}, {}
     for i in todo:
-        entry = report[i]
         t0 = time.perf_counter()
         try:
-            ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
-        except _FILL_ERRORS as exc:
-            entry.update(status="failed", reason=_reason(exc), seconds=time.perf_counter() - t0)
+            contexts[i] = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
+        except FILL_ERRORS as exc:
+            report[i].update(status="failed", reason=reason_of(exc), seconds=time.perf_counter() - t0)
             continue
-        key = _context_key(ctx)
-        if i not in fills or fills[i][0] != key:
-            fills[i] = (key, _fill_or_reason(fill, ctx, fill_kwargs), time.perf_counter() - t0)
+        context_seconds[i] = time.perf_counter() - t0
+    keys = {i: _context_key(ctx) for i, ctx in contexts.items()}
+    refill = [i for i in contexts if i not in fills or fills[i][0] != keys[i]]
+    outcomes = fill_contexts(fill, [contexts[i] for i in refill], fill_kwargs, workers=params["workers"],
+                             timelimit=params["timelimit"],
+                             progress=progress and (lambda position: progress(refill[position], len(refill))))
+    for i, (outcome, seconds) in zip(refill, outcomes):
+        fills[i] = (keys[i], outcome, context_seconds[i] + seconds)
+    filled = []  # (hole id, context, patch, seconds) of patches that passed validation
+    for i, ctx in contexts.items():
         _, outcome, seconds = fills[i]
         if isinstance(outcome, str):
-            entry.update(status="failed", reason=outcome, seconds=seconds)
+            report[i].update(status="failed", reason=outcome, seconds=seconds)
             continue
         filled.append((i, ctx, outcome, seconds))
     if params["selfintersection"] and filled:

@@ -7,11 +7,13 @@ from hypothesis import given, settings, strategies as st
 import meshlab_holefill  # noqa: F401  (registers the filters)
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.core.crossings import face_boxes_near, patch_intersections
+from meshlab_holefill.core.parameters import resolve_params
+from meshlab_holefill.core.pipeline import COMMON_PARAMS
 from meshlab_holefill.meshlab.close_holes import close_holes
 from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops, nonmanifold_edges
 from meshlab_holefill.core.patch import Patch, validate_patch
 
-from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sphere_with_holes
 
 FILTERS = ["meshing_close_holes_min_angle_bilateral", "meshing_close_holes_curve_unfolding",
            "meshing_close_holes_lssvm_poisson", "meshing_close_holes_differential_evolution"]
@@ -50,7 +52,7 @@ def test_selfintersection_off_fills_the_pierced_hole():
     assert res["failed_holes"] == 0 and res["closed_holes"] == 2
 
 
-def test_island_outline_is_reported_as_not_a_hole():
+def test_island_outline_is_skipped_by_default_and_named_when_filled():
     """A lone triangle's border is a 3-edge loop; capping it would duplicate the triangle."""
     V, F = grid(8, 8)
     k = len(V)
@@ -59,10 +61,58 @@ def test_island_outline_is_reported_as_not_a_hole():
     ms = meshset_from_arrays(V, F)
     res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=10)
     (entry,) = [h for h in res["holes"] if h["boundary_edges"] == 3]
+    assert (entry["status"], entry["size_class"]) == ("skipped", "outline") and "island outline" in entry["reason"]
+    assert len(mesh_arrays(ms)[1]) == len(F)
+    res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=10, filloutlines=True)
+    (entry,) = [h for h in res["holes"] if h["boundary_edges"] == 3]
     assert entry["status"] == "failed"
     assert "intersect" in entry["reason"] and "island" in entry["reason"]
     V2, F2 = mesh_arrays(ms)
     assert len(F2) == len(F)
+
+
+@pytest.mark.parametrize("name", FILTERS)
+def test_a_curved_fragment_is_not_capped_unless_asked(name):
+    """A loose spherical cap beside the mesh: its rim outlines the whole fragment (before, it was capped)."""
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = mesh_arrays(ms)
+    cap = F[V[F].mean(axis=1)[:, 2] > 0.6]
+    used = np.unique(cap)
+    remap = np.full(len(V), -1)
+    remap[used] = np.arange(len(used))
+    Vc, Fc = V[used], remap[cap]
+    Vg, Fg = grid(6, 6)
+    Vg = Vg * 0.5 + [3.0, 0, 0]
+    Vall, Fall = np.concatenate([Vg, Vc]), np.concatenate([Fg, Fc + len(Vg)])
+    res = getattr(meshset_from_arrays(Vall, Fall), name)()
+    (entry,) = [h for h in res["holes"] if h["centroid"][2] > 0.5]  # the cap's rim (the grid's border is one too)
+    assert (entry["status"], entry["size_class"]) == ("skipped", "outline") and res["new_faces"] == 0
+    capped = getattr(meshset_from_arrays(Vall, Fall), name)(filloutlines=True)
+    assert [h["status"] for h in capped["holes"] if h["hole"] == entry["hole"]] != ["skipped"]
+
+
+def test_every_closed_loop_reports_where_it_is_and_how_large():
+    V, F, _ = sphere_with_holes(subdiv=3)
+    res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral()
+    for h in res["holes"]:
+        loop_points = V[[lp for lp in boundary_loops(F)][h["hole"]].vertices]
+        np.testing.assert_allclose(h["centroid"], loop_points.mean(axis=0))
+        assert h["size_class"] == "hole" and 0 < h["area"] < np.pi * h["diameter"] ** 2 / 4 + 1e-9
+        assert h["perimeter"] >= 2 * h["diameter"] - 1e-9
+
+
+def test_a_diameter_bound_skips_wider_holes_as_a_length_or_a_percentage():
+    V, F, _ = sphere_with_holes(subdiv=3)
+    diameters = sorted(h["diameter"] for h in meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral(
+        maxholesize=3)["holes"])
+    cut = (diameters[0] + diameters[1]) / 2 if diameters[1] > diameters[0] else diameters[0] * 0.99
+    res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral(maxholediameter=pymeshlab.PureValue(cut))
+    assert sum(h["status"] == "skipped" and "maxholediameter" in h["reason"] for h in res["holes"]) >= 1
+    diag = float(np.linalg.norm(V.max(axis=0) - V.min(axis=0)))
+    res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral(
+        maxholediameter=pymeshlab.PercentageValue(100 * cut / diag))
+    assert sum("maxholediameter" in h.get("reason", "") for h in res["holes"]) >= 1
 
 
 # ------------------------------------------------------------- open chains (inconsistent orientation)
@@ -165,7 +215,7 @@ def test_patch_folding_over_itself_is_reported_though_clear_of_the_mesh():
     assert {0, 2} <= set(hits.tolist()), hits
 
 
-COMMON = dict(maxholesize=4, selected=False, newfaceselected=True, selfintersection=True)
+COMMON = {**resolve_params(COMMON_PARAMS, {}, "test", bbox_diagonal=1e300), "maxholesize": 4}
 
 
 def test_pipeline_rejects_a_patch_folding_over_itself():
@@ -212,7 +262,7 @@ def test_of_two_patches_sharing_a_chord_the_first_is_kept_and_the_rest_closed():
     loops = boundary_loops(F)
     assert sorted((len(lp), bool(lp.pinched)) for lp in loops) == [(4, False), (4, True), (4, True), (16, False)]
     ms = meshset_from_arrays(V, F)
-    res = close_holes(ms, _split_at_the_poles, COMMON)
+    res = close_holes(ms, _split_at_the_poles, {**COMMON, "filloutlines": True})  # each wedge pair outlines itself
     # Alone, each pole hole's patch is valid; together they put 4 faces on the chord 4-5.
     # The first (hole 1) is kept, the second withdrawn whole; the square hole is closed.
     outcome = [(h["hole"], h["boundary_edges"], h["pinched"], h["status"]) for h in res["holes"]]
@@ -286,7 +336,7 @@ def test_the_second_pass_does_not_fill_again_a_hole_whose_surroundings_are_uncha
     monkeypatch.setattr(hole_filter, "_context_key", key)
     monkeypatch.setattr(lssvm_poisson, "fill", counting_fill)
     ms = meshset_from_arrays(V, F)
-    res = ms.meshing_close_holes_lssvm_poisson()
+    res = ms.meshing_close_holes_lssvm_poisson(workers=1)  # counted in this process
     # pass 1 fills both (the small hole split to 13 edges, then failing); pass 2, without the
     # failed hole's split, finds the large hole's surroundings unchanged and reuses its patch
     assert sizes == [36, 13]
@@ -323,3 +373,39 @@ def test_of_two_patches_crossing_in_mid_air_the_first_is_kept():
     V3, F3 = mesh_arrays(ms)
     assert res["closed_holes"] == 2
     assert len(faces_intersecting(V3, F3, np.arange(len(F), len(F3)), np.arange(len(F3)))) > 0
+
+
+# ------------------------------------------------------------- holes filled in worker processes
+
+@pytest.mark.parametrize("name", FILTERS)
+def test_the_mesh_is_the_same_whatever_the_number_of_workers(name):
+    V, F, _ = sphere_with_holes(subdiv=3, centers=((1, 0, 0), (0, 0, 1), (0, -1, 0), (-0.6, 0.6, -0.5)), radius=0.3)
+    meshes = []
+    for workers in (1, 2):
+        ms = meshset_from_arrays(V, F)
+        res = getattr(ms, name)(workers=workers)
+        meshes.append((mesh_arrays(ms), [(h["status"], h.get("new_faces")) for h in res["holes"]]))
+    (one, statuses_one), (two, statuses_two) = meshes
+    assert statuses_one == statuses_two and all(s == "closed" for s, _ in statuses_one)
+    np.testing.assert_array_equal(one[0], two[0])
+    np.testing.assert_array_equal(one[1], two[1])
+
+
+def _slow_roof(ctx):
+    import time
+
+    if len(ctx.loop) > 8:
+        time.sleep(5)
+    return _roof(ctx.points, folded=False)
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_hole_over_the_time_limit_fails_and_the_others_are_filled(workers):
+    V, F, square = _two_wedges_and_a_square_hole()
+    Vs, Fs, _ = sphere_with_holes(subdiv=3, centers=((1, 0, 0),), radius=0.3)
+    V, F = np.concatenate([V, Vs + [0, 10, 0]]), np.concatenate([F, Fs + len(V)])
+    params = {**COMMON, "maxholesize": 100, "timelimit": 0.5, "workers": workers}
+    res = close_holes(meshset_from_arrays(V, F), _slow_roof, params)
+    slow = [h for h in res["holes"] if h["boundary_edges"] > 8 and h["status"] != "skipped"]
+    assert slow and all(h["status"] == "failed" and "time limit of 0.5 s" in h["reason"] for h in slow)
+    assert any(h["status"] == "closed" for h in res["holes"])
