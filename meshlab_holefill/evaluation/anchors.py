@@ -183,11 +183,23 @@ def _polyhedron(V, F):
     return P
 
 
+def _cycle_length(h, limit):
+    """Half-edges in the border cycle of ``h`` (counting stops past ``limit``)."""
+    count, g = 1, h.next()
+    while g != h and count <= limit:
+        g = g.next()
+        count += 1
+    return count
+
+
 def cgal_fill(V, F, maxholesize=1000, density=2 ** 0.5, continuity=1):
     """Fill every boundary loop with CGAL's ``triangulate_refine_and_fair_hole``, one call per loop.
 
-    Pinched vertices are split first (CGAL's polyhedron holds only manifold meshes) and mapped
-    back afterwards, so the loops are those of :func:`core.holes.boundary_loops`.
+    Pinched vertices are split first (CGAL's polyhedron holds only manifold meshes: one vertex per
+    fan of faces) and mapped back afterwards; the loops are those of
+    :func:`core.holes.boundary_loops`. A loop pinched at a vertex with another one fails: with the
+    vertex split by fans, CGAL's border cycle there runs through both loops (the two pairings of
+    border edges at a pinched vertex are equally valid; ours keeps each loop simple).
 
     Parameters
     ----------
@@ -235,6 +247,12 @@ def cgal_fill(V, F, maxholesize=1000, density=2 ** 0.5, continuity=1):
         start = border.get((a, b), border.get((b, a)))
         if start is None or not start.is_border():
             entry.update(status="failed", reason="loop not found in CGAL's polyhedron")
+            continue
+        if _cycle_length(start, len(lp)) != len(lp):
+            # At a pinched vertex CGAL's halfedge mesh pairs the border edges by fans, which joins this
+            # loop with the one it touches into a single border cycle: not the hole this row is about.
+            entry.update(status="failed", reason="pinched loop: CGAL's halfedge mesh joins it with the loop it "
+                                                 "touches")
             continue
         faces_out, vertices_out = [], []
         t0 = time.perf_counter()
