@@ -75,11 +75,11 @@ def compare(meshes, report=None, **options):
 
 
 def batch(inputs, out, **options):
-    """Repair many mesh files on dask (a local cluster or yours): see :func:`meshlab_holefill.batch.batch`.
+    """Repair many mesh files on dask (a local cluster or yours): see :func:`meshlab_holefill.batching.batch`.
 
     Imported on first use, so ``import meshlab_holefill`` does not load dask.
     """
-    from .batch import batch as run
+    from .batching import batch as run
 
     return run(inputs, out, **options)
 

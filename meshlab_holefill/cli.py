@@ -210,7 +210,7 @@ _SUBCOMMANDS.append(_register_compare)
 
 
 def cmd_batch(args, extra):
-    from .batch import BatchInterrupted, batch
+    from .batching import BatchInterrupted, batch
 
     params = _params_from_unknown(extra)
     try:
@@ -230,7 +230,7 @@ def cmd_batch(args, extra):
 
 
 def _register_batch(sub):
-    from .batch import OUTPUT_FORMATS
+    from .batching import OUTPUT_FORMATS
 
     p = sub.add_parser("batch", help="repair many files on dask (a local cluster, or yours with --scheduler); "
                                      "extra --name value pairs are filter parameters",

@@ -330,7 +330,7 @@ def batch_throughput(out, files=24, workers=(1, 2)):
     import dask
     from distributed import Client, LocalCluster
 
-    from meshlab_holefill.batch._run import LOCAL_CLUSTER_CONFIG
+    from meshlab_holefill.batching._run import LOCAL_CLUSTER_CONFIG
 
     src = os.path.join(out, "batch_inputs")
     os.makedirs(src, exist_ok=True)
@@ -344,7 +344,7 @@ def batch_throughput(out, files=24, workers=(1, 2)):
         with dask.config.set(LOCAL_CLUSTER_CONFIG):
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, dashboard_address=":0")
         with cluster, Client(cluster) as client:
-            client.run(lambda: __import__("meshlab_holefill.batch._task"))
+            client.run(lambda: __import__("meshlab_holefill.batching._task"))
             startup = time.perf_counter() - t0
             dest = os.path.join(out, f"batch_{n}_workers")
             shutil.rmtree(dest, ignore_errors=True)

@@ -12,8 +12,8 @@ import pymeshlab
 import pytest
 
 import meshlab_holefill
-from meshlab_holefill.batch import BatchInputError, batch
-from meshlab_holefill.batch._inputs import plan_outputs
+from meshlab_holefill.batching import BatchInputError, batch
+from meshlab_holefill.batching._inputs import plan_outputs
 from meshlab_holefill.cli import main
 
 FILTER = "meshing_close_holes_min_angle_bilateral"  # the fastest filter keeps the file under a minute

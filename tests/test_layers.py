@@ -9,7 +9,7 @@ import pytest
 import meshlab_holefill
 
 PACKAGE_DIR = os.path.dirname(meshlab_holefill.__file__)
-LAYERS = ["errors", "_version", "geometry", "core", "algorithms", "array_api", "meshlab", "evaluation", "batch", "cli"]
+LAYERS = ["errors", "_version", "geometry", "core", "algorithms", "array_api", "meshlab", "evaluation", "batching", "cli"]
 
 
 def _modules():

@@ -23,7 +23,9 @@ import numpy as np
 from ..errors import HoleFillError
 from .patch import validate_patch
 
-__all__ = ["FILL_ERRORS", "HoleTimeLimit", "available_workers", "fill_contexts", "reason_of"]
+__all__ = ["FILL_ERRORS", "HoleTimeLimit", "available_workers", "fill_contexts", "limit_workers", "reason_of"]
+
+_WORKER_CAP = None  # set by limit_workers
 
 # What a fill may raise that makes its hole fail rather than the filter: the algorithm's own
 # refusal, and the numerical errors of degenerate input.
@@ -44,9 +46,21 @@ def available_workers():
     if "fork" not in multiprocessing.get_all_start_methods() or multiprocessing.current_process().daemon:
         return 1
     try:
-        return max(1, len(os.sched_getaffinity(0)))
+        cpus = max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # not Linux
-        return max(1, os.cpu_count() or 1)
+        cpus = max(1, os.cpu_count() or 1)
+    return cpus if _WORKER_CAP is None else min(cpus, _WORKER_CAP)
+
+
+@contextmanager
+def limit_workers(count):
+    """Fill holes with at most ``count`` processes inside the block (a batch task already runs one file per core)."""
+    global _WORKER_CAP
+    previous, _WORKER_CAP = _WORKER_CAP, max(1, int(count))
+    try:
+        yield
+    finally:
+        _WORKER_CAP = previous
 
 
 @contextmanager

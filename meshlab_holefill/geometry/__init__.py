@@ -1,4 +1,18 @@
-"""Shared geometric building blocks used by every hole-filling algorithm.
+"""Geometric building blocks shared by two or more algorithms (or by an algorithm and the core).
 
-Plain numpy arrays in and out; nothing here touches pymeshlab.
+Plain numpy arrays in and out; nothing here imports the core, the algorithms or pymeshlab.
+
+* :mod:`.quality`: areas, normals, angles, edge lengths, the 2r/R triangle quality.
+* :mod:`.topology`: half-edge twins, interior edges and 1-rings of small face lists.
+* :mod:`.laplacian`: uniform and cotangent Laplacians, tangential umbrella smoothing.
+* :mod:`.flips`: edge relaxation by swaps (circumsphere, unfolded-angle or scored tests).
+* :mod:`.refine`: Pfeifle-Seidel density refinement (Hu et al. Sec. III.C; Xu et al.'s fallback).
+* :mod:`.pca`: least-squares planes and plane frames.
+* :mod:`.triangulate`: constrained Delaunay triangulation of a simple polygon (Triangle).
+* :mod:`.segments`: exact segment distances, simple-polygon tests.
+* :mod:`.intersections`: topology-aware triangle-triangle intersection queries.
+* :mod:`.development`: a border loop laid out in the plane with its edge lengths and surface angles.
 """
+
+__all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca", "triangulate", "segments", "intersections",
+           "development"]

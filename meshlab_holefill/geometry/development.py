@@ -12,6 +12,9 @@ import numpy as np
 from .segments import is_simple_polygon
 from .triangulate import polygon_perimeter, polygon_signed_area
 
+__all__ = ["boundary_gap_angles", "develop_loop", "developed_area", "close_lengths", "simple_development",
+           "simple_developments"]
+
 
 def boundary_gap_angles(vertices, faces, k):
     """Angle the hole leaves open at each loop vertex: 2 pi minus the mesh's corner angles there.

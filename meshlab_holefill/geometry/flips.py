@@ -6,6 +6,8 @@ import numpy as np
 from .quality import corner_angles, cross_rows, face_normals
 from .topology import interior_edges, undirected_keys
 
+__all__ = ["circumcenters", "min_angle_scores", "relax_edges"]
+
 
 def circumcenters(V, F):
     """Circumcentres and circumradii of 3D triangles.
@@ -131,55 +133,14 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         c = F[f1, (c1 + 2) % 3]
         d = F[f2, (c2 + 2) % 3]
         a, b = E[:, 0], E[:, 1]
-        # Of the swaps competing for a face the one of highest priority is made: by default
-        # the highest edge index, for scored criteria the largest gain (or scorer's priority).
-        priority = np.arange(len(E))
-        # The remaining tests run only on the edges that fail this one: most edges pass it.
-        if scorer is not None:
-            scores = scorer(V, F[f1], F[f2], np.stack([a, d, c], axis=1), np.stack([b, c, d], axis=1))
-            old_s, new_s = scores[:2]
-            inside = new_s > old_s + 1e-9
-            order = np.argsort(-(scores[2] if len(scores) > 2 else new_s - old_s), kind="stable")
-            priority = np.empty(len(E), np.int64)
-            priority[order] = np.arange(len(E), 0, -1)
-        elif criterion == "angles":
-            inside = _angle_at(V[c], V[a], V[b]) + _angle_at(V[d], V[a], V[b]) > np.pi * (1 + 1e-9)
-        else:
-            # Circumspheres once per face (row-wise, so the same values as per edge).
-            cc, r = circumcenters(V, F)
-            cc1, r1, cc2, r2 = cc[f1], r[f1], cc[f2], r[f2]
-            # Strictly inside (relative margin) so that cocircular quads do not flip forever.
-            inside = (np.linalg.norm(V[d] - cc1, axis=1) < r1 * (1 - 1e-9)) | \
-                     (np.linalg.norm(V[c] - cc2, axis=1) < r2 * (1 - 1e-9))
+        inside, priority = _failing_edges(V, F, a, b, c, d, f1, f2, criterion, scorer)
         ok = np.zeros(len(E), bool)
         s = np.flatnonzero(inside)
         if len(s) == 0:
             break
         a_, b_, c_, d_ = a[s], b[s], c[s], d[s]
-        # On a non-planar quad both diagonals can fail the test; swapping only when the new
-        # edge passes it rules out swapping back and forth.
-        if scorer is not None:
-            passes = np.ones(len(s), bool)  # the strict gain already rules out swapping back
-        elif criterion == "angles":
-            passes = _angle_at(V[a_], V[d_], V[c_]) + _angle_at(V[b_], V[c_], V[d_]) <= np.pi * (1 + 1e-9)
-        else:
-            cc3, r3 = circumcenters(V, np.stack([a_, d_, c_], axis=1))
-            cc4, r4 = circumcenters(V, np.stack([b_, c_, d_], axis=1))
-            passes = (np.linalg.norm(V[b_] - cc3, axis=1) >= r3 * (1 - 1e-9)) & \
-                     (np.linalg.norm(V[a_] - cc4, axis=1) >= r4 * (1 - 1e-9))
-        old = _triangle_normals(V[a_], V[b_], V[c_]) + _triangle_normals(V[b_], V[a_], V[d_])
-        n1 = _triangle_normals(V[a_], V[d_], V[c_])
-        n2 = _triangle_normals(V[b_], V[c_], V[d_])
-        if normal_cos is None:
-            keeps_orientation = np.ones(len(s), bool)
-        elif normal_cos == 0.0:
-            keeps_orientation = (np.einsum("ij,ij->i", n1, old) > 0) & (np.einsum("ij,ij->i", n2, old) > 0)
-        else:
-            old /= np.maximum(np.linalg.norm(old, axis=1, keepdims=True), 1e-300)
-            m1 = face_normals(V, np.stack([a_, d_, c_], axis=1))
-            m2 = face_normals(V, np.stack([b_, c_, d_], axis=1))
-            keeps_orientation = (np.einsum("ij,ij->i", m1, old) > normal_cos) & \
-                                (np.einsum("ij,ij->i", m2, old) > normal_cos)
+        passes = _new_edge_passes(V, a_, b_, c_, d_, criterion, scorer)
+        keeps_orientation = _keeps_orientation(V, a_, b_, c_, d_, normal_cos)
         lo, hi = np.minimum(c, d), np.maximum(c, d)
         new_key = lo * n + hi
         cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
@@ -196,29 +157,99 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
                                 np.stack([f1[cand], f2[cand]], axis=1))]
         if len(cand) == 0:
             break
-        # Independent set: a face takes part in at most one swap per round; a few claiming
-        # passes make the set nearly maximal, so rounds stay few. Scored swaps take one pass:
-        # the losers of a face are re-scored next round, strictly greedy by priority.
-        taken = np.zeros(len(F), bool)
-        picked = []
-        for _ in range(1 if scorer is not None else 4):
-            cand = cand[~taken[f1[cand]] & ~taken[f2[cand]]]
-            if len(cand) == 0:
-                break
-            claim = np.full(len(F), -1)
-            pc = priority[cand]
-            np.maximum.at(claim, f1[cand], pc)
-            np.maximum.at(claim, f2[cand], pc)
-            won = cand[(claim[f1[cand]] == pc) & (claim[f2[cand]] == pc)]
-            taken[f1[won]] = taken[f2[won]] = True
-            picked.append(won)
-        chosen = np.concatenate(picked)
-        if scorer is not None:
-            # Of two swaps that would create the same edge, the larger gain is made.
-            chosen = chosen[np.argsort(-priority[chosen], kind="stable")]
-        _, first = np.unique(new_key[chosen], return_index=True)
-        chosen = chosen[first]
+        chosen = _independent_swaps(cand, f1, f2, priority, new_key, len(F), scorer is not None)
         F[f1[chosen]] = np.stack([a[chosen], d[chosen], c[chosen]], axis=1)
         F[f2[chosen]] = np.stack([b[chosen], c[chosen], d[chosen]], axis=1)
         total += len(chosen)
     return F, total
+
+
+def _failing_edges(V, F, a, b, c, d, f1, f2, criterion, scorer):
+    """The swap test on every interior edge (a, b) with opposite corners c, d: which fail it, and their priority.
+
+    Of the swaps competing for a face the one of highest priority is made: by default the
+    highest edge index, for scored criteria the largest gain (or the scorer's priority).
+
+    Returns
+    -------
+    inside : (e,) bool  edges failing the test (candidates for a swap)
+    priority : (e,) int64
+    """
+    priority = np.arange(len(a))
+    # The remaining tests run only on the edges that fail this one: most edges pass it.
+    if scorer is not None:
+        scores = scorer(V, F[f1], F[f2], np.stack([a, d, c], axis=1), np.stack([b, c, d], axis=1))
+        old_s, new_s = scores[:2]
+        inside = new_s > old_s + 1e-9
+        order = np.argsort(-(scores[2] if len(scores) > 2 else new_s - old_s), kind="stable")
+        priority = np.empty(len(a), np.int64)
+        priority[order] = np.arange(len(a), 0, -1)
+    elif criterion == "angles":
+        inside = _angle_at(V[c], V[a], V[b]) + _angle_at(V[d], V[a], V[b]) > np.pi * (1 + 1e-9)
+    else:
+        # Circumspheres once per face (row-wise, so the same values as per edge).
+        cc, r = circumcenters(V, F)
+        cc1, r1, cc2, r2 = cc[f1], r[f1], cc[f2], r[f2]
+        # Strictly inside (relative margin) so that cocircular quads do not flip forever.
+        inside = (np.linalg.norm(V[d] - cc1, axis=1) < r1 * (1 - 1e-9)) | \
+                 (np.linalg.norm(V[c] - cc2, axis=1) < r2 * (1 - 1e-9))
+    return inside, priority
+
+
+def _new_edge_passes(V, a_, b_, c_, d_, criterion, scorer):
+    """Whether the new edge (c, d) passes the test (on a non-planar quad both diagonals can fail it).
+
+    Swapping only when the new edge passes rules out swapping back and forth; a scored
+    criterion's strict gain already does.
+    """
+    if scorer is not None:
+        return np.ones(len(a_), bool)
+    if criterion == "angles":
+        return _angle_at(V[a_], V[d_], V[c_]) + _angle_at(V[b_], V[c_], V[d_]) <= np.pi * (1 + 1e-9)
+    cc3, r3 = circumcenters(V, np.stack([a_, d_, c_], axis=1))
+    cc4, r4 = circumcenters(V, np.stack([b_, c_, d_], axis=1))
+    return (np.linalg.norm(V[b_] - cc3, axis=1) >= r3 * (1 - 1e-9)) & \
+           (np.linalg.norm(V[a_] - cc4, axis=1) >= r4 * (1 - 1e-9))
+
+
+def _keeps_orientation(V, a_, b_, c_, d_, normal_cos):
+    """Whether both new triangles (a, d, c), (b, c, d) stay within ``normal_cos`` of the old pair's normal."""
+    old = _triangle_normals(V[a_], V[b_], V[c_]) + _triangle_normals(V[b_], V[a_], V[d_])
+    n1 = _triangle_normals(V[a_], V[d_], V[c_])
+    n2 = _triangle_normals(V[b_], V[c_], V[d_])
+    if normal_cos is None:
+        return np.ones(len(a_), bool)
+    if normal_cos == 0.0:
+        return (np.einsum("ij,ij->i", n1, old) > 0) & (np.einsum("ij,ij->i", n2, old) > 0)
+    old /= np.maximum(np.linalg.norm(old, axis=1, keepdims=True), 1e-300)
+    m1 = face_normals(V, np.stack([a_, d_, c_], axis=1))
+    m2 = face_normals(V, np.stack([b_, c_, d_], axis=1))
+    return (np.einsum("ij,ij->i", m1, old) > normal_cos) & (np.einsum("ij,ij->i", m2, old) > normal_cos)
+
+
+def _independent_swaps(cand, f1, f2, priority, new_key, face_count, scored):
+    """The swaps of one round: an independent set of the candidates, one new edge made once.
+
+    A face takes part in at most one swap per round; a few claiming passes make the set
+    nearly maximal, so rounds stay few. Scored swaps take one pass: the losers of a face are
+    re-scored next round, strictly greedy by priority; of two scored swaps that would create
+    the same edge, the larger gain is made.
+    """
+    taken = np.zeros(face_count, bool)
+    picked = []
+    for _ in range(1 if scored else 4):
+        cand = cand[~taken[f1[cand]] & ~taken[f2[cand]]]
+        if len(cand) == 0:
+            break
+        claim = np.full(face_count, -1)
+        pc = priority[cand]
+        np.maximum.at(claim, f1[cand], pc)
+        np.maximum.at(claim, f2[cand], pc)
+        won = cand[(claim[f1[cand]] == pc) & (claim[f2[cand]] == pc)]
+        taken[f1[won]] = taken[f2[won]] = True
+        picked.append(won)
+    chosen = np.concatenate(picked)
+    if scored:
+        chosen = chosen[np.argsort(-priority[chosen], kind="stable")]
+    _, first = np.unique(new_key[chosen], return_index=True)
+    return chosen[first]

@@ -6,6 +6,9 @@ import scipy.sparse as sp
 
 from .quality import corner_angles, unique_edges, vertex_normals
 
+__all__ = ["adjacency_matrix", "tangential_umbrella_smoothing", "uniform_laplacian", "cotangent_weights",
+           "cotangent_laplacian", "lowest_dirichlet_frequency"]
+
 
 def adjacency_matrix(F, n):
     """Symmetric vertex adjacency (1 where an edge exists), (n, n) CSR."""

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["fit_plane", "plane_frame", "project_to_plane"]
+
 
 def fit_plane(P):
     """Best-fitting plane of a point set.

@@ -3,6 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["cross_rows", "face_normals", "face_areas", "vertex_normals", "edge_lengths", "triangle_quality",
+           "corner_angles", "unique_edges", "mean_edge_length"]
+
 
 def cross_rows(a, b):
     """Cross products of (..., 3) arrays along the last axis, broadcasting like np.cross.

@@ -6,6 +6,8 @@ import numpy as np
 from .flips import relax_edges
 from .quality import corner_angles
 
+__all__ = ["split_condition", "refine_patch"]
+
 
 def split_condition(V, F, scale, alpha):
     """Faces to split by the centroid rule (Hu et al. Sec. III.C, Step 2).

@@ -9,6 +9,9 @@ import math
 
 import numpy as np
 
+__all__ = ["segment_distances", "nonadjacent_mask", "segment_distance_rows", "segment_distance_matrix",
+           "min_segment_distance", "is_simple_polygon", "polygon_edges_touch"]
+
 
 def segment_distances(A0, A1, B0, B1):
     """Exact distance between segments [A0, A1] and [B0, B1], elementwise with broadcasting.

@@ -4,6 +4,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+__all__ = ["interior_edges", "one_ring_matrix", "undirected_keys", "edge_pair_set", "face_adjacency"]
+
 
 def interior_edges(F, n):
     """Interior (two-face) edges of a consistently oriented face list.

@@ -6,6 +6,8 @@ import triangle
 
 from ..errors import HoleFillError
 
+__all__ = ["polygon_signed_area", "polygon_perimeter", "triangulate_polygon"]
+
 
 def polygon_signed_area(Q):
     """Signed area of a closed 2D polygon (positive when counter-clockwise), Q : (k, 2)."""

@@ -1,6 +1,6 @@
 """One mesh file through pymeshlab: load it, run a filter or a .mlx script, save it; job checks.
 
-The batch machinery (``meshlab_holefill.batch``) never imports pymeshlab itself: it asks this
+The batch machinery (``meshlab_holefill.batching``) never imports pymeshlab itself: it asks this
 module to check a job before any work starts, to turn parameter values into plain data that
 crosses to dask workers and back, and to process one file inside a worker.
 """
@@ -10,6 +10,8 @@ import os
 import time
 
 import numpy as np
+
+from ..core.parallel import limit_workers
 
 # Plain-data tags for pymeshlab's length values, so parameters pickle, hash and print as JSON.
 _PERCENTAGE, _ABSOLUTE = "percentage", "absolute"
@@ -148,10 +150,11 @@ def fill_file(input_path, output_path, filter=None, params=None, mlx=None, on_st
     ms.load_new_mesh(os.fspath(input_path))
     seconds["load"], t = time.perf_counter() - t, time.perf_counter()
     stage("fill")
-    if mlx is not None:
-        result = {"steps": run_filter_script(ms, os.fspath(mlx))}
-    else:
-        result = apply_filter(ms, filter, **decode_params(params or {}))
+    with limit_workers(1):  # the batch runs one file per core already
+        if mlx is not None:
+            result = {"steps": run_filter_script(ms, os.fspath(mlx))}
+        else:
+            result = apply_filter(ms, filter, **decode_params(params or {}))
     seconds["fill"], t = time.perf_counter() - t, time.perf_counter()
     stage("save")
     ms.save_current_mesh(os.fspath(output_path))

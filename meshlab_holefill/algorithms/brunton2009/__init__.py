@@ -1,1 +1,25 @@
-"""algorithms.brunton2009."""
+"""Brunton, Wuhrer, Shu, Bose and Demaine, "Filling Holes in Triangular Meshes by Curve Unfolding", SMI 2009.
+
+Where each step lives:
+
+* Sec. 3.1, unfolding the boundary loop into a simple planar polygon (E_PE, simulated
+  annealing under the clearance d_MD, projection to the best plane, restarts):
+  :mod:`.unfolding` (:func:`anneal_loop`, :func:`unfold_loop`).
+* Sec. 3.2, constrained Delaunay triangulation of the unfolded polygon without Steiner points,
+  and Sec. 3.3's planar refinement: :mod:`.unfolded_triangulation`
+  (:func:`constrained_delaunay`, :func:`refine_planar`, :func:`triangulate_and_embed`).
+* Sec. 3.3, the embedding energies E_AREA and E_DF, each one sparse solve: :mod:`.embedding`
+  (:func:`embedding_energy`, :func:`minimise_embedding_energy`, :func:`embed_patch`).
+* Beyond the paper: the development fallback
+  (:mod:`meshlab_holefill.geometry.development`, shared with Xu et al.), the crossing repair and
+  the quality swaps (:mod:`.curve_unfolding`: :func:`repair_crossings`, :func:`improve_by_swaps`).
+* The filter (``fill``, ``PARAMS``, ``RINGS``): :mod:`.curve_unfolding`.
+"""
+from .curve_unfolding import PARAMS, RINGS, fill, improve_by_swaps, repair_crossings
+from .embedding import embed_patch, embedding_energy, minimise_embedding_energy
+from .unfolded_triangulation import constrained_delaunay, refine_planar, triangulate_and_embed
+from .unfolding import anneal_loop, unfold_loop
+
+__all__ = ["fill", "PARAMS", "RINGS", "anneal_loop", "unfold_loop", "constrained_delaunay", "refine_planar",
+           "triangulate_and_embed", "embedding_energy", "minimise_embedding_energy", "embed_patch",
+           "repair_crossings", "improve_by_swaps"]

@@ -49,11 +49,14 @@ from ...geometry.development import boundary_gap_angles, develop_loop, developed
 from ...geometry.triangulate import polygon_perimeter, polygon_signed_area
 from .unfolding import linear_motion_is_simple, unfold_loop
 
+__all__ = ["fill", "PARAMS", "RINGS", "crossing_faces", "clip_ears", "repair_crossings", "improve_by_swaps",
+           "domains_within_area"]
+
 RINGS = 2
 
 MAX_REPAIR_ROUNDS = 4  # rounds of ear clipping when a patch crosses its surroundings
 MAX_SWAP_ROUNDS = 4  # rounds of quality-improving edge swaps, each followed by a new energy solve
-GOOD_QUALITY = 0.3  # repair stops trying domains at a clean patch of this minimum quality (the issue's target)
+GOOD_QUALITY = 0.3  # repair stops trying domains at a clean patch of this minimum quality (poor triangles are below it)
 
 PARAMS = [
     ParamSpec("k", "float", 0.9,
@@ -77,8 +80,8 @@ PARAMS = [
               "d_MD (same no-crossing guarantee, larger steps).",
               choices=("global", "local")),
     ParamSpec("energy", "enum", "area",
-              "Energy of the interior vertices (Sec. 3.3): 'area' = least-squares mesh E_AREA (the paper's bunny "
-              "experiment), 'fairing' = discrete fairing E_DF.",
+              "Energy of the interior vertices (Sec. 3.3): 'area' = least-squares mesh E_AREA (the energy of the "
+              "paper's Table 1 run), 'fairing' = discrete fairing E_DF.",
               choices=("area", "fairing")),
     ParamSpec("area_rows", "enum", "mesh",
               "Rows of E_AREA: 'mesh' = the least-squares mesh (Sorkine and Cohen-Or, the paper's ref. [24]): the "
@@ -366,16 +369,40 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
          area_rows="mesh", max_domain_area=6.0):
     """Fill one hole by unfolding, triangulation and embedding (Sec. 3.1-3.3).
 
+    The loop is unfolded into a simple planar polygon (:func:`.unfolding.unfold_loop`, Sec.
+    3.1), triangulated and refined in the plane and embedded by the energy of Sec. 3.3
+    (:func:`.unfolded_triangulation.triangulate_and_embed`, :mod:`.embedding`); the
+    development fallback, the crossing repair and the swaps are beyond the paper.
+
     Parameters
     ----------
     ctx : HoleContext
-    k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,
-    repair, swaps, tangential, seed, area_rows, max_domain_area : see PARAMS
+        The hole and ``RINGS`` rings of faces around it (:func:`meshlab_holefill.core.holes.hole_context`).
+    k, temperature : float
+        Annealing constant (Boltzmann factor and cooling) and start temperature (Sec. 3.1, 4).
+    epsilon : float
+        Clearance kept between non-adjacent boundary segments, relative to the mean edge length.
+    max_restarts, sa_steps : int
+        Annealing runs before giving up, and moves per run.
+    step_bound : {'global', 'local'}
+        Bound of a move's length.
+    energy : {'area', 'fairing'}
+        E_AREA or E_DF (Sec. 3.3); ``area_rows`` ({'mesh', 'interior'}) chooses E_AREA's rows.
+    refinement : bool
+        Planar refinement of Sec. 3.3.
+    fallback, repair, swaps, tangential : bool
+        Beyond the paper: development fallback, crossing repair, quality swaps, tangential relaxation.
+    seed : int
+        Seed of the annealing.
+    area_rows : {'mesh', 'interior'}
+    max_domain_area : float
+        Largest planar domain embedded, as a multiple of the missing surface's area (0: no limit).
 
     Returns
     -------
     Patch
-        ``info``: ``unfolding`` ('annealing' or 'development'), ``restarts``, ``sa_steps``,
+        ``vertices`` (p, 3) float64 and ``faces`` (q, 3) int64 in loop-local indices (i < k:
+        loop vertex i). ``info``: ``unfolding`` ('annealing' or 'development'), ``restarts``, ``sa_steps``,
         ``energy_pe_start`` / ``energy_pe_end`` (E_PE before / after annealing),
         ``development_relax`` (blend of the development used or offered, see
         :func:`simple_development`), ``ears_clipped``, ``edge_swaps``, ``crossing_faces`` (left
@@ -383,6 +410,37 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         ``unfolding_seconds`` (Sec. 3.1), ``embedding_seconds`` (Sec. 3.2-3.3: triangulation,
         refinement and energy solve, as the paper's embedding times), ``repair_seconds`` and
         ``swap_seconds``.
+
+    Raises
+    ------
+    HoleFillError
+        When no simple planar domain is found (or none within ``max_domain_area``), or the
+        embedding fails.
+
+    References
+    ----------
+    A. Brunton, S. Wuhrer, C. Shu, P. Bose and E. D. Demaine, "Filling Holes in Triangular
+    Meshes by Curve Unfolding", IEEE International Conference on Shape Modeling and
+    Applications (SMI), 2009.
+
+    Examples
+    --------
+    A round hole in the middle of a bowl-shaped grid, filled from its HoleContext:
+
+    >>> import numpy as np
+    >>> from meshlab_holefill.core.holes import boundary_loops, hole_context
+    >>> from meshlab_holefill.core.patch import validate_patch
+    >>> x, y = np.meshgrid(np.linspace(-1, 1, 11), np.linspace(-1, 1, 11))
+    >>> V = np.c_[x.ravel(), y.ravel(), 0.2 * (x ** 2 + y ** 2).ravel()]
+    >>> i = (np.arange(10)[:, None] * 11 + np.arange(10)).ravel()
+    >>> F = np.concatenate([np.c_[i, i + 1, i + 12], np.c_[i, i + 12, i + 11]])
+    >>> F = F[np.linalg.norm(V[F].mean(axis=1)[:, :2], axis=1) > 0.45]
+    >>> loop = min(boundary_loops(F), key=len)  # the hole, not the grid's outer border
+    >>> ctx = hole_context(V, F, loop, rings=RINGS)
+    >>> patch = fill(ctx)
+    >>> validate_patch(patch, ctx.points, ctx.forbidden_edges)  # closes the loop exactly once
+    >>> len(patch.faces) == 2 * len(patch.vertices) + len(loop) - 2  # a disc (Euler)
+    True
     """
     P = ctx.points
     m = ctx.size

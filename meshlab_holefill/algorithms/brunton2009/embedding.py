@@ -32,6 +32,9 @@ import scipy.sparse.linalg as spla
 from ...geometry.laplacian import uniform_laplacian
 from ...errors import HoleFillError
 
+__all__ = ["umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy", "vertex_normals",
+           "tangent_frames", "tangential_relaxation", "embed_patch"]
+
 
 def umbrella_operator(F, n):
     """U of Sec. 3.3 as a sparse matrix: (W @ X)[p] = mean of p's 1-ring - p.

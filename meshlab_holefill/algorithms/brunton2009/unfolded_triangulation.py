@@ -14,6 +14,8 @@ from ...geometry.triangulate import polygon_perimeter, triangulate_polygon
 from ...errors import HoleFillError
 from .embedding import embed_patch
 
+__all__ = ["constrained_delaunay", "scale_to_loop", "refine_planar", "triangulate_and_embed"]
+
 MIN_ANGLE_DEGREES = 30.0  # Sec. 3.3 after Chew: every angle in [30, 120] degrees
 MAX_CHORD_ROUNDS = 8  # re-triangulations that break chords duplicating mesh edges
 

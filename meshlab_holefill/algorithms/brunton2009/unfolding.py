@@ -21,7 +21,7 @@ Readings of what Sec. 3.1 leaves open:
   direction" after an accepted improving step: every vertex remembers the direction of its
   last move; if that move was accepted and lowered E_PE, its next direction is drawn within a
   10 degree cone around it, otherwise uniformly on the sphere.
-* **Schedule.** Acceptance ``exp(-dE / (k T))`` (Metropolis). The paper calls k < 1 the rate of
+* **Schedule.** Metropolis rule: a move is kept with probability ``exp(-dE / (k T))``. The paper calls k < 1 the rate of
   cooling and T the start temperature; as in Press et al.'s schedule the temperature drops by
   the factor k after each stage, ``T <- k T``, a stage being one sweep (every vertex one move).
 * **Stopping rule.** At the start of every stage the loop's projection is tested; a run ends
@@ -61,6 +61,9 @@ import numpy as np
 from ...geometry.pca import fit_plane, plane_frame
 from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
 from ...errors import HoleFillError
+
+__all__ = ["triple_normals", "planarity_terms", "planarity_energy", "colour_classes", "anneal_loop",
+           "project_to_best_plane", "linear_motion_is_simple", "unfold_loop"]
 
 TEMPERATURE_FLOOR = 1e-3  # a run ends when k T < TEMPERATURE_FLOOR * T_start
 CONE_DEGREES = 10.0  # Sec. 3.1: next direction within 10 degrees of the previous one
@@ -199,51 +202,18 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
             if len(J) == 0:
                 break
             steps += len(J)
-            G = rng.standard_normal((len(J), 3))
-            U = rng.random((len(J), 3))
-            dirs = G / np.linalg.norm(G, axis=1)[:, None]
-            cone = improving[J]
-            if cone.any():
-                dirs[cone] = _cone_directions(last_dir[J[cone]], G[cone], U[cone, 1])
-            last_dir[J] = dirs
-            jm, jp = (J - 1) % m, (J + 1) % m
-            jm2, jm3, jp2 = (J - 2) % m, (J - 3) % m, (J + 2) % m
-            if step_bound == "global":
-                clearance = np.full(len(J), d_md)
-            else:
-                clearance = np.minimum(D[jm].min(axis=1), D[J].min(axis=1))
-            # Moves of one class happen together: half the bound keeps any two moving segments
-            # from meeting (their distance is >= d_MD and shrinks by less than two half steps).
-            length = U[:, 0] * 0.5 * np.maximum(eps, clearance)
-            q = P[J] + length[:, None] * dirs
-            n_a = _cross_normals(P[jm2], P[jm], q)    # n_{j-2}
-            n_b = _cross_normals(P[jm], q, P[jp])     # n_{j-1}
-            n_c = _cross_normals(q, P[jp], P[jp2])    # n_j
-            t0, t1 = _angles(N[jm3], n_a), _angles(n_a, n_b)
-            t2, t3 = _angles(n_b, n_c), _angles(n_c, N[jp])
-            dE = (t0 + t1 + t2 + t3) - (T[jm3] + T[jm2] + T[jm] + T[J])
+            q, U = _propose_moves(P, J, rng, improving, last_dir, D, d_md, eps, step_bound)
+            jm = (J - 1) % m
+            n_a, n_b, n_c, t0, t1, t2, t3, dE = _energy_change(P, N, T, J, q)
             with np.errstate(over="ignore"):
                 acc = (dE <= 0.0) | (U[:, 2] < np.exp(-dE / kT))
-            # Constraint d_MD > eps on the moved segments, all moves of the class applied.
-            for _ in range(3):
-                if not acc.any():
-                    break
-                trial = P.copy()
-                trial[J[acc]] = q[acc]
-                ends = np.roll(trial, -1, axis=0)
-                moved = np.unique(np.concatenate([jm[acc], J[acc]]))
-                rows = segment_distance_rows(trial[moved], ends[moved], trial, ends, mask[moved], near)
-                bad = moved[rows.min(axis=1) <= eps]
-                if len(bad) == 0:
-                    break
-                acc &= ~(np.isin(J, bad) | np.isin(jm, bad))
-            else:
-                acc[:] = False
+            acc, trial, moved, rows = _keep_clearance(P, J, q, acc, mask, near, eps)
             improving[J] = acc & (dE < 0.0)
             if not acc.any():
                 continue
             accepted += int(acc.sum())
             P = trial
+            jm2, jm3 = (J - 2) % m, (J - 3) % m
             N[jm2[acc]], N[jm[acc]], N[J[acc]] = n_a[acc], n_b[acc], n_c[acc]
             T[jm3[acc]], T[jm2[acc]], T[jm[acc]], T[J[acc]] = t0[acc], t1[acc], t2[acc], t3[acc]
             D[moved, :] = rows
@@ -255,6 +225,87 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
         kT *= k
     return P, {"steps": steps, "accepted": accepted, "stages": stages, "energy_start": energy_start,
                "energy_end": planarity_energy(P), "d_md": min_segment_distance(P), "simple": simple}
+
+
+def _propose_moves(P, J, rng, improving, last_dir, D, d_md, eps, step_bound):
+    """Moves of the vertices J of one colour class: new positions q and the uniforms U they used.
+
+    Directions are uniform on the sphere, or within the 10 degree cone of the last direction
+    for a vertex whose last move lowered the energy (``improving``); ``last_dir`` is updated.
+    A move's length is uniform up to half the bound (global d_MD or the moved segments'
+    clearance): moves of one class happen together, and half the bound keeps any two moving
+    segments from meeting (their distance is >= d_MD and shrinks by less than two half steps).
+
+    Returns
+    -------
+    q : (j, 3) float64
+    U : (j, 3) float64  U[:, 0] the length, U[:, 1] the cone tilt, U[:, 2] the Metropolis draw
+    """
+    m = len(P)
+    G = rng.standard_normal((len(J), 3))
+    U = rng.random((len(J), 3))
+    dirs = G / np.linalg.norm(G, axis=1)[:, None]
+    cone = improving[J]
+    if cone.any():
+        dirs[cone] = _cone_directions(last_dir[J[cone]], G[cone], U[cone, 1])
+    last_dir[J] = dirs
+    jm = (J - 1) % m
+    if step_bound == "global":
+        clearance = np.full(len(J), d_md)
+    else:
+        clearance = np.minimum(D[jm].min(axis=1), D[J].min(axis=1))
+    length = U[:, 0] * 0.5 * np.maximum(eps, clearance)
+    return P[J] + length[:, None] * dirs, U
+
+
+def _energy_change(P, N, T, J, q):
+    """Change of E_PE when each vertex J[i] moves to q[i]: the four d_PE terms it touches (O(1) each).
+
+    Returns the three new triple normals n_{j-2}, n_{j-1}, n_j, the four new angles t0..t3 and dE.
+    """
+    m = len(P)
+    jm, jp = (J - 1) % m, (J + 1) % m
+    jm2, jm3, jp2 = (J - 2) % m, (J - 3) % m, (J + 2) % m
+    n_a = _cross_normals(P[jm2], P[jm], q)    # n_{j-2}
+    n_b = _cross_normals(P[jm], q, P[jp])     # n_{j-1}
+    n_c = _cross_normals(q, P[jp], P[jp2])    # n_j
+    t0, t1 = _angles(N[jm3], n_a), _angles(n_a, n_b)
+    t2, t3 = _angles(n_b, n_c), _angles(n_c, N[jp])
+    dE = (t0 + t1 + t2 + t3) - (T[jm3] + T[jm2] + T[jm] + T[J])
+    return n_a, n_b, n_c, t0, t1, t2, t3, dE
+
+
+def _keep_clearance(P, J, q, acc, mask, near, eps):
+    """The constraint d_MD > eps on the moved segments, all accepted moves of the class applied.
+
+    Moves whose segments come too close are refused, up to three times; then every move of
+    the class is refused.
+
+    Returns
+    -------
+    acc : (j,) bool  the moves kept
+    trial : (m, 3) float64 or None  the loop with them applied
+    moved : (s,) int64  segments moved
+    rows : (s, m) float64  their distances to every segment
+    """
+    m = len(P)
+    jm = (J - 1) % m
+    trial = moved = rows = None
+    for _ in range(3):
+        if not acc.any():
+            break
+        trial = P.copy()
+        trial[J[acc]] = q[acc]
+        ends = np.roll(trial, -1, axis=0)
+        moved = np.unique(np.concatenate([jm[acc], J[acc]]))
+        rows = segment_distance_rows(trial[moved], ends[moved], trial, ends, mask[moved], near)
+        bad = moved[rows.min(axis=1) <= eps]
+        if len(bad) == 0:
+            break
+        acc &= ~(np.isin(J, bad) | np.isin(jm, bad))
+    else:
+        acc[:] = False
+    return acc, trial, moved, rows
 
 
 def project_to_best_plane(P):

@@ -6,6 +6,8 @@ import numpy as np
 from ...geometry.quality import triangle_quality, vertex_normals
 from ...geometry.topology import one_ring_matrix
 
+__all__ = ["bilateral_filter"]
+
 
 def _radius_pairs(V, movable, rho, fixed_points):
     """(rows, cols) of every point within rho[row] of a movable vertex (Fleishman's N(v)).

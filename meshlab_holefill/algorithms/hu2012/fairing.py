@@ -1,10 +1,21 @@
-"""Fairing by sparse linear solves: membrane (Laplacian) and thin-plate (bi-Laplacian) energies."""
+"""Fairing by sparse linear solves: membrane (Laplacian) and thin-plate (bi-Laplacian) energies.
+
+The ``fairing`` option of Hu et al.'s filter (beyond the paper, off by default) solves one of
+them for the new vertices with the surrounding rings fixed, after the refinement and before the
+bilateral filter. The filter is a smoother: after fairing it flattens the faired patch again,
+hence the advice to combine fairing with ``iterations=0``. Measured on the benchmark's cut
+holes (mean patch-to-removed-surface distance, per mille of the bounding-box diagonal, small /
+medium / large): thinplate 0.28 / 2.5 / 5.7 with iterations=0, 0.45 / 3.6 / 5.9 with 3; no
+fairing 0.49 / 6.1 / 16.8; MeshLab's Close Holes 0.30 / 5.9 / 21.2.
+"""
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse.linalg as spla
 
 from ...geometry.laplacian import cotangent_laplacian, uniform_laplacian
+
+__all__ = ["fair_positions", "fair_patch_in_context"]
 
 
 def fair_positions(V, F, fixed, order=1, weights="uniform", rhs=None):

@@ -14,6 +14,8 @@ import numpy as np
 
 from ...geometry.intersections import faces_intersecting, intersecting_pairs
 
+__all__ = ["sector_angle", "inside_hole_sector", "LoopSectors", "patch_crossings", "patch_guard", "swaps_crossing"]
+
 
 def sector_angle(apex, normal, reference, directions):
     """Angles of directions about ``normal``, counter-clockwise from (reference - apex), in [0, 2 pi).

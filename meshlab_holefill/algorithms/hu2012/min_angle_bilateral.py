@@ -59,6 +59,8 @@ from ...core.parameters import ParamSpec
 from .tangential_smoothing import tangential_smoothing
 from .min_angle_triangulation import min_angle_triangulation
 
+__all__ = ["fill", "PARAMS", "RINGS", "relaxation_guard", "embeds_in_projection"]
+
 RINGS = 2
 
 PARAMS = [
@@ -76,10 +78,7 @@ PARAMS = [
               "Extra step beyond the paper, off by default: solve a membrane ('membrane') or thin-plate "
               "('thinplate') energy for the new vertices, with the surrounding rings fixed, after refinement "
               "(edges relaxed again afterwards) and before the bilateral filter. The filter is a smoother: after "
-              "fairing it flattens the faired patch again, so combine fairing with iterations=0 (measured on the "
-              "benchmark's cut holes, mean patch-to-removed-surface distance per mille of the bbox diagonal, "
-              "small/medium/large: thinplate 0.28/2.5/5.7 with iterations=0, 0.45/3.6/5.9 with 3; no fairing "
-              "0.49/6.1/16.8; MeshLab's close holes 0.30/5.9/21.2).",
+              "fairing it flattens the faired patch again, so combine fairing with iterations=0.",
               choices=("none", "membrane", "thinplate")),
     ParamSpec("smoothing", "int", 0,
               "Extra step beyond the paper, off by default: rounds of tangential smoothing of the new vertices "
@@ -87,8 +86,7 @@ PARAMS = [
               "stuck next to a long border edge, bisects the interior edge opposite the obtuse angle of poor "
               "triangles, moves every new vertex in its tangent plane toward the apexes of equilateral triangles "
               "on its opposite edges (a move that lowers the worst quality around it is undone) and relaxes the "
-              "edges again. Natural holes' mean quality 0.79 -> 0.84 with 10 rounds; with fairing=thinplate and "
-              "iterations=0 every benchmark target is met (see tangential_smoothing).",
+              "edges again. Best combined with fairing=thinplate and iterations=0.",
               minimum=0, maximum=100),
     ParamSpec("relaxation", "enum", "angles",
               "Edge relaxation test of the refinement (Sec. III.C, Fig. 4): 'angles' = the two triangles "
@@ -274,15 +272,68 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
          neighbourhood="ring", filter_guard=0.3, smoothing=0):
     """Fill one hole by Hu et al.'s three steps (Sec. III.B-III.D).
 
+    The modified minimum-angle triangulation (:func:`.min_angle_triangulation.min_angle_triangulation`),
+    the Pfeifle-Seidel refinement with edge relaxation (:func:`meshlab_holefill.geometry.refine.refine_patch`),
+    then the bilateral filter (:func:`.bilateral_filter.bilateral_filter`); ``fairing`` and
+    ``smoothing`` are steps beyond the paper, off by default.
+
     Parameters
     ----------
     ctx : HoleContext
-    alpha, sigma_c, sigma_s, iterations, fairing, relaxation, neighbourhood, filter_guard, smoothing : see PARAMS
+        The hole and ``RINGS`` rings of faces around it (:func:`meshlab_holefill.core.holes.hole_context`).
+    alpha : float
+        Density control factor of the refinement (Sec. III.C).
+    sigma_c, sigma_s : float
+        Bilateral closeness and feature widths, as fractions of the local vertex density.
+    iterations : int
+        Bilateral filter iterations (Sec. III.D).
+    fairing : {'none', 'membrane', 'thinplate'}
+        Beyond the paper: an energy solved for the new vertices before the filter.
+    relaxation : {'angles', 'sphere'}
+        Edge relaxation test of the refinement.
+    neighbourhood : {'ring', 'radius'}
+        Bilateral filter neighbourhood.
+    filter_guard : float
+        Quality below which a bilateral move is undone (0: off).
+    smoothing : int
+        Beyond the paper: rounds of tangential smoothing of the new vertices.
 
     Returns
     -------
     Patch
-        ``info`` has ``initial_faces``, ``split_rounds``, ``swaps`` and per-step seconds.
+        ``vertices`` (p, 3) float64 and ``faces`` (q, 3) int64 in loop-local indices (i < k:
+        loop vertex i); ``info`` has ``initial_faces``, ``split_rounds``, ``swaps`` and
+        per-step seconds.
+
+    Raises
+    ------
+    HoleFillError
+        When the minimum-angle triangulation cannot close the hole (fewer than 3 boundary
+        vertices, no valid ear left, or a last triangle duplicating a mesh edge).
+
+    References
+    ----------
+    P. Hu, C. Wang, B. Li and M. Liu, "Filling Holes in Triangular Meshes in Engineering",
+    Journal of Software (JSW) 7(1), 2012.
+
+    Examples
+    --------
+    A round hole in the middle of a bowl-shaped grid, filled from its HoleContext:
+
+    >>> import numpy as np
+    >>> from meshlab_holefill.core.holes import boundary_loops, hole_context
+    >>> from meshlab_holefill.core.patch import validate_patch
+    >>> x, y = np.meshgrid(np.linspace(-1, 1, 11), np.linspace(-1, 1, 11))
+    >>> V = np.c_[x.ravel(), y.ravel(), 0.2 * (x ** 2 + y ** 2).ravel()]
+    >>> i = (np.arange(10)[:, None] * 11 + np.arange(10)).ravel()
+    >>> F = np.concatenate([np.c_[i, i + 1, i + 12], np.c_[i, i + 12, i + 11]])
+    >>> F = F[np.linalg.norm(V[F].mean(axis=1)[:, :2], axis=1) > 0.45]
+    >>> loop = min(boundary_loops(F), key=len)  # the hole, not the grid's outer border
+    >>> ctx = hole_context(V, F, loop, rings=RINGS)
+    >>> patch = fill(ctx)
+    >>> validate_patch(patch, ctx.points, ctx.forbidden_edges)  # closes the loop exactly once
+    >>> len(patch.faces) == 2 * len(patch.vertices) + len(loop) - 2  # a disc (Euler)
+    True
     """
     k = ctx.size
     t0 = time.perf_counter()

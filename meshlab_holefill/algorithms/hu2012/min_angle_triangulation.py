@@ -14,6 +14,8 @@ import numpy as np
 from ...geometry.topology import edge_pair_set
 from ...errors import HoleFillError
 
+__all__ = ["boundary_angles", "normal_angle_threshold", "min_angle_triangulation"]
+
 
 def boundary_angles(P, normals):
     """Angle of each boundary vertex, with concave vertices reflexed (Sec. III.B, Eq. 2).

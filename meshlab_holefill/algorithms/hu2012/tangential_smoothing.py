@@ -6,7 +6,8 @@ they leave flat triangles that no split or swap may touch. :func:`tangential_smo
 filter's ``smoothing`` parameter) moves the new vertices within their tangent planes, splits
 obtuse ears (:func:`bisect_obtuse`) and collapses vertices with no room to move
 (:func:`collapse_poor`), each step kept only when it does not lower the local minimum quality.
-Measured effect: see :mod:`.min_angle_bilateral`.
+Measured effect: see :mod:`.min_angle_bilateral`; on the benchmark's natural holes 10 rounds raise
+the mean quality from 0.79 to 0.84.
 """
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ import numpy as np
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
+
+__all__ = ["bisect_obtuse", "collapse_poor", "tangential_smoothing"]
 
 
 def _refuse_worse(V_old, V_new, F, moved):

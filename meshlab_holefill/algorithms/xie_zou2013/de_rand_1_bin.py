@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["reflect_into_bounds", "de_rand_1_bin"]
+
 
 def reflect_into_bounds(X, lower, upper):
     """Constrain variables to [l, u] by reflection at the violated bound (Eq. 5).

@@ -39,7 +39,7 @@ Readings of passages the paper leaves open (each documented at the function that
   Prediction points outside the projected boundary polygon or within 0.25 EdgeLen
   of it are left out; beyond the paper, also a point that the triangulation makes the apex
   of a triangle on a loop edge of length L > 2 EdgeLen while within 0.35 L of that edge
-  (``hpde_steps.EDGE_CLEARANCE``, ``LONG_EDGE``; the rest is then triangulated again): range-scan
+  (``triangulation.EDGE_CLEARANCE``, ``LONG_EDGE``; the rest is then triangulated again): range-scan
   borders have loop edges of 2-4 EdgeLen, and such an apex makes a sliver (angle ~145
   degrees, 2r/R 0.1-0.25) that the decimation and the swaps of Sec. 4.7 cannot remove (with
   the pass of ``quality_floor``, face000.ply natural holes 3, 13, 23: min quality 0.098 /
@@ -53,8 +53,8 @@ Readings of passages the paper leaves open (each documented at the function that
   swaps and local relaxation repair what they can, prediction points left on folds are
   dropped for up to 4 rounds. A loop-only triangulation with Liepa's weights is the last
   resort. A chord duplicating a mesh edge is split at its midpoint.
-* Sec. 4.7. NumSmooth = 60 passes of Taubin's non-shrinking lambda|mu filter (ref. [26], as
-  issue #5 asks; the paper names no operator for step 7) on the new vertices, loop fixed,
+* Sec. 4.7. NumSmooth = 60 passes of Taubin's non-shrinking lambda|mu filter (ref. [26]: the
+  paper names no operator for step 7, and Taubin's filter does not shrink the patch) on the new vertices, loop fixed,
   lambda = 0.33 (Taubin's example) and mu from the pass band k_PB = 1/lambda + 1/mu set to
   the patch's lowest Dirichlet frequency k_1 (``taubin_pass_band=0``), so the smoothest
   shape of the patch passes with gain 1 and no mode is amplified. Taubin's closed-surface
@@ -65,14 +65,15 @@ Readings of passages the paper leaves open (each documented at the function that
   (Kobbelt 1998) on the patch glued to its surrounding rings, whose fixed points have the
   uniform turning angles of Sec. 5.2.2, anchored to the predictions (``smoothing_anchor``
   0.15; free passes converge on narrow holes to the thin-plate fill of the loop): closer to
-  the removed surface (0.200 / 1.682 / 1.591), but not the filter the issue names. Edges
+  the removed surface (0.200 / 1.682 / 1.591), but a fit to the predictions over the patch and its
+  rings rather than the smoothing filter of the patch that step 7 describes. Edges
   shorter than ``decimation_rate`` (0.6) * EdgeLen collapse to their midpoint, onto the loop
   vertex when one end is on the loop; min-angle swaps keep each new triangle within 60
   degrees of the old pair's normal. ``relax`` (beyond the paper, on by
   default for the quality target): obtuse-edge splits, collapse of slivers on the loop and
   tangential relaxation, then moves of the free vertices of triangles below quality 0.5
   (improve_worst_vertices), undone if it folds. ``quality_floor`` (beyond the paper, 0.4 by
-  default): the final guarded pass of hpde_quality on the triangles below the floor, the
+  default): the final guarded pass of quality_pass on the triangles below the floor, the
   paper's swaps and collapses plus vertex moves, each kept only if it raises the smallest
   quality of the triangles it changes, keeps them unfolded, and the patch does not cross the
   rings (benchmark, with the clearance above: the 14 natural / large holes below 0.3 and
@@ -85,22 +86,10 @@ Readings of passages the paper leaves open (each documented at the function that
 """
 from __future__ import annotations
 
-import time
-
-import numpy as np
-
-from ...geometry.laplacian import tangential_umbrella_smoothing
-from ...geometry.quality import triangle_quality
-from ...core.patch import Patch
-from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
-from . import folds
-from . import triangulation as mesh_steps
-from . import optimisation
-from . import quality_pass as hpde_quality
-from . import sections
-from .smooth_optimise import RELAX_ROUNDS, smooth_and_optimise
-from .steps import base_point_normals, pairing_coverage, plane_map_for, predict_points, ring_edge_length, segment_boundary, triangulate
+from ._algorithm2 import OptimisationOptions, PredictionOptions, SmoothingOptions, patch_hole
+
+__all__ = ["fill", "PARAMS", "RINGS"]
 
 RINGS = 2
 
@@ -154,21 +143,14 @@ PARAMS = [
     ParamSpec("quality_floor", "float", 0.4,
               "Beyond the paper: triangles of 2r/R below this floor are improved at the end of Sec. 4.7 by "
               "guarded edge swaps, vertex moves in the tangent plane and edge collapses, each kept only if it "
-              "raises the smallest quality of the triangles it changes without folding them (hpde_quality); "
+              "raises the smallest quality of the triangles it changes without folding them; "
               "0 = off.", minimum=0.0, maximum=1.0),
     ParamSpec("relax", "int", 10,
               "Beyond the paper: passes of tangential relaxation (then min-angle swaps) after the mesh "
-              "optimisation, evening out the triangles without changing the shape; on by default to meet the "
-              "quality target (2r/R mean >= 0.85, min >= 0.3); 0 = the paper.",
+              "optimisation, evening out the triangles without changing the shape; on by default for triangle "
+              "quality; 0 = the paper.",
               minimum=0, maximum=1000),
 ]
-
-OUTLIER_ROUNDS = 4  # rounds of leaving out prediction points on faces that stay folded
-LAST_RESORT_ANGLE = np.radians(175.0)  # largest crease the loop-only last resort accepts
-LAST_RESORT_FLOORS = (0.4, 0.6)  # quality pass floors of the loop-only last resort (splits give it inner vertices)
-MIN_COVERAGE = 0.5  # a pairing keeping fewer base points than this share yields to the other choice
-GOOD_KEPT_SHARE = 0.5  # a layout keeping fewer prediction points is used only if no other keeps more
-
 
 def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=100, critical_dihedral=90.0,
          critical_intersection=12.0, num_smooth=60, decimation_rate=0.6, seed=0, relax=10, smoothing="taubin",
@@ -182,174 +164,75 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
     attempt is clean when no fold-over is left after smoothing, optimisation and repairs and
     the patch does not cross the surrounding rings; one that kept under half of the prediction
     points is used only if no other keeps more. The loop-only triangulation is the last
-    resort; if it also fails, HoleFillError names every attempt's reason.
+    resort. The steps run in :func:`._algorithm2.patch_hole`; the keywords are grouped there
+    into :class:`PredictionOptions` (steps 2-5), :class:`SmoothingOptions` and
+    :class:`OptimisationOptions` (step 7).
 
     Parameters
     ----------
     ctx : HoleContext
-    population_factor, mutation, crossover, generations, critical_dihedral, critical_intersection,
-    num_smooth, decimation_rate, seed, relax, smoothing, taubin_pass_band, taubin_lambda : see PARAMS
+        The hole and ``RINGS`` rings of faces around it (:func:`meshlab_holefill.core.holes.hole_context`).
+    population_factor, mutation, crossover, generations, seed : float, float, float, int, int
+        Differential evolution of Sec. 4.5 and 4.8 (N = factor * m, F, CR, NumIter, random seed).
+    critical_dihedral, critical_intersection : float
+        A_c (Sec. 4.2) and I_c (Sec. 4.3), in degrees.
+    num_smooth, smoothing, smoothing_anchor, taubin_pass_band, taubin_lambda : int, str, float, float, float
+        NumSmooth and the smoothing operator of Sec. 4.7 with its settings.
+    decimation_rate : float
+        Edges shorter than this times EdgeLen collapse (Sec. 4.7).
+    relax, quality_floor : int, float
+        Beyond the paper: tangential relaxation passes and the floor of the final quality pass.
+    arc_tangent : {'secant', 'circle'}
+        Start angle of the arcs of Sec. 4.5.
     record : dict, optional
-        Receives ``smoothed_points`` (the SP_i of Sec. 4.7 of the returned patch; empty for the
-        loop-only last resort), for the errors of Eq. 17.
+        Receives ``smoothed_points`` ((s, 3) float64, the SP_i of Sec. 4.7 of the returned
+        patch; empty for the loop-only last resort), for the errors of Eq. 17.
 
     Returns
     -------
     Patch
-        ``info``: ``base_points`` (n), ``segmented`` (prediction), ``layout``, ``dihedral_deg``,
-        ``pairs``, ``skipped_base_points``, ``M``, ``predicted``, ``kept`` (prediction points
-        triangulated), ``collapses``, ``rate`` (new vertices / prediction points, the paper's
-        Rate), ``swaps``, ``fold_repairs``, ``outliers`` and per-step seconds.
-    """
-    t0 = time.perf_counter()
-    k = ctx.size
-    P = ctx.points
-    edge_len = float(ring_edge_length(ctx))
-    if k < 3 or edge_len <= 0:
-        raise HoleFillError("degenerate hole")
-    base = sections.base_points(P, edge_len)
-    normals = base_point_normals(ctx.loop_normals, base)
-    seg = segment_boundary(base, normals, np.radians(critical_dihedral))
-    t1 = time.perf_counter()
-    de_options = dict(N_factor=population_factor, F=mutation, CR=crossover, generations=generations, seed=seed)
-    # Attempts: the paper's choice (segmented prediction with two unfolded planes, or the
-    # unsegmented one with the PCA plane), then the other plane layout and the disc with the
-    # same prediction, then the same three layouts with the other prediction.
-    # Reading: a pairing that keeps fewer than half of the base points (the Eq. 9 pairs of a
-    # hole whose two PCA runs are its two long sides run along the boundary and are skipped by
-    # I_c) covers the hole badly; then the other choice goes first if it covers more.
-    first = bool(seg["segmented"])
-    if seg["split"] is not None:
-        coverage = {s: pairing_coverage(base, normals, seg["split"] if s else None, np.radians(critical_intersection))
-                    for s in (True, False)}
-        if coverage[first] < MIN_COVERAGE and coverage[not first] > coverage[first]:
-            first = not first
-    choices = [first] + ([not first] if seg["split"] is not None else [])
-    attempts = []
-    for segmented in choices:
-        plane_layouts = ["two planes", "plane"] if segmented else ["plane", "two planes"]
-        if seg["split"] is None:
-            plane_layouts = ["plane"]
-        attempts += [(segmented, layout) for layout in plane_layouts + ["disc"]]
-    predictions, reasons, best = {}, [], None
-    mesh_normals = folds.border_normals(ctx)
-    prediction_seconds = 0.0
-    for segmented, layout in attempts:
-        t2 = time.perf_counter()
-        if segmented not in predictions:
-            predictions[segmented] = predict_points(ctx, base, normals, seg["split"] if segmented else None,
-                                                    np.radians(critical_intersection), edge_len, de_options,
-                                                    arc_tangent)
-        result = predictions[segmented]
-        prediction_seconds += time.perf_counter() - t2
-        excluded = np.zeros(len(result[0]), bool)
-        for round_ in range(OUTLIER_ROUNDS):
-            try:
-                t3 = time.perf_counter()
-                tri_stats = {}
-                V, F, ids = triangulate(ctx, base, normals, seg, layout, result, edge_len, excluded, tri_stats)
-                t4 = time.perf_counter()
-                attempt_record = {}
-                V, F, stats, bad_ids = smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, num_smooth,
-                                                           decimation_rate, relax, smoothing, attempt_record,
-                                                           smoothing_anchor, quality_floor, taubin_pass_band,
-                                                           taubin_lambda)
-                t5 = time.perf_counter()
-            except HoleFillError as exc:
-                reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: {exc}")
-                break
-            crossing = stats.pop("crossing", None)  # known when the quality pass changed the patch
-            if stats["folds_left"] == 0 and (folds.intersects_surroundings(ctx, V, F) if crossing is None
-                                             else crossing):
-                reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
-                               "patch crosses the surrounding mesh")
-                break
-            if stats["folds_left"] == 0:
-                info = dict(result[3])
-                # Points left out next to long loop edges (hpde_steps.EDGE_CLEARANCE) are not lost by the layout.
-                kept = (stats["kept"] + tri_stats.get("edge_cleared", 0)) / max(info["predicted"], 1)
-                info.update(base_points=len(base), segmented=bool(segmented), layout=layout,
-                            dihedral_deg=None if seg["dihedral"] is None else float(np.degrees(seg["dihedral"])),
-                            outliers=int(excluded.sum()), rate=float((len(V) - k) / max(info["predicted"], 1)),
-                            kept_share=float(kept), boundary_seconds=t1 - t0, prediction_seconds=prediction_seconds,
-                            triangulation_seconds=t4 - t3, optimisation_seconds=t5 - t4, **stats)
-                patch = Patch(vertices=V[k:], faces=F, info=info)
-                if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
-                    if reasons:
-                        info["attempts_failed"] = "; ".join(reasons)
-                    if record is not None:
-                        record.update(attempt_record)
-                    return patch
-                # The layout lost many prediction points: keep it, but try the others first.
-                if best is None or kept > best.info["kept_share"]:
-                    best, best_record = patch, attempt_record
-                reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
-                               f"kept only {kept:.0%} of the prediction points")
-                break
-            if len(bad_ids) == 0:
-                reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
-                               "fold-over after smoothing and mesh optimisation")
-                break
-            excluded[bad_ids] = True
-        else:
-            reasons.append(f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}: "
-                           f"fold-over after smoothing and mesh optimisation ({OUTLIER_ROUNDS} rounds)")
-    if best is not None:
-        best.info["attempts_failed"] = "; ".join(reasons)
-        if record is not None:
-            record.update(best_record)
-        return best
-    # Last resort (beyond the paper): the loop alone, triangulated by Liepa's weights or flat
-    # in the PCA plane. Teeth of a crumpled scan border force sharp creases there, so up to
-    # LAST_RESORT_ANGLE is accepted (a triangle flipped onto its neighbour is at 180 degrees).
-    candidates = [folds.loop_triangulation(P, mesh_normals, ctx.forbidden_edges,
-                                           blocked=folds.crossing_triangles(ctx))[0]]
-    try:
-        pmap = plane_map_for(base, normals, seg, False)
-        candidates.append(mesh_steps.triangulate_projection(P, np.zeros((0, 3)), pmap, 0.0)[1])
-    except HoleFillError:
-        pass
-    fe = np.sort(np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2), axis=1)
-    for F in candidates:
-        if F is None or len(F) == 0:
-            continue
-        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        if len(fe) and np.isin(fe[:, 0] * k + fe[:, 1], E[:, 0] * k + E[:, 1]).any():
-            continue
-        if folds.local_folds(P, F, mesh_normals, max_angle=LAST_RESORT_ANGLE).any():
-            continue
-        if folds.intersects_surroundings(ctx, P, F):
-            continue
-        info = {"base_points": len(base), "segmented": False, "layout": "loop only", "pairs": 0, "predicted": 0,
-                "rate": 0.0, "attempts_failed": "; ".join(reasons), "boundary_seconds": t1 - t0,
-                "prediction_seconds": prediction_seconds}
-        V = P
-        if relax > 0:
-            # The relaxation's splits give the loop-only patch interior vertices; kept if clean.
-            Vr, Fr = P, F
-            for _ in range(RELAX_ROUNDS):
-                Vr, Fr, s_ = optimisation.split_obtuse_edges(Vr, Fr, k)
-                Vr = tangential_umbrella_smoothing(Vr, Fr, np.arange(len(Vr)) < k, relax)
-                if s_ == 0:
-                    break
-            if not folds.local_folds(Vr, Fr, mesh_normals, max_angle=LAST_RESORT_ANGLE).any() and \
-                    not folds.intersects_surroundings(ctx, Vr, Fr):
-                V, F = Vr, Fr
-        if quality_floor > 0:
-            # The guarded quality pass (beyond the paper), with splits: a loop-only patch has
-            # no free vertex to move. Swaps may not create loop triangles that cross the rings.
-            def fold_count(V_, F_):
-                return int(folds.local_folds(V_, F_, mesh_normals, max_angle=LAST_RESORT_ANGLE).sum())
+        ``vertices`` (p, 3) float64 and ``faces`` (q, 3) int64 in loop-local indices (i < k:
+        loop vertex i). ``info``: ``base_points`` (n), ``segmented`` (prediction), ``layout``,
+        ``dihedral_deg``, ``pairs``, ``skipped_base_points``, ``M``, ``predicted``, ``kept``
+        (prediction points triangulated), ``collapses``, ``rate`` (new vertices / prediction
+        points, the paper's Rate), ``swaps``, ``fold_repairs``, ``outliers`` and per-step seconds.
 
-            blocked = folds.crossing_triangles(ctx)
-            for floor in LAST_RESORT_FLOORS:
-                Vq, Fq, _, qstats = hpde_quality.raise_min_quality(
-                    V, F, k, ctx.forbidden_edges, mesh_normals, floor=floor, fold_test=fold_count, blocked=blocked,
-                    split=True)
-                if any(qstats.values()) and not folds.intersects_surroundings(ctx, Vq, Fq) and \
-                        triangle_quality(Vq, Fq).min() >= min(floor, triangle_quality(V, F).min()):
-                    V, F = Vq, Fq
-                    for key, value in qstats.items():
-                        info[f"quality_{key}"] = info.get(f"quality_{key}", 0) + value
-        return Patch(vertices=V[k:], faces=F, info=info)
-    raise HoleFillError("; ".join(reasons))
+    Raises
+    ------
+    HoleFillError
+        A degenerate hole, or every attempt and the last resort failed (the message names
+        each attempt's reason).
+
+    References
+    ----------
+    W.-C. Xie and X.-F. Zou, "A triangulation-based hole patching method using differential
+    evolution", Computer-Aided Design 45 (2013), Elsevier.
+
+    Examples
+    --------
+    A round hole in the middle of a bowl-shaped grid, filled from its HoleContext:
+
+    >>> import numpy as np
+    >>> from meshlab_holefill.core.holes import boundary_loops, hole_context
+    >>> from meshlab_holefill.core.patch import validate_patch
+    >>> x, y = np.meshgrid(np.linspace(-1, 1, 11), np.linspace(-1, 1, 11))
+    >>> V = np.c_[x.ravel(), y.ravel(), 0.2 * (x ** 2 + y ** 2).ravel()]
+    >>> i = (np.arange(10)[:, None] * 11 + np.arange(10)).ravel()
+    >>> F = np.concatenate([np.c_[i, i + 1, i + 12], np.c_[i, i + 12, i + 11]])
+    >>> F = F[np.linalg.norm(V[F].mean(axis=1)[:, :2], axis=1) > 0.45]
+    >>> loop = min(boundary_loops(F), key=len)  # the hole, not the grid's outer border
+    >>> ctx = hole_context(V, F, loop, rings=RINGS)
+    >>> patch = fill(ctx)
+    >>> validate_patch(patch, ctx.points, ctx.forbidden_edges)  # closes the loop exactly once
+    >>> len(patch.faces) == 2 * len(patch.vertices) + len(loop) - 2  # a disc (Euler)
+    True
+    """
+    return patch_hole(
+        ctx,
+        PredictionOptions(critical_dihedral=critical_dihedral, critical_intersection=critical_intersection,
+                          population_factor=population_factor, mutation=mutation, crossover=crossover,
+                          generations=generations, seed=seed, arc_tangent=arc_tangent),
+        SmoothingOptions(operator=smoothing, passes=num_smooth, taubin_lambda=taubin_lambda,
+                         taubin_pass_band=taubin_pass_band, anchor=smoothing_anchor),
+        OptimisationOptions(decimation_rate=decimation_rate, relax=relax, quality_floor=quality_floor),
+        record=record)

@@ -16,6 +16,9 @@ from ...geometry.quality import face_normals
 from ...geometry.topology import edge_pair_set, interior_edges
 from .optimisation import adjacency
 
+__all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_folds", "unfold_by_swaps",
+           "repair_folds", "intersects_surroundings", "boundary_ears", "border_normals"]
+
 # Neighbouring patch faces whose normals differ by more than this are a fold-over.
 FOLD_ANGLE = np.radians(150.0)
 

@@ -1,10 +1,10 @@
 """HPDE step 7, second half (Xie and Zou 2013, Sec. 4.7): mesh optimisation of the smoothed patch.
 
-After the smoothing (:mod:`.hpde_smoothing`), edges shorter
+After the smoothing (:mod:`.smoothing`), edges shorter
 than a rate of EdgeLen are collapsed to their midpoints and edges are swapped while that
 raises the smaller angle of their two triangles (Fig. 5). The tangential relaxation and the
 obtuse-edge splits are the option ``relax`` beyond the paper; the final guarded pass on the
-worst triangles (option ``quality_floor``) is in hpde_quality.
+worst triangles (option ``quality_floor``) is in :mod:`.quality_pass`.
 """
 from __future__ import annotations
 
@@ -14,6 +14,9 @@ import scipy.sparse as sp
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
 from ...geometry.topology import edge_pair_set, interior_edges
+
+__all__ = ["split_obtuse_edges", "remove_valence_three", "compact_vertices", "adjacency", "decimate_short_edges",
+           "swap_edges_min_angle", "improve_worst_vertices"]
 
 # A collapse may turn no surrounding face by more than this (cosine of 60 degrees); a swap
 # may turn its two faces no further from their former mean normal.

@@ -11,7 +11,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import sections
 from .de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
+
+__all__ = ["arc_points", "arc_height", "circle_start_angle", "forward_tangents", "prediction_counts",
+           "SectionProblem", "section_problems", "turning_angles", "angle_variation", "initial_population",
+           "subset", "predict_y", "predicted_points", "predict_points"]
 
 
 def arc_points(theta, length, s):
@@ -344,3 +349,43 @@ def predicted_points(P1, frames, problem, Y):
     ex, ey = frames[plane, 0], frames[plane, 1]
     pts = P1[plane] + problem.x[plane, col, None] * ex + Y[plane, col, None] * ey
     return pts, plane, problem.x[plane, col] / problem.length[plane]
+
+
+def predict_points(ctx, base, normals, split, I_c, edge_len, de_options, arc_tangent="secant"):
+    """Steps 3-5: correspondences, section planes and DE prediction (Sec. 4.3-4.5).
+
+    Returns
+    -------
+    points : (q, 3) float64
+    owner : (q, 2) int64  base points (a, b) of the pair each point was predicted for
+    fraction : (q,) float64  position along the chord, in (0, 1)
+    info : dict
+    """
+    P = ctx.points
+    tangent, inward = sections.boundary_frames(base.points, normals)
+    pairs, cinfo = sections.correspondences(base.points, tangent, inward, split, I_c)
+    info = {"pairs": int(len(pairs)), "skipped_base_points": cinfo["skipped"], "M": 0, "predicted": 0,
+            "de_generations": 0, "dropped_pairs": 0}
+    empty = (np.zeros((0, 3)), np.zeros((0, 2), np.int64), np.zeros(0), info)
+    if len(pairs) == 0:
+        return empty
+    a, b = pairs[:, 0], pairs[:, 1]
+    Nv, flat = sections.section_normals(base.points, pairs, normals[a] + normals[b])
+    W = sections.border_third_vertices(ctx)
+    AP_a, TV_a = sections.ring_intersections(P, base.edge[a], base.points[a], Nv, W[base.edge[a]])
+    AP_b, TV_b = sections.ring_intersections(P, base.edge[b], base.points[b], Nv, W[base.edge[b]])
+    P1, P2, TV1, TV2 = base.points[a], base.points[b], TV_a, -TV_b
+    ok = forward_tangents(P1, P2, TV1, TV2)
+    info.update(section_normal_fallbacks=int(flat.sum()), dropped_pairs=int((~ok).sum()))
+    if not ok.any():
+        return empty
+    pairs, P1, P2, TV1, TV2, Nv = pairs[ok], P1[ok], P2[ok], TV1[ok], TV2[ok], Nv[ok]
+    m, M = prediction_counts(np.linalg.norm(P2 - P1, axis=1), edge_len)
+    if arc_tangent == "circle":
+        # The circle through AP, BP and the other base point needs the lengths |BP - AP|.
+        TV1, TV2 = P1 - AP_a[ok], AP_b[ok] - P2
+    problem, frames = section_problems(P1, P2, TV1, TV2, Nv, m, tangent=arc_tangent)
+    Y, f, g = predict_y(problem, **de_options)
+    points, plane, fraction = predicted_points(P1, frames, problem, Y)
+    info.update(M=M, predicted=int(len(points)), de_generations=int(g), de_objective_mean=float(np.mean(f)))
+    return points, pairs[plane], fraction, info

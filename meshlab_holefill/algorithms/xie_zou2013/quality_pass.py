@@ -33,6 +33,8 @@ from ...geometry.quality import cross_rows, face_normals, triangle_quality, vert
 from ...geometry.topology import edge_pair_set
 from .optimisation import compact_vertices
 
+__all__ = ["raise_min_quality"]
+
 TURN_COS = 0.5  # a changed triangle may turn by less than 60 degrees
 BORDER_COS = np.cos(np.radians(150.0))  # and bend less than 150 degrees against the mesh across a loop edge
 GAIN = 1e-6

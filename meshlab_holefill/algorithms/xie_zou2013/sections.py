@@ -10,6 +10,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...geometry.quality import mean_edge_length
+
+__all__ = ["BasePoints", "base_points", "ring_edge_length", "base_point_normals", "pca_segmentation",
+           "dihedral_angle", "segment_boundary", "boundary_frames", "intersection_angle", "best_start",
+           "pair_chain", "correspondences", "pairing_coverage", "section_normals", "border_third_vertices",
+           "ring_intersections"]
+
 # Dihedral comparisons (Sec. 4.2) allow this rounding slack, so that the cube of Fig. 15(b),
 # whose two faces meet at exactly A_c = pi/2, is segmented as the paper reports.
 ANGLE_SLACK = 1e-6
@@ -62,6 +69,19 @@ def base_points(P, edge_length):
     t = np.clip((s - cum[edge]) / np.maximum(lengths[edge], 1e-300), 0.0, 1.0)
     points = P[edge] + t[:, None] * seg[edge]
     return BasePoints(points=points, edge=edge.astype(np.int64), t=t, perimeter=perimeter)
+
+
+def ring_edge_length(ctx):
+    """EdgeLen (Sec. 4.2): mean length of the edges of the ring of triangles adjacent to the hole."""
+    ring = ctx.faces[np.any(ctx.faces < ctx.size, axis=1)]
+    return mean_edge_length(ctx.vertices, ring)
+
+
+def base_point_normals(normals, base):
+    """Surface normal at each base point, interpolated along its loop edge, (n, 3)."""
+    k = len(normals)
+    N = (1 - base.t)[:, None] * normals[base.edge] + base.t[:, None] * normals[(base.edge + 1) % k]
+    return N / np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
 
 
 def _batched_plane_fits(count, sums, squares):
@@ -138,6 +158,27 @@ def dihedral_angle(normal_1, normal_2, reference_1, reference_2):
     n1 = normal_1 * (1.0 if np.dot(normal_1, reference_1) >= 0 else -1.0)
     n2 = normal_2 * (1.0 if np.dot(normal_2, reference_2) >= 0 else -1.0)
     return float(np.pi - np.arccos(np.clip(np.dot(n1, n2), -1.0, 1.0))), n1, n2
+
+
+def segment_boundary(base, normals, critical_dihedral):
+    """Step 2 decision: Eq. 8 split and whether to segment (Sec. 4.2).
+
+    Returns
+    -------
+    dict with ``split`` (i0, j0) or None, ``dihedral`` (radians or None), ``segmented`` (bool),
+    ``planes`` ((centroid, oriented normal) for PS_1 and PS_2, or None).
+    """
+    i0, j0, lams, plane_normals = pca_segmentation(base.points)
+    if i0 is None:
+        return {"split": None, "dihedral": None, "segmented": False, "planes": None}
+    n = len(base)
+    ps1 = np.r_[np.arange(j0, n), np.arange(0, i0)]
+    ps2 = np.arange(i0, j0)
+    angle, n1, n2 = dihedral_angle(plane_normals[0], plane_normals[1],
+                                            normals[ps1].sum(axis=0), normals[ps2].sum(axis=0))
+    planes = ((base.points[ps1].mean(axis=0), n1), (base.points[ps2].mean(axis=0), n2))
+    return {"split": (i0, j0), "dihedral": angle, "segmented": angle <= critical_dihedral + ANGLE_SLACK,
+            "planes": planes}
 
 
 def boundary_frames(BP, normals, window=2):
@@ -295,6 +336,13 @@ def correspondences(BP, tangent, inward, segmentation=None, I_c=np.pi / 15):
     return pairs, {"start": sp, "skipped": skipped}
 
 
+def pairing_coverage(base, normals, split, I_c):
+    """Share of the base points that the correspondences of Sec. 4.3 keep in a pair."""
+    tangent, inward = boundary_frames(base.points, normals)
+    pairs, _ = correspondences(base.points, tangent, inward, split, I_c)
+    return 2.0 * len(pairs) / max(len(base), 1)
+
+
 def section_normals(BP, pairs, surface_normals, max_tilt=np.pi / 4):
     """Normal Nv of the section plane of each pair (Sec. 4.4, Eq. 11).
 
@@ -333,6 +381,17 @@ def section_normals(BP, pairs, surface_normals, max_tilt=np.pi / 4):
     nbar[fallback] = sn[fallback]
     Nv = np.cross(lv, nbar)
     return Nv / np.maximum(np.linalg.norm(Nv, axis=1, keepdims=True), 1e-300), fallback
+
+
+def border_third_vertices(ctx):
+    """Third corner W of the border triangle of each loop edge, (k, 3)."""
+    k = ctx.size
+    tri = ctx.faces[ctx.border_faces]
+    i = np.arange(k)[:, None]
+    other = (tri != i) & (tri != (i + 1) % k)
+    # A border face whose third corner is also a loop vertex still has one "other" corner.
+    pick = np.argmax(other, axis=1)
+    return ctx.vertices[tri[np.arange(k), pick]]
 
 
 def ring_intersections(P, base_edge, BP, Nv, third_vertex):

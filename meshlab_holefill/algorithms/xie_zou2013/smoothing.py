@@ -4,7 +4,7 @@
 its pass band at the patch's lowest Dirichlet frequency; :func:`curvature_smooth` (option
 ``smoothing='curvature'``) is the second-order umbrella on the patch glued to its
 surrounding rings, anchored to the predicted positions. The mesh optimisation that follows
-(decimation, swaps) is in :mod:`.hpde_optimisation`.
+(decimation, swaps) is in :mod:`.optimisation`.
 """
 from __future__ import annotations
 
@@ -13,6 +13,8 @@ import scipy.sparse as sp
 
 from ...geometry.laplacian import adjacency_matrix, lowest_dirichlet_frequency
 from ...geometry.quality import unique_edges
+
+__all__ = ["taubin_mu", "taubin_smooth", "curvature_smooth"]
 
 # Taubin's lambda (ref. [26]); mu follows from the pass band (taubin_smooth).
 TAUBIN_LAMBDA = 0.33

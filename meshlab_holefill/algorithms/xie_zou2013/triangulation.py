@@ -4,17 +4,29 @@ The boundary and prediction points are projected to the PCA plane of the boundar
 segmented boundary, to the two fitted planes unfolded into one about their common line
 (Fig. 1); Triangle's constrained Delaunay triangulation keeps every boundary edge and its
 topology is applied to the 3D points. A disc layout is the fallback beyond the paper for holes
-no plane can flatten; fold-overs are handled in :mod:`hpde_folds`.
+no plane can flatten; fold-overs are handled in :mod:`.folds`.
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ...geometry.pca import plane_frame
+from ...geometry.pca import fit_plane, plane_frame
 from ...geometry.topology import interior_edges
 from ...geometry.triangulate import polygon_signed_area, triangulate_polygon
 from ...errors import HoleFillError
+from . import folds
+from . import sections
+
+__all__ = ["PlaneMap", "points_in_polygon", "distance_to_polygon", "disc_coordinates", "inside_boundary",
+           "lateral_offsets", "triangulate_planar", "edge_sliver_apexes", "triangulate_projection",
+           "split_forbidden_edges", "fitting_plane", "plane_map_for", "triangulate_layout"]
+
+EDGE_CLEARANCE = 0.35  # beyond the paper: a sliver apex nearer than this * L to a loop edge of length L ...
+LONG_EDGE = 2.0  # ... longer than this * EdgeLen is left out (triangulate_planar)
+CLEARANCE = 0.25  # prediction points nearer than this * EdgeLen to the projected boundary are left out
+STANDING_PLANE_COS = 0.5  # a PCA plane whose normal is further than 60 deg from the surface's stands across it
+
 
 class PlaneMap:
     """Map of 3D points to the triangulation plane (Sec. 4.6, Fig. 1).
@@ -145,7 +157,7 @@ def inside_boundary(X, BP, inward, clearance):
 
     A point is kept when it is at least ``clearance`` from every base point and its offset
     from the nearest base point has a positive component along that point's into-hole
-    direction (:func:`hpde_sections.boundary_frames`).
+    direction (:func:`.sections.boundary_frames`).
     """
     if len(X) == 0:
         return np.zeros(0, bool)
@@ -305,3 +317,84 @@ def split_forbidden_edges(V, F, forbidden_edges):
     if new_faces:
         F = np.concatenate([F, np.asarray(new_faces, np.int64)])
     return V, F, len(hit)
+
+
+def fitting_plane(points, normals):
+    """The PCA fitting plane of Sec. 4.6 whose normal faces the surface: (centroid, unit normal).
+
+    Reading: the paper takes the plane of the two largest principal directions. A narrow hole
+    bent along its length (a strip around a sphere) has its smallest spread across the strip,
+    so that plane stands across the surface and the projected loop folds onto itself. Of the
+    three principal axes the one nearest to the mean surface normal is used as the normal
+    when the paper's normal is more than 60 degrees (``STANDING_PLANE_COS``) from it; for a
+    hole that is not bent more than its width the paper's plane is kept.
+
+    Parameters
+    ----------
+    points : (n, 3) float64  base points
+    normals : (n, 3) float64  surface normals at the base points
+
+    Returns
+    -------
+    centroid : (3,) float64
+    normal : (3,) float64  unit, on the side of the surface normals
+    """
+    c, n, _, axes = fit_plane(points)
+    mean = normals.sum(axis=0)
+    if np.linalg.norm(mean) > 0:
+        mean = mean / np.linalg.norm(mean)
+        dots = axes @ mean
+        if abs(n @ mean) < STANDING_PLANE_COS and np.abs(dots).max() > abs(n @ mean):
+            n = axes[int(np.argmax(np.abs(dots)))]
+    if n @ normals.sum(axis=0) < 0:
+        n = -n
+    return c, n
+
+
+def plane_map_for(base, normals, seg, segmented):
+    """The triangulation plane(s) of Sec. 4.6: the two fitted planes unfolded, or the PCA plane."""
+    if segmented:
+        (c1, n1), (c2, n2) = seg["planes"]
+        if np.linalg.norm(np.cross(n1, n2)) > 1e-6:
+            return PlaneMap(c1, n1, (c2, n2))
+    return PlaneMap(*fitting_plane(base.points, normals))
+
+
+def triangulate_layout(ctx, base, normals, seg, layout, prediction_result, edge_len, excluded, stats=None):
+    """Step 6 for one layout: 'plane', 'two planes' (Sec. 4.6) or the 'disc' fallback.
+
+    Parameters
+    ----------
+    excluded : (q,) bool  prediction points left out (outliers of earlier rounds)
+    stats : dict, optional  receives ``edge_cleared`` (points left out by EDGE_CLEARANCE alone)
+
+    Returns
+    -------
+    V : (k + q', 3) float64,  F : (t, 3) int64,  ids : (q',) int64 prediction point of each V[k:]
+
+    Raises
+    ------
+    HoleFillError  non-simple layout, or a fold-over after mapping the triangulation back.
+    """
+    points, owner, fraction, _ = prediction_result
+    P = ctx.points
+    clearance = CLEARANCE * edge_len
+    use = np.flatnonzero(~excluded)
+    if layout == "disc":
+        # The disc keeps every chord inside; drop points whose chord left the hole in 3D
+        # (the 2D inside test of the plane layouts).
+        _, inward = sections.boundary_frames(base.points, normals)
+        use = use[inside_boundary(points[use], base.points, inward, clearance)]
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+        offsets = lateral_offsets(P, ctx.loop_normals)
+        Q, X = disc_coordinates(arc, base.perimeter, len(base), owner[use, 0], owner[use, 1],
+                                           fraction[use], offsets)
+        V, F, _, kept = triangulate_planar(P, points[use], Q, X, clearance, EDGE_CLEARANCE, stats,
+                                                      LONG_EDGE * edge_len)
+    else:
+        pmap = plane_map_for(base, normals, seg, layout == "two planes")
+        V, F, orientation, kept = triangulate_projection(P, points[use], pmap, clearance, EDGE_CLEARANCE,
+                                                                    stats, LONG_EDGE * edge_len)
+        if folds.fold_overs(V, F, pmap.reference_normals(V, F, orientation)).any():
+            raise HoleFillError(f"fold-over after mapping the {layout} triangulation back to 3D")
+    return V, F, use[kept]

@@ -14,7 +14,7 @@ the same front is merged with it (Step 4): with one of v's two neighbours the st
 to the rule with one vertex less, with any other vertex the front is split in two there. The
 front is updated (Step 5) and the steps repeat until every front is closed (Step 6). Fronts
 are cyclic linked lists of nodes (a vertex may be on two fronts after a split); a heap keeps
-the angles (:class:`.front_state.FrontState`).
+the angles (:class:`._front_state.FrontState`).
 
 What the paper leaves open, as chosen here:
 
@@ -56,9 +56,11 @@ import math
 import numpy as np
 
 from ...errors import HoleFillError
-from .front_obstacles import FrontObstacles
-from .front_state import FrontState
-from .front_predicates import cross, direction_angle, dot, norm, scaled, segments_cross, sub, unit
+from ._front_obstacles import FrontObstacles
+from ._front_state import FrontState
+from ._front_predicates import cross, direction_angle, dot, norm, scaled, segments_cross, sub, unit
+
+__all__ = ["advancing_front_triangulation"]
 
 ONE_TRIANGLE_MAX = math.radians(75.0)
 TWO_TRIANGLES_MAX = math.radians(135.0)

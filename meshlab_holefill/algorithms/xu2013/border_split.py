@@ -18,6 +18,8 @@ import numpy as np
 
 from ...core.holes import BoundaryLoop
 
+__all__ = ["BorderRefinement", "split_long_boundary_edges"]
+
 
 @dataclass
 class BorderRefinement:

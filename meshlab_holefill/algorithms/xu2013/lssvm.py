@@ -18,6 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+__all__ = ["rbf_kernel", "LSSVMRegressor", "lssvm_fit", "kkt_matrix"]
+
 
 def rbf_kernel(X, Z, width):
     """RBF kernel matrix K_ij = exp(-|X_i - Z_j|^2 / (2 width^2)).

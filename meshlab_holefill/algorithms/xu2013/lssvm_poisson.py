@@ -11,8 +11,13 @@ the membrane fill of Zhao et al. 2007 the paper compares with (its Table 1).
 
 Sec. 3.1 runs for all holes at once before any is filled (``PREPARE``: it changes original
 faces, see :mod:`meshlab_holefill.algorithms.xu2013.border_split`); the initial patch, the Laplacian and
-the safeguards beyond the paper are in :mod:`.lssvm_poisson_patch`, the regression in
+the safeguards beyond the paper are in :mod:`.poisson_patch`, the regression in
 :mod:`.lssvm`, the advancing front in :mod:`meshlab_holefill.algorithms.xu2013.advancing_front`.
+
+Parameter choices the paper leaves open, as measured on the benchmark's cut holes (mean
+distance to the ground truth, per mille of the bounding-box diagonal): ``layers`` 1 / 2 / 3
+(/ 4) gives medium 1.6 / 2.1 / 2.6 / 2.9 and large 5.7 / 5.6 / 5.3, so 2 is the compromise;
+``poisson_iterations`` beyond 1 did not lower the distance and lowered the triangle quality.
 """
 from __future__ import annotations
 
@@ -30,13 +35,17 @@ from ...core.parameters import ParamSpec
 from .lssvm import lssvm_fit
 from .poisson_patch import context_hits, folds, initial_patches, normalized_cotangent_laplacian, relax_patch, repair_slivers
 
+__all__ = ["fill", "PARAMS", "RINGS", "PREPARE", "prepare_boundary", "training_set", "fit_laplacian_regressors",
+           "predict_laplacians", "poisson_reposition", "reposition"]
+
 MAX_LAYERS = 5
 RINGS = MAX_LAYERS + 1  # vertices of depth <= RINGS - 1 have complete 1-rings in the HoleContext
 # Tangential smoothing steps after the Poisson solve (with relax): 3 raised the benchmark's
 # minimum triangle quality from 0.11 to 0.48 without changing the distance to the ground truth.
 TANGENTIAL_ITERATIONS = 3
 # Beyond the paper: triangles still below this quality after the smoothing get local tangential
-# steps (repair_slivers); 0.3 is the issue's quality floor. face000's 227-edge hole 0.216 -> 0.340.
+# steps (repair_slivers); 0.3 is the minimum quality below which a triangle counts as poor (README,
+# "How each paper is implemented").
 SLIVER_QUALITY = 0.3
 
 PARAMS = [
@@ -52,9 +61,7 @@ PARAMS = [
               "edge length to a front vertex is merged with it.", minimum=0.1, maximum=0.95),
     ParamSpec("layers", "int", 2,
               "Layers of mesh vertices around the hole in the LS-SVM training set (Sec. 3.3; the paper leaves "
-              "k open). Mean distance to the ground truth on benchmark holes, per mille of the diagonal: "
-              "medium 1.6 / 2.1 / 2.6 / 2.9 and large 5.7 / 5.6 / 5.3 for 1 / 2 / 3 (/ 4) layers; 2 is the "
-              "compromise.",
+              "k open).",
               minimum=1, maximum=MAX_LAYERS),
     ParamSpec("gamma", "float", 10.0,
               "LS-SVM regularisation parameter gamma (Sec. 2.2, Eq. 11, 14; not given in the paper). 1 to 10 "
@@ -65,13 +72,12 @@ PARAMS = [
               minimum=1e-3, maximum=100.0),
     ParamSpec("poisson_iterations", "int", 1,
               "Poisson solves (Sec. 3.4): the patch's cotangent Laplacian depends on the positions, so further "
-              "solves use the previous result's weights. One is the default: more did not lower the distance "
-              "to the ground truth on the benchmark and lowered the triangle quality.", minimum=1, maximum=50),
+              "solves use the previous result's weights.", minimum=1, maximum=50),
     ParamSpec("laplacian_prediction", "enum", "lssvm",
               "Right-hand side of the Poisson equation: 'lssvm' (the paper) or 'zero' (membrane fill of "
               "Zhao et al. 2007, the paper's Table 1 comparison).", choices=("lssvm", "zero")),
     ParamSpec("relax", "bool", True,
-              "Beyond the paper, needed for the quality target: Delaunay edge swaps on the advancing-front "
+              "Beyond the paper, for triangle quality: Delaunay edge swaps on the advancing-front "
               "patch (thin triangles where fronts meet) and, after the Poisson solve, swaps and tangential "
               "smoothing (the solve also moves vertices along the surface), then local smoothing around "
               "triangles still below quality 0.3."),
@@ -284,20 +290,35 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=2
          kernel_width=0.5, poisson_iterations=1, laplacian_prediction="lssvm", relax=True):
     """Fill one hole by Xu et al.'s steps (Sec. 3.2-3.4); Sec. 3.1 ran before as ``PREPARE``.
 
+    The training set and regression (Sec. 3.3, 2.2) come first; then the initial patches of
+    :func:`.poisson_patch.initial_patches` are tried in turn (the paper's 3D advancing front
+    first) until one is repositioned (:func:`reposition`) clear of the surrounding mesh.
+
     Parameters
     ----------
-    ctx : HoleContext  (loop already refined by :func:`prepare_boundary` when enabled)
-    split_boundary, split_factor : used by :func:`prepare_boundary` only
-    merge_factor, layers, gamma, kernel_width, poisson_iterations, laplacian_prediction, relax : see PARAMS
-
-    The training set and regression (Sec. 3.3, 2.2) come first; then the initial patches of
-    :func:`initial_patches` are tried in turn (the paper's 3D advancing front first) until
-    one is repositioned (:func:`reposition`) clear of the surrounding mesh.
+    ctx : HoleContext
+        The hole and ``RINGS`` rings of faces around it (:func:`meshlab_holefill.core.holes.hole_context`),
+        its loop already refined by :func:`prepare_boundary` when the pipeline runs it.
+    split_boundary, split_factor : bool, float
+        Used by :func:`prepare_boundary` only (Sec. 3.1).
+    merge_factor : float
+        Advancing-front merge distance, in target edge lengths (Sec. 3.2, Step 4).
+    layers : int
+        Rings of mesh vertices in the LS-SVM training set (Sec. 3.3).
+    gamma, kernel_width : float
+        LS-SVM regularisation and RBF width (fraction of the training set's RMS radius).
+    poisson_iterations : int
+        Poisson solves (Sec. 3.4).
+    laplacian_prediction : {'lssvm', 'zero'}
+        Right-hand side of the Poisson equation.
+    relax : bool
+        Beyond the paper: swaps and smoothing for triangle quality.
 
     Returns
     -------
     Patch
-        ``info`` has the initial patch's counts (``afm_*``, ``afm_domain`` says which
+        ``vertices`` (p, 3) float64 and ``faces`` (q, 3) int64 in loop-local indices (i < k:
+        loop vertex i). ``info`` has the initial patch's counts (``afm_*``, ``afm_domain`` says which
         triangulation), ``fallbacks`` (and ``fallback_reasons``), ``swaps``,
         ``training_samples``, the Poisson counts, ``poisson_damping`` and per-step seconds.
 
@@ -305,6 +326,31 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=2
     ------
     HoleFillError
         When no initial patch can be made or kept clear of the surrounding mesh.
+
+    References
+    ----------
+    B. Xu, Z. Li and Y. Tan, "Feature Based Hole Filling Algorithm on Triangular Mesh", 7th
+    International Conference on Computer and Computing Technologies in Agriculture (CCTA 2013),
+    IFIP AICT 420, Springer, pp. 90-101.
+
+    Examples
+    --------
+    A round hole in the middle of a bowl-shaped grid, filled from its HoleContext:
+
+    >>> import numpy as np
+    >>> from meshlab_holefill.core.holes import boundary_loops, hole_context
+    >>> from meshlab_holefill.core.patch import validate_patch
+    >>> x, y = np.meshgrid(np.linspace(-1, 1, 11), np.linspace(-1, 1, 11))
+    >>> V = np.c_[x.ravel(), y.ravel(), 0.2 * (x ** 2 + y ** 2).ravel()]
+    >>> i = (np.arange(10)[:, None] * 11 + np.arange(10)).ravel()
+    >>> F = np.concatenate([np.c_[i, i + 1, i + 12], np.c_[i, i + 12, i + 11]])
+    >>> F = F[np.linalg.norm(V[F].mean(axis=1)[:, :2], axis=1) > 0.45]
+    >>> loop = min(boundary_loops(F), key=len)  # the hole, not the grid's outer border
+    >>> ctx = hole_context(V, F, loop, rings=RINGS)
+    >>> patch = fill(ctx)
+    >>> validate_patch(patch, ctx.points, ctx.forbidden_edges)  # closes the loop exactly once
+    >>> len(patch.faces) == 2 * len(patch.vertices) + len(loop) - 2  # a disc (Euler)
+    True
     """
     k = ctx.size
     t0 = time.perf_counter()

@@ -22,6 +22,9 @@ from ...geometry.segments import polygon_edges_touch
 from ...geometry.topology import interior_edges
 from ...errors import HoleFillError
 
+__all__ = ["normalized_cotangent_laplacian", "reference_normals", "planar_boundaries", "harmonic_lift",
+           "initial_patches", "relax_patch", "folds", "repair_slivers", "context_hits"]
+
 
 def normalized_cotangent_laplacian(V, F, n=None):
     """Laplacian matrix with normalised cotangent weights (Sec. 2.1, Eq. 1-3, 5-6).

@@ -1,4 +1,4 @@
-"""Batch repair of many mesh files on dask.distributed: :func:`batch` (the module is callable too).
+"""Batch repair of many mesh files on dask.distributed: :func:`batch` (``meshlab_holefill.batch``).
 
 Each file is one dask task that loads the mesh, runs a filter (or a .mlx script), saves it
 under the output folder and writes ``<output>.json`` beside it with the filter's per-hole
@@ -15,7 +15,6 @@ import json
 import os
 import sys
 import time
-import types
 
 from ._inputs import OUTPUT_FORMATS, BatchInputError, plan_outputs, sha256_file
 from ._report import BatchReport, make_report, write_report
@@ -194,13 +193,3 @@ def _execute(todo, settings, records, client, scheduler, n_workers, memory_limit
 def _not_run(item):
     return {"input": item.input, "output": item.output, "name": item.name, "status": "not run",
             "error": "interrupted before it finished"}
-
-
-class _CallableModule(types.ModuleType):
-    """Lets ``meshlab_holefill.batch(...)`` call :func:`batch` once this subpackage is imported."""
-
-    def __call__(self, *args, **kwargs):
-        return batch(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule

@@ -11,7 +11,7 @@ from meshlab_holefill.algorithms.xu2013 import lssvm_poisson as xu
 from meshlab_holefill.algorithms.xu2013.lssvm import kkt_matrix, lssvm_fit, rbf_kernel
 from meshlab_holefill.algorithms.xu2013.poisson_patch import normalized_cotangent_laplacian
 from meshlab_holefill.algorithms.xu2013.advancing_front import advancing_front_triangulation
-from meshlab_holefill.algorithms.xu2013.front_predicates import front_angle
+from meshlab_holefill.algorithms.xu2013._front_predicates import front_angle
 from meshlab_holefill.algorithms.xu2013.border_split import split_long_boundary_edges
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import face_areas, triangle_quality

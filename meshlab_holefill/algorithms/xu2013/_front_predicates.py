@@ -11,6 +11,9 @@ import numpy as np
 
 from ...geometry.quality import cross_rows
 
+__all__ = ["sub", "dot", "cross", "norm", "scaled", "unit", "front_angle", "direction_angle", "segments_cross",
+           "dot_rows", "point_triangle_distance", "segments_hit_triangles"]
+
 # The plane of the two front edges is used when its normal is within 30 degrees of the
 # reference normal and the edges make an angle of at least ~8.6 degrees (sin > 0.15).
 PLANE_MIN_COS = 0.866

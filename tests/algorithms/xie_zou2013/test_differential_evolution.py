@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 import meshlab_holefill  # noqa: F401  (registers the filters)
 from meshlab_holefill.algorithms.xie_zou2013 import differential_evolution as hpde
 from meshlab_holefill.evaluation.papers import hpde_sphere as hpde_experiment
-from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, triangulation as hpde_mesh, optimisation as hpde_optimisation, prediction as hpde_prediction, sections as hpde_sections, smoothing as hpde_smoothing, steps as hpde_steps
+from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, triangulation as hpde_mesh, optimisation as hpde_optimisation, prediction as hpde_prediction, sections as hpde_sections, smoothing as hpde_smoothing, _algorithm2 as hpde_algorithm2
 from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.core.holes import boundary_loops, hole_context
@@ -105,7 +105,7 @@ def patch_points(ctx, patch):
 
 def test_base_points_count_and_equal_arc_length(sphere_hole):
     _, _, _, ctx = sphere_hole
-    e = hpde_steps.ring_edge_length(ctx)
+    e = hpde_sections.ring_edge_length(ctx)
     base = hpde_sections.base_points(ctx.points, e)
     perimeter = np.linalg.norm(np.roll(ctx.points, -1, axis=0) - ctx.points, axis=1).sum()
     assert len(base) == int(np.floor(perimeter / (0.8 * e)))
@@ -122,7 +122,7 @@ def test_ring_edge_length_is_mean_of_adjacent_triangles():
     V, F = grid_plane(10)
     F_cut, _ = cut(V, F, (0.5, 0.5, 0), 0.2)
     ctx = context(V, F_cut)
-    assert hpde_steps.ring_edge_length(ctx) == pytest.approx(np.mean([0.1] * 2 + [0.1 * np.sqrt(2)]), rel=0.15)
+    assert hpde_sections.ring_edge_length(ctx) == pytest.approx(np.mean([0.1] * 2 + [0.1 * np.sqrt(2)]), rel=0.15)
 
 
 def test_pca_segmentation_matches_brute_force_eq8():
@@ -144,10 +144,10 @@ def test_pca_segmentation_matches_brute_force_eq8():
 
 def test_cube_edge_hole_is_segmented_along_the_characteristic_line(cube_edge_hole):
     _, _, _, ctx = cube_edge_hole
-    e = hpde_steps.ring_edge_length(ctx)
+    e = hpde_sections.ring_edge_length(ctx)
     base = hpde_sections.base_points(ctx.points, e)
-    normals = hpde_steps.base_point_normals(ctx.loop_normals, base)
-    seg = hpde_steps.segment_boundary(base, normals, np.pi / 2)
+    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
+    seg = hpde_sections.segment_boundary(base, normals, np.pi / 2)
     assert seg["segmented"]
     assert np.degrees(seg["dihedral"]) == pytest.approx(90.0, abs=1.0)
     i0, j0 = seg["split"]
@@ -166,8 +166,8 @@ def test_planar_hole_is_not_segmented():
     V, F = grid_plane(24)
     F_cut, _ = cut(V, F, (0.5, 0.5, 0), 0.3)
     ctx = context(V, F_cut)
-    base = hpde_sections.base_points(ctx.points, hpde_steps.ring_edge_length(ctx))
-    seg = hpde_steps.segment_boundary(base, hpde_steps.base_point_normals(ctx.loop_normals, base), np.pi / 2)
+    base = hpde_sections.base_points(ctx.points, hpde_sections.ring_edge_length(ctx))
+    seg = hpde_sections.segment_boundary(base, hpde_sections.base_point_normals(ctx.loop_normals, base), np.pi / 2)
     assert not seg["segmented"] and np.degrees(seg["dihedral"]) > 170
 
 
@@ -205,9 +205,9 @@ def test_ellipse_pairs_cross_the_short_way_and_respect_ic():
 
 def test_forced_pairing_eq9_keeps_the_index_sum(cube_edge_hole):
     _, _, _, ctx = cube_edge_hole
-    base = hpde_sections.base_points(ctx.points, hpde_steps.ring_edge_length(ctx))
-    normals = hpde_steps.base_point_normals(ctx.loop_normals, base)
-    i0, j0 = hpde_steps.segment_boundary(base, normals, np.pi / 2)["split"]
+    base = hpde_sections.base_points(ctx.points, hpde_sections.ring_edge_length(ctx))
+    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
+    i0, j0 = hpde_sections.segment_boundary(base, normals, np.pi / 2)["split"]
     tangent, inward = hpde_sections.boundary_frames(base.points, normals)
     # I_c = -pi switches the modification off: the pure Eq. 9 pairing.
     pairs, _ = hpde_sections.correspondences(base.points, tangent, inward, (i0, j0), I_c=-np.pi)
@@ -222,16 +222,16 @@ def test_forced_pairing_eq9_keeps_the_index_sum(cube_edge_hole):
 
 def test_section_planes_contain_the_chord_and_cut_the_ring_triangles(sphere_hole):
     _, _, _, ctx = sphere_hole
-    e = hpde_steps.ring_edge_length(ctx)
+    e = hpde_sections.ring_edge_length(ctx)
     base = hpde_sections.base_points(ctx.points, e)
-    normals = hpde_steps.base_point_normals(ctx.loop_normals, base)
+    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
     tangent, inward = hpde_sections.boundary_frames(base.points, normals)
     pairs, _ = hpde_sections.correspondences(base.points, tangent, inward)
     a, b = pairs[:, 0], pairs[:, 1]
     Nv, _ = hpde_sections.section_normals(base.points, pairs, normals[a] + normals[b])
     lv = base.points[a] - base.points[b]
     assert np.allclose(np.einsum("ij,ij->i", Nv, lv), 0, atol=1e-9)
-    W = hpde_steps.border_third_vertices(ctx)
+    W = hpde_sections.border_third_vertices(ctx)
     AP, TV = hpde_sections.ring_intersections(ctx.points, base.edge[a], base.points[a], Nv, W[base.edge[a]])
     # AP lies on the section plane and on an edge of the ring triangle of the base point.
     assert np.allclose(np.einsum("ij,ij->i", AP - base.points[a], Nv), 0, atol=1e-9)
@@ -391,10 +391,10 @@ def test_de_on_eq14_matches_brute_force(m):
 
 def test_unfolding_two_planes_is_isometric(cube_edge_hole):
     _, _, _, ctx = cube_edge_hole
-    base = hpde_sections.base_points(ctx.points, hpde_steps.ring_edge_length(ctx))
-    normals = hpde_steps.base_point_normals(ctx.loop_normals, base)
-    seg = hpde_steps.segment_boundary(base, normals, np.pi / 2)
-    pmap = hpde_steps.plane_map_for(base, normals, seg, True)
+    base = hpde_sections.base_points(ctx.points, hpde_sections.ring_edge_length(ctx))
+    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
+    seg = hpde_sections.segment_boundary(base, normals, np.pi / 2)
+    pmap = hpde_mesh.plane_map_for(base, normals, seg, True)
     assert pmap.segmented
     # A point on face y = 0 and one on face z = 0: the unfolded distance is the path over the edge.
     A, B = np.array([[0.5, 0.0, 0.2]]), np.array([[0.6, 0.3, 0.0]])
@@ -405,18 +405,18 @@ def test_unfolding_two_planes_is_isometric(cube_edge_hole):
 
 def test_triangulation_keeps_every_loop_edge_and_detects_fold_overs(sphere_hole):
     _, _, _, ctx = sphere_hole
-    e = hpde_steps.ring_edge_length(ctx)
+    e = hpde_sections.ring_edge_length(ctx)
     base = hpde_sections.base_points(ctx.points, e)
-    normals = hpde_steps.base_point_normals(ctx.loop_normals, base)
-    seg = hpde_steps.segment_boundary(base, normals, np.pi / 2)
-    result = hpde_steps.predict_points(ctx, base, normals, None, np.pi / 15, e,
+    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
+    seg = hpde_sections.segment_boundary(base, normals, np.pi / 2)
+    result = hpde_prediction.predict_points(ctx, base, normals, None, np.pi / 15, e,
                                  dict(N_factor=3, F=0.8, CR=0.05, generations=10, seed=0))
-    V, F, ids = hpde_steps.triangulate(ctx, base, normals, seg, "plane", result, e, np.zeros(len(result[0]), bool))
+    V, F, ids = hpde_mesh.triangulate_layout(ctx, base, normals, seg, "plane", result, e, np.zeros(len(result[0]), bool))
     from meshlab_holefill.core.patch import Patch
 
     validate_patch(Patch(V[ctx.size:], F), ctx.points, ctx.forbidden_edges)
     assert np.array_equal(V[ctx.size:], result[0][ids])
-    pmap = hpde_steps.plane_map_for(base, normals, seg, False)
+    pmap = hpde_mesh.plane_map_for(base, normals, seg, False)
     ref = pmap.reference_normals(V, F, 1)
     assert not hpde_folds.fold_overs(V, F, ref).any()
     # Drag one predicted point across its ring within the plane: faces flip and are detected.
@@ -607,7 +607,7 @@ def test_sphere_hole_follows_the_sphere(sphere_hole):
     X = check_patch(ctx, patch)
     assert patch.info["layout"] == "plane" and not patch.info["segmented"]
     r = np.linalg.norm(patch.vertices, axis=1)
-    e = hpde_steps.ring_edge_length(ctx)
+    e = hpde_sections.ring_edge_length(ctx)
     flat = np.abs(np.linalg.norm(ctx.points, axis=1).mean() * 0 + ctx.points[:, 2].mean() - 1.0)
     assert np.abs(r - 1).mean() < 0.05 * e and np.abs(r - 1).max() < 0.2 * e < flat
     q = triangle_quality(X, patch.faces)
@@ -630,7 +630,7 @@ def test_cube_edge_hole_segmented_and_near_the_cube(cube_edge_hole):
     assert patch.info["segmented"] and patch.info["layout"] == "two planes"
     X = patch.vertices
     to_cube = np.minimum(np.abs(X[:, 1]), np.abs(X[:, 2]))  # distance to the faces y = 0, z = 0
-    e = hpde_steps.ring_edge_length(ctx)
+    e = hpde_sections.ring_edge_length(ctx)
     # The smoothing rounds the characteristic line (Fig. 15(b)); most points stay on the faces.
     assert to_cube.max() < 0.75 * e
     assert np.median(to_cube) < 0.15 * e
@@ -646,7 +646,7 @@ def test_cube_corner_hole_closes_near_the_cube():
     V, F = grid_cube(16)
     F_cut, removed = cut(V, F, (0.0, 0.0, 0.0), 0.35)
     ctx = context(V, F_cut)
-    e = hpde_steps.ring_edge_length(ctx)
+    e = hpde_sections.ring_edge_length(ctx)
     # The paper's A_c = pi/2 does not segment a corner: the best Eq. 8 split (one face against
     # the other two) leaves planes at about 156 degrees.
     plain = hpde.fill(ctx)
@@ -711,7 +711,7 @@ def test_record_returns_the_smoothed_prediction_points(sphere_hole):
     patch = hpde.fill(ctx, seed=0, record=record)
     S = record["smoothed_points"]
     assert len(S) == patch.info["kept"] and len(S) >= len(patch.vertices) > 0
-    assert np.abs(np.linalg.norm(S, axis=1) - 1).max() < 0.2 * hpde_steps.ring_edge_length(ctx)
+    assert np.abs(np.linalg.norm(S, axis=1) - 1).max() < 0.2 * hpde_sections.ring_edge_length(ctx)
 
 
 def removed_patch(V, F, center, radius):
@@ -863,10 +863,10 @@ def test_narrow_bent_hole_is_projected_on_a_plane_facing_the_surface():
     patch = hpde.fill(ctx, seed=0)
     check_patch(ctx, patch)
     assert patch.info["layout"] == "plane" and "attempts_failed" not in patch.info
-    assert np.abs(np.linalg.norm(patch.vertices, axis=1) - 1.0).max() < 0.5 * hpde_steps.ring_edge_length(ctx)
-    base = hpde_sections.base_points(ctx.points, hpde_steps.ring_edge_length(ctx))
-    normals = hpde_steps.base_point_normals(ctx.loop_normals, base)
-    _, n = hpde_steps.fitting_plane(base.points, normals)
+    assert np.abs(np.linalg.norm(patch.vertices, axis=1) - 1.0).max() < 0.5 * hpde_sections.ring_edge_length(ctx)
+    base = hpde_sections.base_points(ctx.points, hpde_sections.ring_edge_length(ctx))
+    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
+    _, n = hpde_mesh.fitting_plane(base.points, normals)
     assert n @ np.array([1.0, 0, 0]) > 0.9  # the strip is centred at (1, 0, 0)
 
 
@@ -910,7 +910,7 @@ def test_long_loop_edges_leave_no_slivers(size, centroid):
     (hpde_quality) lifts what the Sec. 4.7 optimisation leaves below the floor.
     """
     ctx = sample_loop_context(os.path.join("rangemaps", "face000.ply"), size, centroid)
-    edge_len = hpde_steps.ring_edge_length(ctx)
+    edge_len = hpde_sections.ring_edge_length(ctx)
     assert np.linalg.norm(np.roll(ctx.points, -1, axis=0) - ctx.points, axis=1).max() > 2 * edge_len
     patch = hpde.fill(ctx)
     X = check_patch(ctx, patch)
@@ -929,7 +929,7 @@ def test_loop_only_last_resort_is_lifted_by_the_quality_pass():
     X = patch_points(ctx, patch)
     assert not hpde_folds.intersects_surroundings(ctx, X, patch.faces)
     assert not hpde_folds.local_folds(X, patch.faces, hpde_folds.border_normals(ctx),
-                                      max_angle=hpde.LAST_RESORT_ANGLE).any()
+                                      max_angle=hpde_algorithm2.LAST_RESORT_ANGLE).any()
     q = triangle_quality(X, patch.faces)
     assert q.min() >= 0.3 and len(patch.vertices) > 0
 

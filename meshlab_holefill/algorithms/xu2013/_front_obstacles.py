@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .front_predicates import point_triangle_distance, segments_hit_triangles
+from ._front_predicates import point_triangle_distance, segments_hit_triangles
 
 __all__ = ["FrontObstacles"]
 

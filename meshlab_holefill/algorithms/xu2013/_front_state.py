@@ -14,7 +14,9 @@ import math
 
 import numpy as np
 
-from .front_predicates import cross, front_angle, sub, unit
+from ._front_predicates import cross, front_angle, sub, unit
+
+__all__ = ["FrontState"]
 
 
 class FrontState:

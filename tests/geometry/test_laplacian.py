@@ -1,0 +1,50 @@
+"""Laplacians and tangential umbrella smoothing of geometry.laplacian."""
+import numpy as np
+
+from meshlab_holefill.geometry.laplacian import cotangent_laplacian, tangential_umbrella_smoothing, uniform_laplacian
+from conftest import grid
+
+
+def test_laplacians_annihilate_constants_and_cotangent_has_linear_precision():
+    V, F = grid(8, 8)
+    interior = np.flatnonzero((V[:, 0] > 0.01) & (V[:, 0] < 0.99) & (V[:, 1] > 0.01) & (V[:, 1] < 0.99))
+    rng = np.random.default_rng(1)
+    V[:, :2] += rng.uniform(-0.02, 0.02, size=(len(V), 2))
+    for L in (uniform_laplacian(F, len(V)), cotangent_laplacian(V, F)):
+        assert np.allclose(L @ np.ones(len(V)), 0)
+        assert abs(L - L.T).max() < 1e-12
+    Lc = cotangent_laplacian(V, F)
+    linear = 2 * V[:, 0] - 3 * V[:, 1]
+    assert np.abs((Lc @ linear)[interior]).max() < 1e-10
+
+
+def test_tangential_umbrella_smoothing_evens_a_plane_within_it():
+    """On a tilted plane the vertices stay in the plane and return to the regular grid."""
+    V, F = grid(9, 9, z=lambda x, y: 0.3 * x + 0.2 * y)
+    boundary = (V[:, 0] < 1e-9) | (V[:, 0] > 1 - 1e-9) | (V[:, 1] < 1e-9) | (V[:, 1] > 1 - 1e-9)
+    rng = np.random.default_rng(4)
+    shaken = V.copy()
+    shaken[~boundary, :2] += rng.uniform(-0.04, 0.04, size=(int((~boundary).sum()), 2))
+    shaken[:, 2] = 0.3 * shaken[:, 0] + 0.2 * shaken[:, 1]
+    out = tangential_umbrella_smoothing(shaken, F, boundary, 200)
+    assert np.array_equal(out[boundary], shaken[boundary])
+    assert np.abs(out[:, 2] - 0.3 * out[:, 0] - 0.2 * out[:, 1]).max() < 1e-12
+    # the umbrella's fixed point on this grid is the grid itself (each vertex the mean of its neighbours)
+    L = uniform_laplacian(F, len(V))
+    assert np.abs((L @ out)[~boundary]).max() < 1e-6
+    assert np.abs(out - V).max() < 0.05 * np.abs(shaken - V).max()
+    assert np.array_equal(tangential_umbrella_smoothing(shaken, F, boundary, 0), shaken)
+
+
+def test_tangential_umbrella_smoothing_keeps_a_sphere_round_to_first_order():
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    fixed = V[:, 2] < 0
+    out = tangential_umbrella_smoothing(V, F, fixed, 10, step=0.5)
+    radius = np.linalg.norm(out, axis=1)
+    moved = np.linalg.norm(out - V, axis=1)
+    assert moved[~fixed].max() > 1e-3  # the sphere's triangulation is not the umbrella's fixed point
+    assert np.abs(radius - 1).max() < 0.05 * moved.max()  # radial drift is second order

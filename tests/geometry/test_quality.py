@@ -1,0 +1,56 @@
+"""Triangle measures of geometry.quality: 2r/R quality, angles, vertex normals."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from meshlab_holefill.geometry.quality import corner_angles, face_areas, triangle_quality, vertex_normals
+from conftest import grid
+
+
+EQUILATERAL = np.array([[0, 0, 0], [1, 0, 0], [0.5, np.sqrt(3) / 2, 0]])
+
+
+def test_quality_of_equilateral_is_one_and_of_degenerate_is_zero():
+    V = np.concatenate([EQUILATERAL, [[2, 0, 0]]])
+    q = triangle_quality(V, np.array([[0, 1, 2], [0, 1, 3]]))
+    assert q[0] == pytest.approx(1.0)
+    assert q[1] == 0.0
+
+
+def test_quality_of_right_isoceles_triangle():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    # r = (2 - sqrt 2)/2, R = sqrt(2)/2  =>  2r/R = 2(2 - sqrt 2)/sqrt 2
+    assert triangle_quality(V, np.array([[0, 1, 2]]))[0] == pytest.approx(2 * (2 - np.sqrt(2)) / np.sqrt(2))
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(-5, 5), min_size=9, max_size=9), st.floats(0.1, 10))
+def test_quality_is_scale_invariant_and_in_unit_interval(coords, s):
+    V = np.array(coords).reshape(3, 3)
+    F = np.array([[0, 1, 2]])
+    q = triangle_quality(V, F)[0]
+    assert 0.0 <= q <= 1.0
+    if face_areas(V, F)[0] > 1e-6:
+        assert triangle_quality(V * s, F)[0] == pytest.approx(q, rel=1e-6, abs=1e-9)
+    assert corner_angles(V, F).sum() == pytest.approx(np.pi) or face_areas(V, F)[0] < 1e-9
+
+
+def test_vertex_normals_of_a_grid_point_up():
+    V, F = grid(4, 4)
+    assert np.allclose(vertex_normals(V, F), [0, 0, 1])
+
+
+def test_vertex_normals_weigh_faces_by_area():
+    """Sum of face cross products: a face of area 2 counts twice as much as one of area 1.
+
+    Both faces have a right angle at vertex 0 and at vertex 1 the angles differ, so neither the
+    unweighted mean of unit normals, (0, 1, 1)/sqrt 2, nor angle weighting gives the answer.
+    """
+    V = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [0, 0, 1], [5, 5, 5]], float)
+    F = np.array([[0, 1, 2],   # area 2, normal +z
+                  [0, 3, 1]])  # area 1, normal +y, shares edge (0, 1) with consistent orientation
+    N = vertex_normals(V, F)
+    both = np.array([0, 2, 4]) / np.sqrt(20)  # (0, 2, 0) + (0, 0, 4), normalised
+    assert np.allclose(N[0], both) and np.allclose(N[1], both)
+    assert np.allclose(N[2], [0, 0, 1]) and np.allclose(N[3], [0, 1, 0])
+    assert np.array_equal(N[4], [0, 0, 0])  # a vertex without faces gets a zero normal
