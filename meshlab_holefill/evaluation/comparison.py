@@ -19,12 +19,13 @@ from ..core.holes import OUTLINE_RATIO, boundary_halfedges, boundary_loops, outl
 from ..geometry.topology import face_adjacency
 from ..meshlab.mesh_files import is_mesh, load_mesh, mesh_arrays
 from ..meshlab.registration import filter_list, is_builtin_filter, parse_text_value
+from .anchors import ANCHORS, is_anchor, missing_package
 from .cut_holes import SIZE_CLASSES, cut_holes, hole_plan
 from .isolation import IsolatedRunner, json_safe
 from .metrics import assign_patches, compact_mesh, corner_quality_bound, hole_metrics, mesh_checks
 
-__all__ = ["BASELINE", "Comparison", "Filler", "Hole", "MeshCase", "PreparedCase", "as_case", "default_fillers",
-           "evaluate_run", "parse_fillers", "prepare_case", "resolve_params", "run_comparison"]
+__all__ = ["BASELINE", "Comparison", "Filler", "Hole", "MeshCase", "PreparedCase", "anchor_fillers", "as_case",
+           "default_fillers", "evaluate_run", "parse_fillers", "prepare_case", "resolve_params", "run_comparison"]
 
 BASELINE = "meshing_close_holes"
 
@@ -48,6 +49,8 @@ class MeshCase:
     removed : (m,) bool, optional
         Faces to remove as holes with ground truth (instead of holes cut at random).
     surface_area : float, optional  area of the analytic surface (Xu et al.'s error normalisation)
+    given_class : str  size class of the ``removed`` holes in the report ("given"; the creased cases
+        of :mod:`.creased` use "crease" and "crossing")
     """
 
     name: str
@@ -56,6 +59,7 @@ class MeshCase:
     analytic: object = None
     removed: np.ndarray | None = None
     surface_area: float | None = None
+    given_class: str = "given"
 
 
 @dataclass
@@ -203,7 +207,7 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
             removed = np.flatnonzero(np.asarray(case.removed, bool))
             _, label = connected_components(face_adjacency(F[removed]), directed=False)
             groups = [removed[label == c] for c in np.unique(label)]
-            specs = [("given", "given", None) for _ in groups]
+            specs = [(case.given_class, "given", None) for _ in groups]
         else:
             kind = "cut holes"
             plan = hole_plan(holes, sizes)
@@ -270,16 +274,20 @@ def _parse_value(text):
 
 def _resolve_name(name):
     ours = filter_list()
-    if name in ours or name == BASELINE or is_builtin_filter(name):
+    if name in ours or name == BASELINE or is_anchor(name) or is_builtin_filter(name):
         return name
     matches = [f for f in ours if f.endswith(name) or f.endswith("_" + name)]
     if len(matches) == 1:
         return matches[0]
-    raise ValueError(f"unknown filter '{name}' (ours: {', '.join(ours)}; or any pymeshlab filter name)")
+    raise ValueError(f"unknown filter '{name}' (ours: {', '.join(ours)}; third-party: {', '.join(ANCHORS)}; "
+                     "or any pymeshlab filter name)")
 
 
 def default_fillers(refinehole=False):
-    """Every registered filter of ours with its defaults, and MeshLab's Close Holes twice.
+    """Every registered filter of ours with its defaults, the third-party anchors, MeshLab's Close Holes twice.
+
+    The anchors (:data:`.anchors.ANCHORS`: ``cgal_liepa``, ``pymeshfix``) get ``maxholesize``
+    "all"; one whose package is not installed is skipped with a note when the comparison runs.
 
     ``meshing_close_holes`` runs with its defaults (holes up to 30 edges) and with a
     ``maxholesize`` covering every hole ("all", resolved per comparison), optionally also with
@@ -290,11 +298,22 @@ def default_fillers(refinehole=False):
     list of Filler
     """
     out = [Filler(name, name) for name in filter_list()]
+    out += anchor_fillers()
     out += [Filler(f"{BASELINE} (default)", BASELINE),
             Filler(f"{BASELINE} (all holes)", BASELINE, {"maxholesize": "all"})]
     if refinehole:
         out.append(Filler(f"{BASELINE} (all holes, refined)", BASELINE, {"maxholesize": "all", "refinehole": True}))
     return out
+
+
+def anchor_fillers():
+    """The third-party fillers with their defaults and a ``maxholesize`` covering every hole.
+
+    Returns
+    -------
+    list of Filler
+    """
+    return [Filler(name, name, {"maxholesize": "all"}) for name in ANCHORS]
 
 
 def parse_fillers(spec, refinehole=False):
@@ -303,8 +322,10 @@ def parse_fillers(spec, refinehole=False):
     Entries are separated by commas (or given as a list); each is ``name`` or
     ``name:param=value[:param=value...]`` (a comma-separated ``param=value`` right after an
     entry also belongs to it). ``name`` may be a unique suffix of one of our filters
-    (``min_angle_bilateral``); ``ours`` means all registered filters of ours and ``baseline``
-    the two ``meshing_close_holes`` variants. ``maxholesize=all`` covers every hole.
+    (``min_angle_bilateral``); ``ours`` means all registered filters of ours, ``anchors`` the
+    third-party fillers (``cgal_liepa``, ``pymeshfix``; each also by name) and ``baseline``
+    the two ``meshing_close_holes`` variants. ``maxholesize=all`` covers every hole; the
+    anchors get it unless their ``maxholesize`` is given.
 
     Returns
     -------
@@ -334,7 +355,14 @@ def parse_fillers(spec, refinehole=False):
         if name == "baseline":
             out += [f for f in default_fillers(refinehole) if f.filter == BASELINE]
             continue
+        if name == "anchors":
+            out += [Filler(f.label, f.filter, {**f.params, **params}) for f in anchor_fillers()]
+            continue
         full = _resolve_name(name)
+        if is_anchor(full):
+            label = full if not params else f"{full} ({', '.join(f'{k}={v}' for k, v in params.items())})"
+            out.append(Filler(label, full, {"maxholesize": "all", **params}))
+            continue
         label = full if not params else f"{full} ({', '.join(f'{k}={v}' for k, v in params.items())})"
         out.append(Filler(label, full, params))
     labels = [f.label for f in out]
@@ -552,9 +580,14 @@ def run_comparison(meshes, holes=4, sizes=("small", "medium", "large"), seed=0, 
             if bar is not None:
                 bar.set_description(f"{case.name} | {short_filler(filler.label)}"[:50])
             params = resolve_params(filler, cases)
-            task = {"kind": "filter", "V": case.V0, "F": case.F0, "filter": filler.filter, "params": params,
-                    "label": case.name}
-            reply = runner.run(task, timeout)
+            kind = "anchor" if is_anchor(filler.filter) else "filter"
+            missing = missing_package(filler.filter) if kind == "anchor" else None
+            if missing:  # not installed: a note in the report, no worker run
+                reply = {"status": "skipped", "error": missing, "seconds": None}
+            else:
+                task = {"kind": kind, "V": case.V0, "F": case.F0, "filter": filler.filter, "params": params,
+                        "label": case.name}
+                reply = runner.run(task, timeout)
             run, hole_rows, pictures = evaluate_run(case, filler, reply, params, full_metrics)
             runs.append(run)
             rows += hole_rows

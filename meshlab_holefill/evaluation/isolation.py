@@ -91,7 +91,7 @@ def peak_memory_since(start_mb):
 
 
 def execute_task(task):
-    """Run one task (in the worker): a filter on arrays, or a named function.
+    """Run one task (in the worker): a filter on arrays, a third-party filler (kind "anchor"), or a named function.
 
     Returns
     -------
@@ -106,6 +106,8 @@ def execute_task(task):
         value = getattr(importlib.import_module(module), name)(*task.get("args", []), **task.get("kwargs", {}))
         return {"status": "ok", "value": json_safe(value), "seconds": time.perf_counter() - t0}
     V0, F0 = task["V"], task["F"]
+    if task["kind"] == "anchor":
+        return _execute_anchor(task)
     start_mb = reset_peak_memory()
     ms = meshset_from_arrays(V0, F0, task.get("label", "mesh"))
     t0 = time.perf_counter()
@@ -126,6 +128,24 @@ def execute_task(task):
     else:
         reply.update(V=V1, F=F1)
     return reply
+
+
+def _execute_anchor(task):
+    """A third-party filler (:mod:`.anchors`) on arrays; the reply has the same shape as a filter's."""
+    from .anchors import run_anchor
+
+    V0, F0 = np.asarray(task["V"], np.float64), np.asarray(task["F"], np.int64)
+    start_mb = reset_peak_memory()
+    t0 = time.perf_counter()
+    try:
+        V1, F1, result = run_anchor(task["filter"], V0, F0, dict(task["params"]))
+    except Exception as exc:  # a comparison reports a failing filler and goes on
+        return {"status": "error", "error": f"{type(exc).__name__}: {exc}", "traceback": traceback.format_exc(limit=-3),
+                "seconds": time.perf_counter() - t0, "memory_mb": peak_memory_since(start_mb)}
+    # map_back and the CGAL wrapper return the originals first, untouched
+    return {"status": "ok", "error": None, "seconds": time.perf_counter() - t0,
+            "memory_mb": peak_memory_since(start_mb), "result": json_safe(result),
+            "V_new": V1[len(V0):], "F_new": F1[len(F0):]}
 
 
 def _worker_loop(conn):

@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from ..anchors import is_anchor
 from ..reference_targets import reference_table
 from .labels import METRICS, SIZE_ORDER, aggregate, short_label
 
@@ -124,6 +125,7 @@ def size_table(comparison, key="dist_patch_to_gt_mean_permille", fmt="{:.3f}", b
     """
     labels = [f.label for f in comparison.fillers]
     sizes = [s for s in SIZE_ORDER if any(r["size_class"] == s and (r["ground_truth"] or not key.startswith("dist"))
+                                          and (not key.startswith("crease") or r.get(key) is not None)
                                           for r in comparison.holes)]
     header = ["holes"] + [f"`{short_label(lab)}`" for lab in labels]
     table, bold = [], []
@@ -180,8 +182,9 @@ def failures(comparison):
     for r in comparison.runs:
         if r["status"] != "ok":
             lines.append(f"{r['case']} / `{r['filler']}`: **{r['status']}**: {r.get('error')}")
+    failed_runs = {(r["case"], r["filler"]) for r in comparison.runs if r["status"] != "ok"}
     for r in comparison.holes:
-        if not r.get("closed") and not r.get("reason", "").startswith(("timeout", "crashed", "error")):
+        if not r.get("closed") and (r["case"], r["filler"]) not in failed_runs:
             lines.append(f"{r['case']} hole {r['hole']} ({r['boundary_edges']} edges) / `{r['filler']}`: {r['reason']}")
     return lines
 
@@ -271,6 +274,11 @@ def summary_blocks(comparison):
                    ("table", *size_table(comparison))]
     blocks += [("p", "Mean triangle quality 2r/R of the new faces per hole size:"),
                ("table", *size_table(comparison, "quality_mean", "{:.3f}", "high"))]
+    if any(r.get("crease_error_mean_deg") is not None for r in comparison.holes):
+        blocks += [("p", "Removed crease error (degrees; holes whose removed surface has edges sharper than 30°): "
+                         "per crease edge, |its dihedral angle − the patch's best-matching dihedral within one edge "
+                         "length| (0 when none: flat there), length-weighted mean; a flat cap scores the crease angle:"),
+                   ("table", *size_table(comparison, "crease_error_mean_deg", "{:.1f}", "low"))]
     baseline = "meshing_close_holes (all holes)"
     if any(f.label == baseline for f in comparison.fillers):
         header, rows, bold = reference_table(comparison, baseline)
@@ -307,6 +315,10 @@ def introduction(comparison):
     text.append("Quality is Field's 2r/R (1 = equilateral). Edge ratio = mean new edge length / mean edge length "
                 "around the hole. Border crease = angle between the normals of the mesh face and the patch face at "
                 "each hole border edge" + ("; 'crease − GT's' compares it with the ground truth's." if has_gt else ".")
+                + (" 'Removed crease error' measures the creases inside the removed surface (edges sharper than 30°): "
+                   "per crease edge the difference between its dihedral angle and the patch's best-matching one "
+                   "within an edge length (0 where the patch is flat there), length-weighted "
+                   "(`metrics.crease_metrics`)." if has_gt else "")
                 + " Means are over the holes each filter closed; in the summary the best value per column is bold "
                 "among the filters that closed at least 90 % as many holes as the best one.")
     return " ".join(text)
@@ -321,6 +333,26 @@ def _per_hole_text(comparison):
     if has_gt:
         return "Patch→GT mean distance (‰) per hole; the best filter per hole in bold."
     return "Mean quality 2r/R of the new triangles per hole; the best filter per hole in bold."
+
+
+def _anchor_note(comparison):
+    """A paragraph on the third-party fillers in the comparison (what their per-hole figures mean)."""
+    names = {f.filter for f in comparison.fillers if is_anchor(f.filter)}
+    if not names:
+        return []
+    text = "Third-party anchors: "
+    parts = []
+    if "cgal_liepa" in names:
+        parts.append("`cgal_liepa` is CGAL's triangulate_refine_and_fair_hole (Liepa: triangulation, refinement, "
+                     "fairing), called once per hole with its own time")
+    if "pymeshfix" in names:
+        parts.append("`pymeshfix` is MeshFix's fill_small_boundaries, called once for the whole mesh (it cannot "
+                     "fill one chosen hole): its patches are still made hole by hole, so distances and qualities "
+                     "are per hole as for the others, but its seconds per hole are the run time shared out")
+    skipped = sorted({r["filler"] for r in comparison.runs if r["status"] == "skipped"})
+    tail = f" Skipped (package not installed): {', '.join(f'`{s}`' for s in skipped)}." if skipped else ""
+    return [("p", text + "; ".join(parts) + ". Their output is mapped back to the original numbering, so every "
+                  "metric is computed the same way." + tail)]
 
 
 def report_blocks(comparison, pictures, command=None):
@@ -343,6 +375,7 @@ def report_blocks(comparison, pictures, command=None):
                     f"{comparison.wall_seconds:.1f} s wall time (runs and metrics). Meshes: {cases}. "
                     + (f"Command: `{command}`." if command else "")),
               ("p", introduction(comparison)),
+              *_anchor_note(comparison),
               ("h", 2, "Summary"), *summary_blocks(comparison),
               ("h", 2, "Per hole"),
               ("p", _per_hole_text(comparison)),
