@@ -337,3 +337,36 @@ def _restore_textures(ms, textures):
             path = os.path.join(tmp, os.path.basename(name) or "texture.png")
             image.save(path)
             ms.set_texture_per_mesh(textname=path)
+
+
+_WRITABLE = {}  # extension -> error text or None, from a trial save
+
+
+def check_mesh_output_path(path):
+    """Refuse, before any work, an output path pymeshlab could not write a mesh to.
+
+    Raises
+    ------
+    ValueError
+        No extension, or one pymeshlab cannot save (found by saving a triangle in a scratch
+        folder once per extension), or a folder that does not exist or is not writable.
+    """
+    folder = os.path.dirname(os.path.abspath(path)) or "."
+    ext = os.path.splitext(path)[1].lower()
+    if not ext:
+        raise ValueError(f"output '{path}' has no extension: give a mesh format, e.g. .ply, .obj, .stl, .off")
+    if ext not in _WRITABLE:
+        ms = pymeshlab.MeshSet()
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.eye(3), face_matrix=np.array([[0, 1, 2]], np.int32)), "check")
+        with tempfile.TemporaryDirectory() as tmp:
+            try:
+                ms.save_current_mesh(os.path.join(tmp, "check" + ext))
+                _WRITABLE[ext] = None
+            except Exception as exc:  # pymeshlab: "Unknown format for save: ..."
+                _WRITABLE[ext] = str(exc)
+    if _WRITABLE[ext] is not None:
+        raise ValueError(f"output '{path}': pymeshlab cannot write '{ext}' files ({_WRITABLE[ext]})")
+    if not os.path.isdir(folder):
+        raise ValueError(f"output '{path}': folder '{folder}' does not exist")
+    if not os.access(folder, os.W_OK):
+        raise ValueError(f"output '{path}': folder '{folder}' is not writable")
