@@ -337,17 +337,23 @@ def cmd_compare(args, extra):
 
     from .evaluation.compare import compare
     from .evaluation.report.tables import markdown_table as _md_table, summary_table
-    from .evaluation.report.write import write_report
 
-    result = compare(args.meshes, holes=args.holes, sizes=args.sizes.split(","), seed=args.seed,
-                     filters=args.filters, refinehole=args.refinehole, timeout=args.timeout,
-                     maxholesize=args.maxholesize, progress=not args.quiet)
+    command = None
     if args.report:
         options = [f"--report {args.report}", f"--holes {args.holes}", f"--sizes {args.sizes}", f"--seed {args.seed}"]
         options += [f"--filters {shlex.quote(f)}" for f in args.filters or []]
         options += ["--refinehole"] * args.refinehole + ["--no-pictures"] * args.no_pictures
+        options += [f"--pictures {args.pictures}"] * (args.pictures is not None)
         command = "meshlab-holefill compare " + " ".join([shlex.quote(m) for m in args.meshes] + options)
-        write_report(result, args.report, pictures=not args.no_pictures, command=command)
+    try:
+        result = compare(args.meshes, report=args.report, pictures=not args.no_pictures, max_pictures=args.pictures,
+                         command=command, holes=args.holes, sizes=args.sizes.split(","), seed=args.seed,
+                         filters=args.filters, refinehole=args.refinehole, timeout=args.timeout,
+                         maxholesize=args.maxholesize, progress=False if args.quiet else None)
+    except ModuleNotFoundError as exc:  # the report's dependencies, checked before any run
+        print(f"meshlab-holefill: error: {exc}", file=sys.stderr)
+        return 2
+    if args.report:
         print(f"report: {args.report}/report.md ({result.wall_seconds:.1f} s)")
     print(_md_table(*summary_table(result)))
     return 0
@@ -357,7 +363,8 @@ def _register_compare(sub):
     p = sub.add_parser("compare", help="compare hole fillers on meshes (holes with ground truth cut into closed "
                                        "meshes) and write a report")
     p.add_argument("meshes", nargs="+", metavar="MESH")
-    p.add_argument("--report", metavar="DIR", help="write report.md/.html, results.json/.csv and pictures here")
+    p.add_argument("--report", metavar="DIR", help="write report.md/.html, results.json/.csv and pictures here "
+                                                   "(pictures need matplotlib: pip install \"meshlab_holefill[bench]\")")
     p.add_argument("--holes", type=int, default=4, help="holes cut into each closed mesh (default 4)")
     p.add_argument("--sizes", default="small,medium,large", help="hole size classes, cycled (small~20, medium~60, "
                                                                    "large~150 boundary edges)")
@@ -369,7 +376,9 @@ def _register_compare(sub):
     p.add_argument("--timeout", type=float, default=300.0, help="seconds before a run is killed (default 300)")
     p.add_argument("--maxholesize", type=int, default=1000, help="largest natural hole evaluated (boundary edges)")
     p.add_argument("--no-pictures", action="store_true", help="tables only")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--pictures", type=int, metavar="N", help="picture at most N holes per mesh, those with the most "
+                                                             "boundary edges (default: every hole)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar (shown only when stderr is a terminal)")
     p.set_defaults(func=cmd_compare)
 
 
