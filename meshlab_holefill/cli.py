@@ -244,7 +244,7 @@ def _add_run_options(p):
 
 
 def build_parser():
-    from . import __version__
+    from ._version import __version__
 
     parser = argparse.ArgumentParser(prog="meshlab-holefill",
                                      description="Hole-filling filters for pymeshlab (four papers + MeshLab's Close Holes).",
