@@ -10,6 +10,7 @@ originals, attributes carried over, and the per-hole report. The MeshSet filters
 from __future__ import annotations
 
 import hashlib
+import logging
 import time
 
 import numpy as np
@@ -25,6 +26,10 @@ from .parameters import ParamSpec, Percentage
 from .patch import merge_patches, validate_patch
 
 __all__ = ["COMMON_PARAMS", "FilledMesh", "fill_mesh_holes"]
+
+# One INFO record per hole when a filter is done (its number, edges, status, reason, time); a child of the
+# package logger "meshlab_holefill", which library users configure.
+_LOG = logging.getLogger(__name__)
 
 COMMON_PARAMS = [
     ParamSpec("maxholesize", "int", 1000,
@@ -163,6 +168,12 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     }
     if prepare is not None:
         result["split_boundary_edges"] = int(len(refinement.edge_weights)) if refinement is not None else 0
+    if _LOG.isEnabledFor(logging.INFO):
+        for h in report:
+            closed = f", {h['new_faces']} new faces" if h["status"] == "closed" else ""
+            took = f" in {h['seconds']:.2f} s" if "seconds" in h else ""
+            why = f": {h['reason']}" if h.get("reason") else ""
+            _LOG.info("hole %d (%d edges): %s%s%s%s", h["hole"], h["boundary_edges"], h["status"], closed, took, why)
     return filled, result
 
 
