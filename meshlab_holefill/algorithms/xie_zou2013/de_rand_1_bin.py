@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._de_kernels import reflect_moved, select, trial_vectors
+
 __all__ = ["reflect_into_bounds", "de_rand_1_bin"]
 
 
@@ -132,24 +134,23 @@ def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0
     else:
         X = reflect_into_bounds(np.asarray(init, np.float64).reshape(B, Nmax, n), lower, upper)
     fX = np.asarray(objective(X), np.float64)
-    fX = np.where(active, fX, np.inf)
+    fX = np.ascontiguousarray(np.where(active, fX, np.inf))
     rows = np.arange(B)[:, None]
+    lower_c, upper_c = np.ascontiguousarray(lower), np.ascontiguousarray(upper)
+    X = np.ascontiguousarray(X)
     g = 0
     for g in range(1, generations + 1):
         r1, r2, r3 = _distinct_triples(rng, pop, (B, Nmax))
-        V = X[rows, r1] + F * (X[rows, r2] - X[rows, r3])  # Eq. 2
         rn = np.floor(rng.random((B, Nmax)) * dims[:, None]).astype(np.int64)
-        take = (rng.random((B, Nmax, n)) <= CR) | (np.arange(n)[None, None, :] == rn[..., None])
-        U = np.where(take, V, X)  # Eq. 3
+        # Eq. 2 and 3 (compiled): U = where(u <= CR or j == rn, X[r1] + F (X[r2] - X[r3]), X)
+        U = trial_vectors(X, r1, r2, r3, rng.random((B, Nmax, n)), rn, float(F), float(CR))
         if bounds == "trial":
-            U = reflect_into_bounds(U, lower, upper)
-        fU = np.asarray(objective(U), np.float64)
-        better = (fU <= fX) & active  # Eq. 4
-        X = np.where(better[..., None], U, X)
-        fX = np.where(better, fU, fX)
+            U = reflect_moved(U, lower_c, upper_c)[0]
+        fU = np.ascontiguousarray(objective(U), np.float64)
+        select(X, fX, U, fU, active)  # Eq. 4, in place
         if bounds == "paper":
-            Xr = reflect_into_bounds(X, lower, upper)  # Eq. 5 on the new generation
-            moved = np.any(Xr != X, axis=2) & active
+            Xr, moved = reflect_moved(X, lower_c, upper_c)  # Eq. 5 on the new generation
+            moved &= active
         if bounds == "paper" and moved.any():
             X = Xr
             # Step 9: renew f of the reflected individuals only (gathered per problem).

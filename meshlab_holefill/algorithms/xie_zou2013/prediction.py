@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import sections
+from ._de_kernels import turning_terms
 from .de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
 
 __all__ = ["arc_points", "arc_height", "circle_start_angle", "forward_tangents", "prediction_counts",
@@ -236,12 +237,10 @@ def turning_angles(problem, Y):
     """
     p, N, m_max = Y.shape
     seg_x, seg_y_add, valid = _chain_constants(problem)
-    # y of the chain segments: differences of (0, Y, 0); Y is 0 beyond m (fixed bounds).
-    dy = np.diff(Y, axis=2, prepend=0.0, append=0.0)
-    sy = np.concatenate([np.zeros((p, N, 1)), dy, np.zeros((p, N, 1))], axis=2) + seg_y_add[:, None, :]
-    sx = seg_x[:, None, :]
-    beta = np.arctan2(sx[..., :-1] * sy[..., 1:] - sy[..., :-1] * sx[..., 1:],
-                      sx[..., :-1] * sx[..., 1:] + sy[..., :-1] * sy[..., 1:])
+    # y of the chain segments (differences of (0, Y, 0); Y is 0 beyond m, fixed bounds) and the
+    # cross and dot products of consecutive segments, compiled; arctan2 stays numpy's.
+    cross, dot = turning_terms(np.ascontiguousarray(Y, np.float64), seg_x, seg_y_add)
+    beta = np.arctan2(cross, dot)
     valid = valid[:, None, :]
     return beta, valid
 

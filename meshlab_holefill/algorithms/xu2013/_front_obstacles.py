@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 
-from ._front_predicates import point_triangle_distance, segments_hit_triangles
+from ._front_kernels import min_point_triangle_distance
+from ._front_predicates import segments_hit_triangles
 
 __all__ = ["FrontObstacles"]
 
@@ -80,8 +81,7 @@ class FrontObstacles:
         cand = self.candidates([x - radius for x in pos], [x + radius for x in pos])
         if len(cand) == 0:
             return radius
-        d = point_triangle_distance(np.asarray(pos, np.float64), self.V[self.F[cand]])
-        return min(float(d.min()), radius)
+        return float(min_point_triangle_distance(np.asarray(pos, np.float64), self.V, self.F, cand, radius))
 
     def crossed(self, faces, corners):
         """Whether a new triangle intersects a face (shared boundary vertices allowed).

@@ -1,0 +1,92 @@
+"""Compiled kernels of the DE run (numba): the element-wise steps of one generation, fused.
+
+Each kernel does, element by element, the same IEEE operations in the same order as the
+numpy expression it replaces (no fastmath, no contraction to FMA), so the results are bit
+for bit those of the numpy code (tests/algorithms/xie_zou2013/test_de_kernels.py checks it
+against the numpy reference kept there). The transcendental step (arctan2 of the turning
+angles) stays in numpy, whose SIMD arctan2 differs from libm's in the last bits.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["reflect_moved", "trial_vectors", "select", "turning_terms"]
+
+
+@njit(cache=True)
+def reflect_moved(X, lower, upper):
+    """(reflected X, moved): Eq. 5 on X (B, N, n) with bounds (B, n); moved (B, N) bool: any component changed."""
+    B, N, n = X.shape
+    out = np.empty_like(X)
+    moved = np.zeros((B, N), np.bool_)
+    for b in range(B):
+        for i in range(N):
+            for j in range(n):
+                x = X[b, i, j]
+                lo = lower[b, j]
+                hi = upper[b, j]
+                y = x
+                if x < lo:
+                    y = min(2.0 * lo - x, hi)
+                if y > hi:
+                    y = max(2.0 * hi - y, lo)
+                out[b, i, j] = y
+                if y != x:
+                    moved[b, i] = True
+    return out, moved
+
+
+@njit(cache=True)
+def trial_vectors(X, r1, r2, r3, u_take, rn, F, CR):
+    """Eq. 2 and 3: U = where(u_take <= CR or j == rn, X[r1] + F (X[r2] - X[r3]), X), (B, N, n)."""
+    B, N, n = X.shape
+    U = np.empty_like(X)
+    for b in range(B):
+        for i in range(N):
+            a, c, d, r = r1[b, i], r2[b, i], r3[b, i], rn[b, i]
+            for j in range(n):
+                if u_take[b, i, j] <= CR or j == r:
+                    U[b, i, j] = X[b, a, j] + F * (X[b, c, j] - X[b, d, j])
+                else:
+                    U[b, i, j] = X[b, i, j]
+    return U
+
+
+@njit(cache=True)
+def select(X, fX, U, fU, active):
+    """Eq. 4 in place: X[b, i] = U[b, i] and fX[b, i] = fU[b, i] where fU <= fX on active rows."""
+    B, N, n = X.shape
+    for b in range(B):
+        for i in range(N):
+            if active[b, i] and fU[b, i] <= fX[b, i]:
+                fX[b, i] = fU[b, i]
+                for j in range(n):
+                    X[b, i, j] = U[b, i, j]
+
+
+@njit(cache=True)
+def turning_terms(Y, seg_x, seg_y_add):
+    """Arguments (cross, dot) of the turning angles' arctan2 for candidates Y (p, N, m) (see turning_angles)."""
+    p, N, m = Y.shape
+    K = m + 2
+    cr = np.empty((p, N, K))
+    dt = np.empty((p, N, K))
+    sy = np.empty(m + 3)
+    for a in range(p):
+        for i in range(N):
+            # sy = [0, diff((0, Y, 0)), 0] + seg_y_add
+            prev = 0.0
+            sy[0] = 0.0 + seg_y_add[a, 0]
+            for j in range(m):
+                y = Y[a, i, j]
+                sy[j + 1] = (y - prev) + seg_y_add[a, j + 1]
+                prev = y
+            sy[m + 1] = (0.0 - prev) + seg_y_add[a, m + 1]
+            sy[m + 2] = 0.0 + seg_y_add[a, m + 2]
+            for k in range(K):
+                x0, x1 = seg_x[a, k], seg_x[a, k + 1]
+                y0, y1 = sy[k], sy[k + 1]
+                cr[a, i, k] = x0 * y1 - y0 * x1
+                dt[a, i, k] = x0 * x1 + y0 * y1
+    return cr, dt
