@@ -19,7 +19,7 @@ def _params_from_unknown(unknown):
     while i < len(unknown):
         key = unknown[i]
         if not key.startswith("--"):
-            raise SystemExit(f"unexpected argument {key!r}; filter parameters are given as --name value")
+            raise ValueError(f"unexpected argument {key!r}; filter parameters are given as --name value")
         name = key[2:].replace("-", "_")
         if "=" in name:
             name, value = name.split("=", 1)
@@ -28,56 +28,196 @@ def _params_from_unknown(unknown):
             value = unknown[i + 1]
             i += 2
         else:
-            raise SystemExit(f"parameter {key} has no value")
+            raise ValueError(f"parameter {key} has no value")
         params[name] = parse_text_value(value)
     return params
 
 
+EXIT_OK, EXIT_STRICT, EXIT_ERROR = 0, 1, 2
+EXIT_CODES_HELP = ("exit status: 0 when the run completed, even with holes skipped or failed (they are listed); "
+                   "1 with --strict when any hole to be filled failed; 2 on an error (unreadable or bad input, "
+                   "unknown filter or parameter, bad value, an output that cannot be written)")
+REPORT_FORMATS = (".json", ".csv")
+
+
+class _HoleProgress:
+    """``progress(hole_id, total)`` for the filters: a tqdm bar per filter on an interactive stderr."""
+
+    def __init__(self, enabled):
+        self.enabled, self.bar = enabled, None
+
+    def __call__(self, hole, total):
+        if not self.enabled:
+            return
+        if self.bar is None or self.bar.n >= self.bar.total:  # the next filter of a script
+            self.close()
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, desc="filling holes", unit="hole", file=sys.stderr, leave=False)
+        self.bar.update(1)
+        self.bar.set_postfix_str(f"hole {hole}", refresh=False)
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def _stderr_is_interactive():
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+class _Reporting:
+    """--quiet / --verbose: a progress bar when stderr is a terminal; with --verbose a log line per hole."""
+
+    def __init__(self, args):
+        import logging
+
+        from .meshlab.progress import reporting
+
+        self.bar = _HoleProgress(enabled=not args.quiet and _stderr_is_interactive())
+        self._context = reporting(self.bar)
+        self._logger, self._handler, self._level = logging.getLogger("meshlab_holefill"), None, None
+        if args.verbose and not args.quiet:
+            self._handler = logging.StreamHandler(sys.stderr)
+            self._handler.setFormatter(logging.Formatter("meshlab-holefill: %(message)s"))
+
+    def __enter__(self):
+        import logging
+
+        if self._handler is not None:
+            self._level = self._logger.level
+            self._logger.addHandler(self._handler)
+            self._logger.setLevel(logging.INFO)
+        self._context.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        self._context.__exit__(*exc)
+        self.bar.close()
+        if self._handler is not None:
+            self._logger.removeHandler(self._handler)
+            self._logger.setLevel(self._level)
+        return False
+
+
+def _check_report_path(path):
+    if os.path.splitext(path)[1].lower() not in REPORT_FORMATS:
+        raise ValueError(f"--report '{path}': give a .json or .csv file")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder) or not os.access(folder, os.W_OK):
+        raise ValueError(f"--report '{path}': folder '{folder}' does not exist or is not writable")
+
+
+def _failed_holes(results):
+    return sum(r.get("failed_holes", 0) for r in results)
+
+
 def cmd_fill(args, extra):
+    from .meshlab.meshset_io import check_mesh_output_path
     from .meshlab.registration import apply_filter
 
+    params = _params_from_unknown(extra)
+    check_mesh_output_path(args.output)  # before the work, not after it
+    if args.report:
+        _check_report_path(args.report)
     ms = load_meshset(args.input)
-    result = apply_filter(ms, args.filter, **_params_from_unknown(extra))
+    with _Reporting(args):
+        result = apply_filter(ms, args.filter, **params)
     ms.save_current_mesh(args.output)
+    if args.report:
+        write_hole_report(args.report, result, {"input": args.input, "output": args.output, "filter": args.filter,
+                                                "params": {k: _plain(v) for k, v in params.items()}})
     if args.json:
         print(json.dumps(result, indent=2, default=float))
-    else:
+    elif not args.quiet:
         print(_hole_status_table(result))
-    return 0 if result.get("failed_holes", 0) == 0 else 1
+    return EXIT_STRICT if args.strict and _failed_holes([result]) else EXIT_OK
+
+
+def _plain(value):
+    """A parameter value for a JSON report (pymeshlab's value types as text)."""
+    from .meshlab.registration import shown_value
+
+    return value if isinstance(value, (bool, int, float, str)) else shown_value(value)
+
+
+HOLE_COLUMNS = ["hole", "boundary_edges", "status", "reason", "size_class", "new_vertices", "new_faces", "seconds",
+                "centroid_x", "centroid_y", "centroid_z", "perimeter", "diameter", "area", "planarity", "pinched"]
+
+
+def write_hole_report(path, result, about):
+    """The per-hole report of one filter run: ``.json`` (the run and every hole dict) or ``.csv`` (a row per hole).
+
+    The CSV has the common columns first (``HOLE_COLUMNS``; the centroid split in x, y, z), then any
+    algorithm-specific entries in order of appearance (lists written as JSON).
+    """
+    import csv
+
+    if path.lower().endswith(".json"):
+        doc = dict(about, **{k: v for k, v in result.items() if k != "holes"}, holes=result.get("holes", []))
+        with open(path, "w") as f:
+            json.dump(doc, f, indent=2, default=float)
+        return
+    rows, extra = [], []
+    for h in result.get("holes", []):
+        row = {k: v for k, v in h.items() if k != "centroid"}
+        if "centroid" in h:
+            row.update(zip(("centroid_x", "centroid_y", "centroid_z"), h["centroid"]))
+        for key in row:
+            if key not in HOLE_COLUMNS and key not in extra:
+                extra.append(key)
+        rows.append({k: json.dumps(v) if isinstance(v, (list, dict)) else v for k, v in row.items()})
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, HOLE_COLUMNS + extra, restval="")
+        writer.writeheader()
+        writer.writerows(rows)
 
 
 def _hole_status_table(result):
-    lines = [f"{'hole':>4} {'edges':>6} {'status':>8} {'new V':>6} {'new F':>6} {'sec':>7}  reason"]
+    lines = [f"{'hole':>4} {'edges':>6} {'status':>8} {'class':>7} {'new V':>6} {'new F':>6} {'sec':>7}  reason"]
     for h in result.get("holes", []):
-        lines.append(f"{h['hole']:>4} {h['boundary_edges']:>6} {h['status']:>8} {h.get('new_vertices', ''):>6} "
-                     f"{h.get('new_faces', ''):>6} {h.get('seconds', float('nan')):>7.3f}  {h.get('reason', '')}")
-    summary = {k: v for k, v in result.items() if k != "holes"}
+        lines.append(f"{h['hole']:>4} {h['boundary_edges']:>6} {h['status']:>8} {h.get('size_class', ''):>7} "
+                     f"{h.get('new_vertices', ''):>6} {h.get('new_faces', ''):>6} {h.get('seconds', float('nan')):>7.3f}"
+                     f"  {h.get('reason', '')}")
+    summary = {k: v for k, v in result.items() if k not in ("holes", "layer_note")}
     lines.append(", ".join(f"{k}={v:.3f}" if isinstance(v, float) else f"{k}={v}" for k, v in summary.items()))
+    if result.get("layer_note"):
+        lines.append(f"note: {result['layer_note']}")
     return "\n".join(lines)
 
 
 def cmd_holes(args, extra):
-    from .core.holes import OUTLINE_RATIO, boundary_loops, loop_measures, outline_ratios
+    from .core.holes import boundary_loops, hole_measures, is_outline, vertex_face_incidence
 
     ms = load_meshset(args.input)
     m = ms.current_mesh()
     V, F = m.vertex_matrix(), m.face_matrix()
-    loops = boundary_loops(F)
-    outlines = outline_ratios(V, F, loops) >= OUTLINE_RATIO if loops else []
+    loops = boundary_loops(F)  # the numbering of the filters' per-hole results ("hole")
+    incidence = vertex_face_incidence(F, len(V)) if loops else None
     print(f"{m.label()}: {m.vertex_number()} vertices, {m.face_number()} faces, {len(loops)} boundary loops")
-    print(f"{'hole':>4} {'edges':>6} {'perimeter':>11} {'diameter':>10} {'planarity':>9}  notes")
+    print(f"{'hole':>4} {'edges':>6} {'class':>7} {'perimeter':>11} {'diameter':>10} {'area':>10} {'planarity':>9} "
+          f"{'centroid':>32}  notes")
     for i, loop in enumerate(loops):
-        meas = loop_measures(V[loop.vertices])
         notes = []
         if loop.pinched:
             notes.append("pinched (non-manifold vertex)")
-        if not loop.closed:
-            notes.append("open chain")
-        if outlines[i]:
+        if not loop.closed or len(loop) < 3:
+            notes.append("open chain" if not loop.closed else "degenerate loop")
+            print(f"{i:>4} {loop.edge_count:>6} {'':>7} {'':>11} {'':>10} {'':>10} {'':>9} {'':>32}  {', '.join(notes)}")
+            continue
+        meas = hole_measures(V, loop)
+        outline = is_outline(V, F, loop, incidence)
+        if outline:
             notes.append("outline of a whole component (island or outer border, not a hole)")
-        print(f"{i:>4} {meas['edges']:>6} {meas['perimeter']:>11.4g} {meas['diameter']:>10.4g} "
-              f"{meas['planarity']:>9.4f}  {', '.join(notes)}")
-    return 0
+        centroid = "(" + ", ".join(f"{c:.4g}" for c in meas["centroid"]) + ")"
+        print(f"{i:>4} {loop.edge_count:>6} {'outline' if outline else 'hole':>7} {meas['perimeter']:>11.4g} "
+              f"{meas['diameter']:>10.4g} {meas['area']:>10.4g} {meas['planarity']:>9.4f} {centroid:>32}  "
+              f"{', '.join(notes)}")
+    return EXIT_OK
 
 
 def cmd_filters(args, extra):
@@ -96,18 +236,36 @@ def cmd_filters(args, extra):
     return 0
 
 
+def _add_run_options(p):
+    p.add_argument("--strict", action="store_true", help="exit with status 1 when any hole to be filled failed")
+    talk = p.add_mutually_exclusive_group()
+    talk.add_argument("--quiet", "-q", action="store_true", help="no progress bar, no table (errors only)")
+    talk.add_argument("--verbose", "-v", action="store_true", help="also a log line per hole on stderr")
+
+
 def build_parser():
+    from ._version import __version__
+
     parser = argparse.ArgumentParser(prog="meshlab-holefill",
-                                     description="Hole-filling filters for pymeshlab (four papers + MeshLab's Close Holes).")
+                                     description="Hole-filling filters for pymeshlab (four papers + MeshLab's Close Holes).",
+                                     epilog="fill and run: " + EXIT_CODES_HELP)
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("fill", help="fill the holes of a mesh with one filter; extra --name value pairs are parameters")
+    p = sub.add_parser("fill", help="fill the holes of a mesh with one filter; extra --name value pairs are parameters",
+                       description="Fill the holes of INPUT with one filter and save OUTPUT (checked writable "
+                                   "first). Filter parameters go as --name value (e.g. --maxholesize 500, "
+                                   "--maxholediameter 5%).", epilog=EXIT_CODES_HELP, allow_abbrev=False)
     p.add_argument("input")
-    p.add_argument("output")
+    p.add_argument("output", help="the filled mesh; its extension chooses the format (.ply, .obj, .stl, .off, ...)")
     p.add_argument("--filter", default="meshing_close_holes_min_angle_bilateral",
                    help="filter name (ours or any pymeshlab filter, e.g. meshing_close_holes)")
     p.add_argument("--json", action="store_true", help="print the whole result dictionary as JSON")
+    p.add_argument("--report", metavar="FILE", help="write the per-hole report: FILE.json (the result) or FILE.csv "
+                                                     "(a row per hole)")
+    _add_run_options(p)
     p.set_defaults(func=cmd_fill)
-    p = sub.add_parser("holes", help="table of boundary loops: edges, perimeter, diameter, planarity")
+    p = sub.add_parser("holes", help="table of boundary loops, numbered as in the filters' results: edges, size "
+                                     "class, perimeter, diameter, area, planarity, centroid")
     p.add_argument("input")
     p.set_defaults(func=cmd_holes)
     p = sub.add_parser("filters", help="list the filters with their parameters, defaults and help")
@@ -134,31 +292,40 @@ def cmd_run(args, extra):
         print(f"{script.source}: {len(script.steps)} filter(s), no problems")
         return 0
     if args.input is None or args.output is None:
-        raise SystemExit("meshlab-holefill run: INPUT and OUTPUT are required (unless --check)")
+        raise ValueError("run: INPUT and OUTPUT are required (unless --check)")
+    from .meshlab.meshset_io import check_mesh_output_path
+
+    check_mesh_output_path(args.output)
     ms = load_meshset(args.input)
-    results = run_filter_script(ms, script)
+    with _Reporting(args):
+        results = run_filter_script(ms, script)
     ms.save_current_mesh(args.output)
     if args.record:
         save_filter_script(ms, args.record)
     if args.json:
         print(json.dumps(results, indent=2, default=float))
-    else:
+    elif not args.quiet:
         for step, result in zip(script.steps, results):
             summary = ", ".join(f"{k}={v:.3f}" if isinstance(v, float) else f"{k}={v}"
-                                for k, v in result.items() if k != "holes")
+                                for k, v in result.items() if k not in ("holes", "layer_note"))
             print(f"#{step.index} {step.mlx_name}" + (f": {summary}" if summary else ""))
-    failed = sum(r.get("failed_holes", 0) for r in results)
-    return 0 if failed == 0 else 1
+            failed = [h for h in result.get("holes", []) if h.get("status") == "failed"]
+            for h in failed:
+                print(f"   hole {h['hole']} ({h['boundary_edges']} edges) failed: {h.get('reason', '')}")
+    return EXIT_STRICT if args.strict and _failed_holes(results) else EXIT_OK
 
 
 def _register_run(sub):
-    p = sub.add_parser("run", help="run a MeshLab .mlx filter script (built-in filters and ours) on a mesh")
+    p = sub.add_parser("run", help="run a MeshLab .mlx filter script (built-in filters and ours) on a mesh",
+                       description="Run a MeshLab .mlx filter script on a mesh and save the result.",
+                       epilog=EXIT_CODES_HELP, allow_abbrev=False)
     p.add_argument("script", help=".mlx file (MeshLab FilterScript XML)")
     p.add_argument("input", nargs="?")
     p.add_argument("output", nargs="?")
     p.add_argument("--check", action="store_true", help="only validate the script and list its steps")
     p.add_argument("--record", metavar="MLX", help="also write the filters applied as an .mlx script")
     p.add_argument("--json", action="store_true", help="print the result dictionaries as JSON")
+    _add_run_options(p)
     p.set_defaults(func=cmd_run)
 
 
@@ -170,17 +337,23 @@ def cmd_compare(args, extra):
 
     from .evaluation.compare import compare
     from .evaluation.report.tables import markdown_table as _md_table, summary_table
-    from .evaluation.report.write import write_report
 
-    result = compare(args.meshes, holes=args.holes, sizes=args.sizes.split(","), seed=args.seed,
-                     filters=args.filters, refinehole=args.refinehole, timeout=args.timeout,
-                     maxholesize=args.maxholesize, progress=not args.quiet)
+    command = None
     if args.report:
         options = [f"--report {args.report}", f"--holes {args.holes}", f"--sizes {args.sizes}", f"--seed {args.seed}"]
         options += [f"--filters {shlex.quote(f)}" for f in args.filters or []]
         options += ["--refinehole"] * args.refinehole + ["--no-pictures"] * args.no_pictures
+        options += [f"--pictures {args.pictures}"] * (args.pictures is not None)
         command = "meshlab-holefill compare " + " ".join([shlex.quote(m) for m in args.meshes] + options)
-        write_report(result, args.report, pictures=not args.no_pictures, command=command)
+    try:
+        result = compare(args.meshes, report=args.report, pictures=not args.no_pictures, max_pictures=args.pictures,
+                         command=command, holes=args.holes, sizes=args.sizes.split(","), seed=args.seed,
+                         filters=args.filters, refinehole=args.refinehole, timeout=args.timeout,
+                         maxholesize=args.maxholesize, progress=False if args.quiet else None)
+    except ModuleNotFoundError as exc:  # the report's dependencies, checked before any run
+        print(f"meshlab-holefill: error: {exc}", file=sys.stderr)
+        return 2
+    if args.report:
         print(f"report: {args.report}/report.md ({result.wall_seconds:.1f} s)")
     print(_md_table(*summary_table(result)))
     return 0
@@ -190,7 +363,8 @@ def _register_compare(sub):
     p = sub.add_parser("compare", help="compare hole fillers on meshes (holes with ground truth cut into closed "
                                        "meshes) and write a report")
     p.add_argument("meshes", nargs="+", metavar="MESH")
-    p.add_argument("--report", metavar="DIR", help="write report.md/.html, results.json/.csv and pictures here")
+    p.add_argument("--report", metavar="DIR", help="write report.md/.html, results.json/.csv and pictures here "
+                                                   "(pictures need matplotlib: pip install \"meshlab_holefill[bench]\")")
     p.add_argument("--holes", type=int, default=4, help="holes cut into each closed mesh (default 4)")
     p.add_argument("--sizes", default="small,medium,large", help="hole size classes, cycled (small~20, medium~60, "
                                                                    "large~150 boundary edges)")
@@ -202,7 +376,9 @@ def _register_compare(sub):
     p.add_argument("--timeout", type=float, default=300.0, help="seconds before a run is killed (default 300)")
     p.add_argument("--maxholesize", type=int, default=1000, help="largest natural hole evaluated (boundary edges)")
     p.add_argument("--no-pictures", action="store_true", help="tables only")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--pictures", type=int, metavar="N", help="picture at most N holes per mesh, those with the most "
+                                                             "boundary edges (default: every hole)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar (shown only when stderr is a terminal)")
     p.set_defaults(func=cmd_compare)
 
 

@@ -5,7 +5,10 @@ The suite: pymeshlab's closed sample meshes (bunny.obj, bone.ply, cow.obj, airpl
 an analytic sphere and torus get holes with ground truth cut (``--holes`` per mesh, sizes
 small/medium/large cycling, compact and irregular shapes alternating); the bunny scan's
 natural holes (bunny10k_textured.obj) and the face range scan (rangemaps/face000.ply) are
-filled as they are. The report (tables, charts, one picture per hole) goes to ``OUT/suite``.
+filled as they are; the CAD-like cases of ``evaluation.creased`` (creased_box, bevelled_box,
+cylinder_rims, union: holes a crease runs through; interpenetrating: holes next to where
+overlapping parts cross) have their own holes. CGAL's Liepa fill (``cgal_liepa``) and MeshFix
+(``pymeshfix``) run as anchors when installed. The report (tables, charts, one picture per hole) goes to ``OUT/suite``.
 
 ``--scaling`` adds the scaling run: the same holes (same centres, same boundary sizes) in the
 bunny subdivided to about 50k, 200k, 800k and 3M faces, per-hole seconds against mesh size.
@@ -28,6 +31,7 @@ import pymeshlab
 
 import meshlab_holefill
 from meshlab_holefill.evaluation.comparison import BASELINE, MeshCase, parse_fillers, prepare_case, run_comparison
+from meshlab_holefill.evaluation.creased import CREASED_CASES, creased_case
 from meshlab_holefill.evaluation.cut_holes import cut_holes
 from meshlab_holefill.evaluation.isolation import IsolatedRunner
 from meshlab_holefill.evaluation.papers import hpde_sphere
@@ -39,11 +43,14 @@ from meshlab_holefill.meshlab.mesh_files import load_mesh, mesh_arrays
 SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
 CLOSED = ["bunny.obj", "bone.ply", "cow.obj", "airplane.obj", "sphere", "torus"]
 NATURAL = ["bunny10k_textured.obj", "face000.ply"]
-CASES = CLOSED + NATURAL
+# CAD-like meshes with holes a crease runs through, and interpenetrating parts (evaluation.creased)
+CREASED = list(CREASED_CASES)
+CASES = CLOSED + NATURAL + CREASED
 # Ours with defaults; two measured variants (Xu et al.'s Table 1 membrane comparison, Hu's optional
 # fairing); MeshLab's Close Holes with its defaults and with every hole allowed.
+# CGAL's Liepa fill and MeshFix as open anchors (skipped with a note when not installed).
 DEFAULT_FILTERS = ("ours,lssvm_poisson:laplacian_prediction=zero,min_angle_bilateral:fairing=thinplate:iterations=0:smoothing=10,"
-                   "baseline")
+                   "anchors,baseline")
 
 
 def _sphere_distance(X):
@@ -57,6 +64,8 @@ def _torus_distance(X, R=1.0, r=0.4):
 def load_case(name):
     """The suite's meshes as MeshCase (analytic distance functions for the sphere and torus)."""
     analytic = area = None
+    if name in CREASED_CASES:
+        return creased_case(name)
     if name in ("sphere", "torus"):
         ms = pymeshlab.MeshSet()
         if name == "sphere":

@@ -18,25 +18,41 @@ from ..errors import MeshTopologyError
 from ..geometry.quality import vertex_normals
 
 
-def _edge_runs(F):
-    """Sort the 3m half-edges of F by undirected edge; one sort serves every edge query.
+def _edge_keys(F):
+    """Undirected key of each of the 3m half-edges of F, and their endpoints.
 
     Returns
     -------
-    order : (3m,) int64   half-edge ids (f*3 + corner) sorted by undirected edge
-    starts, counts : (e,) int64   runs of half-edges sharing an undirected edge
-    a, b : (3m,) int64    half-edge endpoints (a -> b as the face traverses it)
+    keys : (3m,) int64   min(a, b) * n + max(a, b), half-edge f*3 + corner
+    a, b : (3m,) int64   half-edge endpoints (a -> b as the face traverses it)
+    n : int              the key base (vertex count)
     """
     F = np.asarray(F, dtype=np.int64)
     a = F.ravel()
-    b = np.roll(F, -1, axis=1).ravel()
+    b = F[:, [1, 2, 0]].ravel()
     n = int(F.max()) + 1 if F.size else 1
-    keys = np.minimum(a, b) * n + np.maximum(a, b)
-    order = np.argsort(keys)
-    sk = keys[order]
-    boundary = np.flatnonzero(np.r_[True, sk[1:] != sk[:-1]])
-    counts = np.diff(np.r_[boundary, len(sk)])
-    return order, boundary, counts, a, b
+    return np.minimum(a, b) * n + np.maximum(a, b), a, b, n
+
+
+def _key_runs(keys):
+    """The distinct values of ``keys`` (sorted) and how often each occurs.
+
+    Sorting the keys themselves, not their order: numpy sorts int64 values with SIMD
+    kernels several times faster than it argsorts them (1.9 s against 0.6 s CPU for the
+    10.8M half-edges of a 3.6M-face mesh), and every query here needs only the values.
+    """
+    sk = np.sort(keys)
+    starts = np.flatnonzero(np.r_[True, sk[1:] != sk[:-1]])
+    return sk[starts], np.diff(np.r_[starts, len(sk)])
+
+
+def _halfedges_with_keys(keys, wanted):
+    """Half-edge ids whose key is in ``wanted`` (sorted, distinct), ordered by key."""
+    if len(wanted) == 0:
+        return np.zeros(0, np.int64)
+    pos = np.minimum(np.searchsorted(wanted, keys), len(wanted) - 1)
+    ids = np.flatnonzero(wanted[pos] == keys)
+    return ids[np.argsort(keys[ids], kind="stable")]
 
 
 def edge_face_counts(F):
@@ -45,14 +61,14 @@ def edge_face_counts(F):
     Returns
     -------
     edges : (e, 2) int64
-        Sorted vertex pairs.
+        Sorted vertex pairs, in increasing key order.
     counts : (e,) int64
     """
     if len(F) == 0:
         return np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
-    order, starts, counts, a, b = _edge_runs(F)
-    first = order[starts]
-    return np.sort(np.stack([a[first], b[first]], axis=1), axis=1), counts
+    keys, _, _, n = _edge_keys(F)
+    unique, counts = _key_runs(keys)
+    return np.stack([unique // n, unique % n], axis=1), counts
 
 
 def nonmanifold_edges(F):
@@ -73,11 +89,8 @@ def boundary_halfedges(F):
     faces : (b,) int64
         The owning (border) face of each half-edge.
     """
-    if len(F) == 0:
-        return np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
-    order, starts, counts, a, b = _edge_runs(F)
-    idx = order[starts[counts == 1]]
-    return np.stack([a[idx], b[idx]], axis=1), idx // 3
+    halfedges, faces, _ = edge_summary(F)
+    return halfedges, faces
 
 
 @dataclass
@@ -116,16 +129,21 @@ def edge_summary(F):
 
     Returns
     -------
-    halfedges : (b, 2) int64, faces : (b,) int64, nonmanifold : (p, 2) int64
+    halfedges : (b, 2) int64
+        Boundary half-edges (a, b) as their faces traverse them, in increasing key order.
+    faces : (b,) int64
+        The face of each.
+    nonmanifold : (p, 2) int64
+        Sorted vertex pairs of the edges with more than two faces.
     """
     if len(F) == 0:
         z = np.zeros((0, 2), np.int64)
         return z, np.zeros(0, np.int64), z
-    order, starts, counts, a, b = _edge_runs(F)
-    idx = order[starts[counts == 1]]
-    bad = order[starts[counts > 2]]
-    return (np.stack([a[idx], b[idx]], axis=1), idx // 3,
-            np.sort(np.stack([a[bad], b[bad]], axis=1), axis=1))
+    keys, a, b, n = _edge_keys(F)
+    unique, counts = _key_runs(keys)
+    idx = _halfedges_with_keys(keys, unique[counts == 1])
+    bad = unique[counts > 2]
+    return np.stack([a[idx], b[idx]], axis=1), idx // 3, np.stack([bad // n, bad % n], axis=1)
 
 
 def boundary_loops(F, halfedges=None):

@@ -10,6 +10,7 @@ originals, attributes carried over, and the per-hole report. The MeshSet filters
 from __future__ import annotations
 
 import hashlib
+import logging
 import time
 
 import numpy as np
@@ -25,6 +26,10 @@ from .parameters import ParamSpec, Percentage
 from .patch import merge_patches, validate_patch
 
 __all__ = ["COMMON_PARAMS", "FilledMesh", "fill_mesh_holes"]
+
+# One INFO record per hole when a filter is done (its number, edges, status, reason, time); a child of the
+# package logger "meshlab_holefill", which library users configure.
+_LOG = logging.getLogger(__name__)
 
 COMMON_PARAMS = [
     ParamSpec("maxholesize", "int", 1000,
@@ -127,9 +132,10 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     he, he_faces, bad_edges = edge_summary(F)
     check_manifold_edges(F, arrays.label, bad_edges)
     loops = boundary_loops(F, (he, he_faces))
-    report, todo = _select_holes(V, F, loops, params, arrays.face_attrs["selected"].ravel() > 0)
+    incidence = vertex_face_incidence(F, len(V)) if len(loops) else None
+    report, todo = _select_holes(V, F, loops, params, arrays.face_attrs["selected"].ravel() > 0, incidence)
     fill_kwargs = {name: params[name] for name in algorithm_params}
-    base = (arrays, list(loops), [dict(entry) for entry in report])
+    base = (arrays, list(loops), [dict(entry) for entry in report], incidence)
     fills = {}  # hole -> outcome of its fill, reused by a later pass while its surroundings are the same
     while True:
         arrays, V, F, V2, F2, done_loops, patches, refinement, report = _fill_holes(
@@ -162,18 +168,21 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     }
     if prepare is not None:
         result["split_boundary_edges"] = int(len(refinement.edge_weights)) if refinement is not None else 0
+    if _LOG.isEnabledFor(logging.INFO):
+        for h in report:
+            closed = f", {h['new_faces']} new faces" if h["status"] == "closed" else ""
+            took = f" in {h['seconds']:.2f} s" if "seconds" in h else ""
+            why = f": {h['reason']}" if h.get("reason") else ""
+            _LOG.info("hole %d (%d edges): %s%s%s%s", h["hole"], h["boundary_edges"], h["status"], closed, took, why)
     return filled, result
 
 
-def _select_holes(V, F, loops, params, selected_faces):
+def _select_holes(V, F, loops, params, selected_faces, incidence):
     """Per-hole report entries with their measures, and the holes to fill (by the filter's parameters)."""
     report, todo = [], []
-    incidence = None
     for i, loop in enumerate(loops):
         entry = {"hole": i, "boundary_edges": loop.edge_count, "pinched": bool(loop.pinched)}
         if loop.closed and len(loop) >= 3:
-            if incidence is None:
-                incidence = vertex_face_incidence(F, len(V))
             entry.update(hole_measures(V, loop))
             entry["size_class"] = "outline" if is_outline(V, F, loop, incidence) else "hole"
         if not loop.closed:
@@ -220,7 +229,7 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     second pass only undoes the border refinement of holes that failed, and on face000.ply
     with LS-SVM refilling every hole doubled the run).
     """
-    arrays, loops, report = base[0], list(base[1]), [dict(entry) for entry in base[2]]
+    arrays, loops, report, incidence = base[0], list(base[1]), [dict(entry) for entry in base[2]], base[3]
     V, F = arrays.V, arrays.F
     refinement = prepare(V, F, [loops[i] for i in todo], params) if prepare is not None and todo else None
     if refinement is not None:
@@ -232,7 +241,8 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     elif prepare is not None:
         for i in todo:
             report[i]["split_boundary_edges"] = 0
-    incidence = vertex_face_incidence(F, len(V)) if todo else None
+    if refinement is not None:
+        incidence = vertex_face_incidence(F, len(V))
     contexts, context_seconds = {}, {}
     for i in todo:
         t0 = time.perf_counter()

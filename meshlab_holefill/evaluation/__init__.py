@@ -6,6 +6,8 @@ the command line (``cli``); nothing below it imports it. Modules:
 
 - :mod:`.compare`: ``compare()``, the one call (cases -> runs -> metrics -> report);
 - :mod:`.cut_holes`: holes with known ground truth cut into closed meshes;
+- :mod:`.creased`: CAD-like meshes with holes a crease runs through, and interpenetrating parts;
+- :mod:`.anchors`: third-party fillers (CGAL's Liepa fill, MeshFix), optional, run like ours;
 - :mod:`.comparison`: cases, fillers, running each filler on each case, the hole rows;
 - :mod:`.isolation`: the worker processes with timeouts;
 - :mod:`.metrics`: distances, quality, normals, creases, the corner quality bound;
@@ -14,4 +16,4 @@ the command line (``cli``); nothing below it imports it. Modules:
 - :mod:`.papers`: the papers' own experiments (Xie and Zou's sphere).
 """
 
-__all__ = ["compare", "comparison", "cut_holes", "isolation", "metrics", "papers", "reference_targets", "report"]
+__all__ = ["anchors", "compare", "comparison", "creased", "cut_holes", "isolation", "metrics", "papers", "reference_targets", "report"]

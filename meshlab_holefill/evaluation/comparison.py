@@ -6,7 +6,9 @@ All metrics are computed here in the parent, by :func:`.metrics.hole_metrics`.
 """
 from __future__ import annotations
 
+import logging
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -17,14 +19,19 @@ from ..core.holes import OUTLINE_RATIO, boundary_halfedges, boundary_loops, outl
 from ..geometry.topology import face_adjacency
 from ..meshlab.mesh_files import is_mesh, load_mesh, mesh_arrays
 from ..meshlab.registration import filter_list, is_builtin_filter, parse_text_value
+from .anchors import ANCHORS, is_anchor, missing_package
 from .cut_holes import SIZE_CLASSES, cut_holes, hole_plan
 from .isolation import IsolatedRunner, json_safe
 from .metrics import assign_patches, compact_mesh, corner_quality_bound, hole_metrics, mesh_checks
 
-__all__ = ["BASELINE", "Comparison", "Filler", "Hole", "MeshCase", "PreparedCase", "as_case", "default_fillers",
-           "evaluate_run", "parse_fillers", "prepare_case", "resolve_params", "run_comparison"]
+__all__ = ["BASELINE", "Comparison", "Filler", "Hole", "MeshCase", "PreparedCase", "anchor_fillers", "as_case",
+           "default_fillers", "evaluate_run", "parse_fillers", "prepare_case", "resolve_params", "run_comparison"]
 
 BASELINE = "meshing_close_holes"
+
+#: One INFO record per run (case, filler, status, holes closed, seconds); a child of the package's
+#: ``logging.getLogger("meshlab_holefill")``.
+logger = logging.getLogger(__name__)
 
 
 # ----------------------------------------------------------------------------------- cases
@@ -42,6 +49,8 @@ class MeshCase:
     removed : (m,) bool, optional
         Faces to remove as holes with ground truth (instead of holes cut at random).
     surface_area : float, optional  area of the analytic surface (Xu et al.'s error normalisation)
+    given_class : str  size class of the ``removed`` holes in the report ("given"; the creased cases
+        of :mod:`.creased` use "crease" and "crossing")
     """
 
     name: str
@@ -50,18 +59,19 @@ class MeshCase:
     analytic: object = None
     removed: np.ndarray | None = None
     surface_area: float | None = None
+    given_class: str = "given"
 
 
 @dataclass
 class Hole:
     """One evaluated hole of a prepared case."""
 
-    index: int
+    index: int  # the hole's number: its boundary loop index, as in `meshlab-holefill holes` and fill results
     size_class: str
     shape: str
     boundary_edges: int
     loop: np.ndarray  # (k,) ordered boundary vertices (indices into the case's V0)
-    loop_index: int  # position among boundary_loops(F0), as in our filters' result['holes']
+    loop_index: int  # position among boundary_loops(F0), as in our filters' result['holes'] (== index)
     border: tuple  # ((k, 2) int64 half-edges, (k,) int64 faces) in F0
     ground_truth: tuple | None = None  # ((n0 + g, 3), (r, 3)) indexed like a filled mesh
     quality_bound: float = 1.0  # metrics.corner_quality_bound: best reachable minimum quality
@@ -197,7 +207,7 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
             removed = np.flatnonzero(np.asarray(case.removed, bool))
             _, label = connected_components(face_adjacency(F[removed]), directed=False)
             groups = [removed[label == c] for c in np.unique(label)]
-            specs = [("given", "given", None) for _ in groups]
+            specs = [(case.given_class, "given", None) for _ in groups]
         else:
             kind = "cut holes"
             plan = hole_plan(holes, sizes)
@@ -223,8 +233,9 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
             if lp is None:
                 notes.append(f"a {size} hole did not leave a simple boundary loop; left out")
                 continue
-            out.append(Hole(len(out), size, shape, len(lp), lp.vertices, li, _border(F0, he, hf, lp.vertices),
+            out.append(Hole(li, size, shape, len(lp), lp.vertices, li, _border(F0, he, hf, lp.vertices),
                             truth, corner_quality_bound(V0, F0, lp.vertices)))
+        out.sort(key=lambda h: h.index)  # numbered and listed as `meshlab-holefill holes` lists the loops
     else:
         kind = "natural holes"
         V0, F0 = V, F
@@ -240,7 +251,7 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
                 continue
             # An island's outline is listed apart: capping it folds over the island (holes.outline_ratios).
             kind_of = "outline" if outline[i] else "natural"
-            out.append(Hole(len(out), kind_of, kind_of, len(lp), lp.vertices, i,
+            out.append(Hole(i, kind_of, kind_of, len(lp), lp.vertices, i,
                             _border(F0, he, hf, lp.vertices), None, corner_quality_bound(V0, F0, lp.vertices)))
     return PreparedCase(case.name, kind, V0, F0, diag, out, notes, case.analytic, case.surface_area, len(F))
 
@@ -263,16 +274,20 @@ def _parse_value(text):
 
 def _resolve_name(name):
     ours = filter_list()
-    if name in ours or name == BASELINE or is_builtin_filter(name):
+    if name in ours or name == BASELINE or is_anchor(name) or is_builtin_filter(name):
         return name
     matches = [f for f in ours if f.endswith(name) or f.endswith("_" + name)]
     if len(matches) == 1:
         return matches[0]
-    raise ValueError(f"unknown filter '{name}' (ours: {', '.join(ours)}; or any pymeshlab filter name)")
+    raise ValueError(f"unknown filter '{name}' (ours: {', '.join(ours)}; third-party: {', '.join(ANCHORS)}; "
+                     "or any pymeshlab filter name)")
 
 
 def default_fillers(refinehole=False):
-    """Every registered filter of ours with its defaults, and MeshLab's Close Holes twice.
+    """Every registered filter of ours with its defaults, the third-party anchors, MeshLab's Close Holes twice.
+
+    The anchors (:data:`.anchors.ANCHORS`: ``cgal_liepa``, ``pymeshfix``) get ``maxholesize``
+    "all"; one whose package is not installed is skipped with a note when the comparison runs.
 
     ``meshing_close_holes`` runs with its defaults (holes up to 30 edges) and with a
     ``maxholesize`` covering every hole ("all", resolved per comparison), optionally also with
@@ -283,11 +298,22 @@ def default_fillers(refinehole=False):
     list of Filler
     """
     out = [Filler(name, name) for name in filter_list()]
+    out += anchor_fillers()
     out += [Filler(f"{BASELINE} (default)", BASELINE),
             Filler(f"{BASELINE} (all holes)", BASELINE, {"maxholesize": "all"})]
     if refinehole:
         out.append(Filler(f"{BASELINE} (all holes, refined)", BASELINE, {"maxholesize": "all", "refinehole": True}))
     return out
+
+
+def anchor_fillers():
+    """The third-party fillers with their defaults and a ``maxholesize`` covering every hole.
+
+    Returns
+    -------
+    list of Filler
+    """
+    return [Filler(name, name, {"maxholesize": "all"}) for name in ANCHORS]
 
 
 def parse_fillers(spec, refinehole=False):
@@ -296,8 +322,10 @@ def parse_fillers(spec, refinehole=False):
     Entries are separated by commas (or given as a list); each is ``name`` or
     ``name:param=value[:param=value...]`` (a comma-separated ``param=value`` right after an
     entry also belongs to it). ``name`` may be a unique suffix of one of our filters
-    (``min_angle_bilateral``); ``ours`` means all registered filters of ours and ``baseline``
-    the two ``meshing_close_holes`` variants. ``maxholesize=all`` covers every hole.
+    (``min_angle_bilateral``); ``ours`` means all registered filters of ours, ``anchors`` the
+    third-party fillers (``cgal_liepa``, ``pymeshfix``; each also by name) and ``baseline``
+    the two ``meshing_close_holes`` variants. ``maxholesize=all`` covers every hole; the
+    anchors get it unless their ``maxholesize`` is given.
 
     Returns
     -------
@@ -327,7 +355,14 @@ def parse_fillers(spec, refinehole=False):
         if name == "baseline":
             out += [f for f in default_fillers(refinehole) if f.filter == BASELINE]
             continue
+        if name == "anchors":
+            out += [Filler(f.label, f.filter, {**f.params, **params}) for f in anchor_fillers()]
+            continue
         full = _resolve_name(name)
+        if is_anchor(full):
+            label = full if not params else f"{full} ({', '.join(f'{k}={v}' for k, v in params.items())})"
+            out.append(Filler(label, full, {"maxholesize": "all", **params}))
+            continue
         label = full if not params else f"{full} ({', '.join(f'{k}={v}' for k, v in params.items())})"
         out.append(Filler(label, full, params))
     labels = [f.label for f in out]
@@ -359,7 +394,9 @@ def _hole_entry(result, loop_index):
     return None
 
 
-_ENTRY_KEYS = {"hole", "boundary_edges", "pinched", "status", "reason", "seconds", "new_vertices", "new_faces"}
+# The pipeline's own entry fields (and the hole's measures), which are not the algorithm's figures.
+_ENTRY_KEYS = {"hole", "boundary_edges", "pinched", "status", "reason", "seconds", "new_vertices", "new_faces",
+               "centroid", "perimeter", "diameter", "area", "planarity", "size_class"}
 
 
 def _patch_info(entry):
@@ -429,10 +466,10 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
     patches = assign_patches(F1[first_patch_face:], [h.loop for h in case.holes])
     max_size = resolved_params.get("maxholesize", 30 if filler.filter == BASELINE else 1000)
     closed_count = 0
-    for h, row in zip(case.holes, base):
+    for position, (h, row) in enumerate(zip(case.holes, base)):
         entry = _hole_entry(result, h.loop_index)
         open_left = bool(np.isin(he1, h.loop).all(axis=1).any())
-        patch_idx = first_patch_face + patches[h.index]
+        patch_idx = first_patch_face + patches[position]
         closed = (not open_left) and len(patch_idx) > 0
         if entry is not None and entry.get("seconds") is not None:
             row["seconds"] = entry["seconds"]
@@ -462,6 +499,35 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
     return run, base, pictures
 
 
+def short_filler(label):
+    """A filler label without the common ``meshing_close_holes_`` prefix (for the progress bar)."""
+    return label.replace("meshing_close_holes_", "")
+
+
+def _progress_bar(total, progress):
+    """A tqdm bar over the runs on stderr, or None.
+
+    ``progress`` None (the default) shows it when stderr is a terminal, True always, False never.
+    """
+    if progress is None:
+        progress = bool(getattr(sys.stderr, "isatty", lambda: False)())
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="run", file=sys.stderr, dynamic_ncols=True)
+
+
+def _log_run(run, holes, number, total):
+    """One INFO record per run on the ``meshlab_holefill`` logger (its extra fields carry the run row)."""
+    seconds = run.get("seconds")
+    logger.info("compare run %d/%d: %s / %s: %s, %d/%d holes closed, %s s%s", number, total, run["case"],
+                run["filler"], run["status"], run.get("closed_holes", 0), holes,
+                "?" if seconds is None or seconds != seconds else f"{seconds:.2f}",
+                "" if run["status"] == "ok" else f" ({run.get('error')})",
+                extra={"comparison_run": {k: v for k, v in run.items()}})
+
+
 def resolve_params(filler, cases):
     """The filler's parameters for these cases ("all" -> a maxholesize covering every hole).
 
@@ -482,10 +548,11 @@ def resolve_params(filler, cases):
 
 
 def run_comparison(meshes, holes=4, sizes=("small", "medium", "large"), seed=0, filters=None, refinehole=False,
-                   timeout=300.0, maxholesize=1000, progress=True, full_metrics=True, cases=None):
+                   timeout=300.0, maxholesize=1000, progress=None, full_metrics=True, cases=None):
     """Prepare the cases, run every filler on each in an isolated worker, measure.
 
-    Parameters are those of :func:`.compare.compare`; ``cases`` may pass
+    Parameters are those of :func:`.compare.compare` (``progress``: a tqdm bar per run on stderr,
+    None = when stderr is a terminal; each run is also logged at INFO); ``cases`` may pass
     already prepared cases (then ``meshes`` is ignored), ``full_metrics=False`` keeps only
     closed/reason/time/counts (for the scaling run).
 
@@ -506,26 +573,29 @@ def run_comparison(meshes, holes=4, sizes=("small", "medium", "large"), seed=0, 
         for h in case.holes:
             render[(case.name, h.index)] = {"context": _context_faces(case.V0, case.F0, h.loop), "V0": case.V0,
                                             "ground_truth": h.ground_truth, "loop": h.loop, "patches": {}}
-    try:
-        from tqdm import tqdm
-    except ImportError:  # the progress bar is a nicety
-        tqdm = None
     jobs = [(c, f) for c in cases for f in fillers]
-    bar = tqdm(total=len(jobs), disable=not progress, unit="run") if tqdm else None
+    bar = _progress_bar(len(jobs), progress)
     with IsolatedRunner() as runner:
-        for case, filler in jobs:
+        for number, (case, filler) in enumerate(jobs, 1):
             if bar is not None:
-                bar.set_description(f"{case.name} | {filler.label}"[:60])
+                bar.set_description(f"{case.name} | {short_filler(filler.label)}"[:50])
             params = resolve_params(filler, cases)
-            task = {"kind": "filter", "V": case.V0, "F": case.F0, "filter": filler.filter, "params": params,
-                    "label": case.name}
-            reply = runner.run(task, timeout)
+            kind = "anchor" if is_anchor(filler.filter) else "filter"
+            missing = missing_package(filler.filter) if kind == "anchor" else None
+            if missing:  # not installed: a note in the report, no worker run
+                reply = {"status": "skipped", "error": missing, "seconds": None}
+            else:
+                task = {"kind": kind, "V": case.V0, "F": case.F0, "filter": filler.filter, "params": params,
+                        "label": case.name}
+                reply = runner.run(task, timeout)
             run, hole_rows, pictures = evaluate_run(case, filler, reply, params, full_metrics)
             runs.append(run)
             rows += hole_rows
             for index, pic in pictures.items():
                 render[(case.name, index)]["patches"][filler.label] = pic
+            _log_run(run, len(case.holes), number, len(jobs))
             if bar is not None:
+                bar.set_postfix_str(f"{run['status']}, {run['closed_holes']}/{len(case.holes)} closed", refresh=False)
                 bar.update()
     if bar is not None:
         bar.close()

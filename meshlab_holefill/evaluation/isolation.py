@@ -1,4 +1,4 @@
-"""Run filters isolated from the caller: a spawned worker process per comparison, killed on timeout.
+"""Run filters isolated from the caller: a worker process per comparison, killed on timeout.
 
 One worker is kept and reused (its imports are paid once); a task that times out or crashes
 the worker (a segfault in native code, ``os._exit``) costs only that worker, which is
@@ -10,6 +10,10 @@ import ctypes
 import gc
 import importlib
 import multiprocessing
+import os
+import socket
+import subprocess
+import sys
 import time
 import traceback
 
@@ -19,7 +23,8 @@ from ..meshlab import register_all
 from ..meshlab.mesh_files import mesh_arrays, meshset_from_arrays
 from ..meshlab.registration import apply_filter, parse_text_value
 
-__all__ = ["IsolatedRunner", "execute_task", "json_safe", "peak_memory_since", "reset_peak_memory"]
+__all__ = ["IsolatedRunner", "check_not_bootstrapping", "execute_task", "json_safe", "peak_memory_since",
+           "reset_peak_memory", "worker_main"]
 
 
 def json_safe(value):
@@ -86,7 +91,7 @@ def peak_memory_since(start_mb):
 
 
 def execute_task(task):
-    """Run one task (in the worker): a filter on arrays, or a named function.
+    """Run one task (in the worker): a filter on arrays, a third-party filler (kind "anchor"), or a named function.
 
     Returns
     -------
@@ -101,6 +106,8 @@ def execute_task(task):
         value = getattr(importlib.import_module(module), name)(*task.get("args", []), **task.get("kwargs", {}))
         return {"status": "ok", "value": json_safe(value), "seconds": time.perf_counter() - t0}
     V0, F0 = task["V"], task["F"]
+    if task["kind"] == "anchor":
+        return _execute_anchor(task)
     start_mb = reset_peak_memory()
     ms = meshset_from_arrays(V0, F0, task.get("label", "mesh"))
     t0 = time.perf_counter()
@@ -123,13 +130,31 @@ def execute_task(task):
     return reply
 
 
+def _execute_anchor(task):
+    """A third-party filler (:mod:`.anchors`) on arrays; the reply has the same shape as a filter's."""
+    from .anchors import run_anchor
+
+    V0, F0 = np.asarray(task["V"], np.float64), np.asarray(task["F"], np.int64)
+    start_mb = reset_peak_memory()
+    t0 = time.perf_counter()
+    try:
+        V1, F1, result = run_anchor(task["filter"], V0, F0, dict(task["params"]))
+    except Exception as exc:  # a comparison reports a failing filler and goes on
+        return {"status": "error", "error": f"{type(exc).__name__}: {exc}", "traceback": traceback.format_exc(limit=-3),
+                "seconds": time.perf_counter() - t0, "memory_mb": peak_memory_since(start_mb)}
+    # map_back and the CGAL wrapper return the originals first, untouched
+    return {"status": "ok", "error": None, "seconds": time.perf_counter() - t0,
+            "memory_mb": peak_memory_since(start_mb), "result": json_safe(result),
+            "V_new": V1[len(V0):], "F_new": F1[len(F0):]}
+
+
 def _worker_loop(conn):
     register_all()  # the filters, in the fresh interpreter
 
     while True:
         try:
             task = conn.recv()
-        except (EOFError, KeyboardInterrupt):
+        except (EOFError, OSError, KeyboardInterrupt):
             return
         if task is None:
             return
@@ -140,33 +165,91 @@ def _worker_loop(conn):
         conn.send(reply)
 
 
+def worker_main(fd):
+    """The worker process's entry point: serve tasks on the socket ``fd`` until told to stop.
+
+    Run as ``python -c "from meshlab_holefill.evaluation.isolation import worker_main; worker_main(FD)"``
+    by :class:`IsolatedRunner`, so the worker's ``__main__`` is that one line and never the
+    caller's script.
+    """
+    from multiprocessing.connection import Connection
+
+    _worker_loop(Connection(fd))
+
+
+def _package_root():
+    """The directory holding the ``meshlab_holefill`` package (put on the worker's PYTHONPATH)."""
+    return os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def check_not_bootstrapping():
+    """Raise RuntimeError when called while ``multiprocessing`` imports a script in a child process.
+
+    That happens when a script without an ``if __name__ == "__main__":`` guard starts
+    processes of its own (a ``multiprocessing.Pool``, ...) in spawn or forkserver mode: each
+    child re-runs the script's top level, and a comparison started there would run once per
+    child. Our own workers never re-run the caller's script (see :class:`IsolatedRunner`).
+    """
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        raise RuntimeError(
+            "meshlab_holefill.compare() was called while multiprocessing was starting a child process of your "
+            "script (it re-runs the script's top level): put the calls that start processes under "
+            "'if __name__ == \"__main__\":'")
+
+
 class IsolatedRunner:
-    """A reusable spawned worker; a run that times out or crashes costs only that worker."""
+    """A reusable worker process; a run that times out or crashes costs only that worker.
+
+    The worker is a fresh interpreter started with ``subprocess`` (``python -c`` calling
+    :func:`worker_main`), talking over a socket pair with ``multiprocessing.connection``.
+    Unlike a ``multiprocessing`` spawn or forkserver child it does not import the caller's
+    ``__main__`` (``multiprocessing.spawn`` re-runs the main script in every child, under the
+    name ``__mp_main__``, so a script calling ``compare()`` at its top level without an
+    ``if __name__ == "__main__":`` guard would start a comparison in each worker and the
+    worker would die): ``compare()`` works from a plain script, a notebook or ``python -c``.
+    """
 
     def __init__(self):
-        self._ctx = multiprocessing.get_context("spawn")
+        check_not_bootstrapping()
         self._proc = None
         self._conn = None
 
     def _start(self):
-        parent, child = self._ctx.Pipe()
-        self._proc = self._ctx.Process(target=_worker_loop, args=(child,), daemon=True)
-        self._proc.start()
-        child.close()
-        self._conn = parent
+        from multiprocessing.connection import Connection
+
+        parent, child = socket.socketpair()
+        env = dict(os.environ)
+        env["PYTHONPATH"] = os.pathsep.join([_package_root()] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep)
+                                                                   if p])
+        # -c puts the current directory first on sys.path; the worker imports only this package,
+        # so that entry goes (a mesh folder's own python files never shadow a library here).
+        code = ("import sys; sys.path[:1] = [] if sys.path[:1] == [''] else sys.path[:1]; "
+                f"from meshlab_holefill.evaluation.isolation import worker_main; worker_main({child.fileno()})")
+        try:
+            self._proc = subprocess.Popen([sys.executable, "-c", code], pass_fds=(child.fileno(),), env=env,
+                                          stdin=subprocess.DEVNULL, close_fds=True)
+        finally:
+            child.close()
+        self._conn = Connection(parent.detach())
 
     def _discard(self):
         if self._proc is not None:
-            if self._proc.is_alive():
+            if self._proc.poll() is None:
                 self._proc.kill()
-            self._proc.join(5)
+            try:
+                self._proc.wait(5)
+            except subprocess.TimeoutExpired:
+                pass
         if self._conn is not None:
             self._conn.close()
         self._proc = self._conn = None
 
+    def _alive(self):
+        return self._proc is not None and self._proc.poll() is None
+
     def run(self, task, timeout):
         """Run a task; returns execute_task's reply, or status "timeout" / "crashed"."""
-        if self._proc is None or not self._proc.is_alive():
+        if not self._alive():
             self._discard()
             self._start()
         t0 = time.perf_counter()
@@ -178,20 +261,22 @@ class IsolatedRunner:
             return {"status": "timeout", "error": f"no answer within {timeout:g} s (worker killed)",
                     "seconds": time.perf_counter() - t0}
         except (EOFError, BrokenPipeError, ConnectionResetError, OSError):
-            code = self._proc.exitcode if self._proc is not None else None
+            code = None
             if self._proc is not None:
-                self._proc.join(5)
-                code = self._proc.exitcode
+                try:
+                    code = self._proc.wait(5)
+                except subprocess.TimeoutExpired:
+                    code = None
             self._discard()
             return {"status": "crashed", "error": f"worker process died (exit code {code})",
                     "seconds": time.perf_counter() - t0}
 
     def close(self):
-        if self._conn is not None and self._proc is not None and self._proc.is_alive():
+        if self._conn is not None and self._alive():
             try:
                 self._conn.send(None)
-                self._proc.join(5)
-            except (BrokenPipeError, OSError):
+                self._proc.wait(5)
+            except (BrokenPipeError, OSError, subprocess.TimeoutExpired):
                 pass
         self._discard()
 

@@ -75,12 +75,17 @@ def standing(rows, baseline_rows, reference):
     natural = [r for r in rows if not r["ground_truth"] and r["size_class"] != "outline"]
     outlines = [r for r in rows if r["size_class"] == "outline"]
     closed = [r for r in rows if r.get("closed")]
-    n_cut = sum(1 for r in cut if r.get("closed"))
-    out.append(("cut holes closed", f"{n_cut}/{len(cut)}", n_cut == len(cut)))
-    n_nat = sum(1 for r in natural if r.get("closed"))
-    out.append(("natural holes closed (island outlines apart)", f"{n_nat}/{len(natural)}", n_nat == len(natural)))
-    n_out = sum(1 for r in outlines if r.get("closed"))
-    out.append(("island outlines capped (not holes)", f"{n_out}/{len(outlines)}", None))
+    # Only the rows that apply: a scan has no cut holes, a closed mesh no natural holes or outlines.
+    if cut:
+        n_cut = sum(1 for r in cut if r.get("closed"))
+        out.append(("cut holes closed", f"{n_cut}/{len(cut)}", n_cut == len(cut)))
+    if natural:
+        n_nat = sum(1 for r in natural if r.get("closed"))
+        out.append(("natural holes closed (island outlines apart)", f"{n_nat}/{len(natural)}",
+                    n_nat == len(natural)))
+    if outlines:
+        n_out = sum(1 for r in outlines if r.get("closed"))
+        out.append(("island outlines capped (not holes)", f"{n_out}/{len(outlines)}", None))
     changed = max((r.get("originals_changed") or 0 for r in closed), default=0)
     if reference.get("splits_border"):
         out.append(("original elements changed", f"{changed} (split border faces, Sec. 3.1)", None))
@@ -89,6 +94,8 @@ def standing(rows, baseline_rows, reference):
     hits = sum(r.get("intersecting_new_faces") or 0 for r in closed)
     out.append(("new faces intersecting the mesh", str(hits), hits == 0))
     for label, group in (("cut", cut), ("natural", natural)):
+        if not group:
+            continue
         q = _mean([r.get("quality_mean") for r in group if r.get("closed")])
         out.append((f"quality mean, {label} holes (≥ {QUALITY_MEAN})",
                     "–" if q is None else f"{q:.3f}", None if q is None else q >= QUALITY_MEAN))

@@ -5,6 +5,7 @@ import time
 
 from ..core.pipeline import fill_mesh_holes
 from .meshset_io import current_mesh_arrays, replace_current_mesh
+from .progress import current_callback
 
 __all__ = ["close_holes"]
 
@@ -21,7 +22,11 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
     Returns
     -------
     dict
-        The pipeline's result; ``seconds`` includes reading and writing the layer.
+        The pipeline's result; ``seconds`` includes reading and writing the layer; ``mesh_id``
+        is the filled layer's id: the current layer's, which keeps its place too (see
+        :func:`.meshset_io.replace_current_mesh`), except in a MeshSet holding rasters, where the
+        filled layer gets a new id, goes last and ``layer_note`` says why (and where another layer's own
+        per-vertex normals would not survive pymeshlab's copy).
 
     Raises
     ------
@@ -34,9 +39,13 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
     t_start = time.perf_counter()
     arrays = current_mesh_arrays(ms)
     filled, result = fill_mesh_holes(arrays, fill, params, algorithm_params=algorithm_params, rings=rings,
-                                     prepare=prepare)
+                                     prepare=prepare, progress=current_callback())
+    mesh_id = arrays.mesh_id
     if filled.changed:
-        replace_current_mesh(ms, filled.source, filled.V, filled.F, filled.vertex_attrs, filled.face_attrs,
-                             filled.wedge_texcoords, select_faces=filled.select_faces)
+        mesh_id, note = replace_current_mesh(ms, filled.source, filled.V, filled.F, filled.vertex_attrs,
+                                       filled.face_attrs, filled.wedge_texcoords, select_faces=filled.select_faces)
+        if note:
+            result["layer_note"] = note
+    result["mesh_id"] = int(mesh_id)
     result["seconds"] = time.perf_counter() - t_start
     return result

@@ -12,7 +12,8 @@ import os
 import numpy as np
 import pymeshlab
 
-__all__ = ["is_mesh", "load_mesh", "mesh_arrays", "meshset_from_arrays", "point_to_surface_distances"]
+__all__ = ["boolean_mesh", "generated_mesh", "is_mesh", "load_mesh", "mesh_arrays", "meshset_from_arrays",
+           "point_to_surface_distances", "remeshed"]
 
 
 def load_mesh(path):
@@ -102,3 +103,74 @@ def point_to_surface_distances(X, V, F):
     ms.compute_scalar_by_distance_from_another_mesh_per_vertex(measuremesh=0, refmesh=1, signeddist=False,
                                                               maxdist=pymeshlab.PureValue(reach))
     return np.asarray(ms.mesh(0).vertex_scalar_array(), np.float64)
+
+
+def generated_mesh(generator, **params):
+    """A mesh from one of MeshLab's generators (``create_cube``, ``create_cone``, ``create_sphere``, ...).
+
+    Parameters
+    ----------
+    generator : str  the name of a pymeshlab filter starting with ``create_``
+    **params : the generator's parameters (``create_cone(r0=1, r1=1, h=2)`` is a cylinder with sharp rims)
+
+    Returns
+    -------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    """
+    if not generator.startswith("create_") or not hasattr(pymeshlab.MeshSet, generator):
+        raise ValueError(f"'{generator}' is not one of MeshLab's create_* generators")
+    ms = pymeshlab.MeshSet()
+    getattr(ms, generator)(**params)
+    return mesh_arrays(ms)
+
+
+def remeshed(V, F, edge_length, feature_angle=30.0, iterations=10):
+    """MeshLab's isotropic explicit remeshing: triangles of about ``edge_length``, creases kept.
+
+    Edges whose dihedral angle exceeds ``feature_angle`` stay where they are (MeshLab's
+    ``featuredeg``); vertices are reprojected within 5 % of ``edge_length`` of the input.
+
+    Parameters
+    ----------
+    V : (n, 3) float, F : (m, 3) int
+    edge_length : float  target edge length (absolute)
+    feature_angle : float  degrees
+    iterations : int
+
+    Returns
+    -------
+    V : (n', 3) float64
+    F : (m', 3) int64
+    """
+    if not edge_length > 0:
+        raise ValueError(f"edge_length must be positive, got {edge_length}")
+    ms = meshset_from_arrays(V, F)
+    # Long input edges first split at their midpoints, so the remeshing starts from a fine sampling.
+    ms.meshing_surface_subdivision_midpoint(iterations=8, threshold=pymeshlab.PureValue(2.0 * edge_length))
+    ms.meshing_isotropic_explicit_remeshing(iterations=int(iterations), targetlen=pymeshlab.PureValue(edge_length),
+                                            featuredeg=float(feature_angle),
+                                            maxsurfdist=pymeshlab.PureValue(0.05 * edge_length))
+    return mesh_arrays(ms)
+
+
+def boolean_mesh(operation, first, second):
+    """MeshLab's mesh booleans (libigl): the union, intersection or difference of two closed meshes.
+
+    Parameters
+    ----------
+    operation : "union", "intersection" or "difference" (first minus second)
+    first, second : ((n, 3) float, (m, 3) int) closed, consistently oriented meshes
+
+    Returns
+    -------
+    V : (n', 3) float64
+    F : (m', 3) int64
+    """
+    if operation not in ("union", "intersection", "difference"):
+        raise ValueError(f"operation must be union, intersection or difference, got {operation!r}")
+    ms = pymeshlab.MeshSet()
+    for V, F in (first, second):
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(V, np.float64), face_matrix=np.asarray(F).astype(np.int32)))
+    getattr(ms, f"generate_boolean_{operation}")(first_mesh=0, second_mesh=1)
+    return mesh_arrays(ms)

@@ -1,7 +1,9 @@
 """MeshSet <-> numpy arrays: loading, reading the current layer, and putting a filled mesh back in its place."""
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 import tempfile
 
 import numpy as np
@@ -68,26 +70,193 @@ def current_mesh_arrays(ms):
 
 
 def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, select_faces=None):
-    """Put the filled mesh into ``ms`` in place of the current layer, keeping its name.
+    """Put the filled mesh into ``ms`` in place of the current layer: same id, place, name and visibility.
 
-    The old layer is removed and the new one becomes current; other layers are untouched.
-    Face selection: the original selection is kept on original faces, and faces in
-    ``select_faces`` (indices into F2) are added to it.
+    pymeshlab gives every new layer the next id of a counter that only ``MeshSet.clear()``
+    resets, and appends it last. To keep the layer's id and place, the other layers are copied
+    to a scratch MeshSet (``add_mesh`` copies a mesh; ``ms.mesh(i)`` is only a reference into
+    its layer, dangling once the layer is gone), ``ms`` is cleared, and the
+    layers are added back in id order, the filled mesh at the old id, with one-vertex
+    placeholder layers added and deleted where ids are missing, up to the id counter as it
+    was: every id names the same layer as before and the next new layer gets the id it would
+    have had. Copies keep geometry, normals, colours, quality, selections and custom
+    attributes; names, visibility, transformation matrices and textures are put back.
+    pymeshlab's own filter-script record (``ms.save_filter_script``) is put back as it was,
+    without the internal steps (deleting layers, matrices, selections) used here.
 
-    The old layer goes first: the new ``pymeshlab.Mesh`` and the MeshSet's copy of it already
-    hold the mesh twice, and the old layer beside them would be a third (measured at 3.6M
-    faces: 836 MB above the start instead of 480). Should building the new mesh fail, the
-    old layer is put back from ``arrays`` before the error propagates.
+    The other layers are all copied before ``ms`` is touched, and compared; when one would
+    not come back the same, nothing is rebuilt and the filled layer goes last with a new id,
+    as it would with rasters in the MeshSet (see ``note`` below).
+
+    Returns
+    -------
+    mesh_id : int
+        The filled layer's id: the old one, unless the layers could not be rebuilt.
+    note : str or None
+        Why the filled layer got a new id and went last, when it did: the MeshSet holds
+        rasters (which pymeshlab cannot copy; ``MeshSet.clear`` would drop them), or another
+        layer has per-vertex normals that ``add_mesh`` would recompute (it recomputes them on
+        every copy; normals computed by pymeshlab on loading survive, a file's own or a
+        filter's do not). Every other layer is then left untouched.
+
+    Memory: the old layer goes first, then the filled mesh exists twice (the new
+    ``pymeshlab.Mesh`` and the MeshSet's copy) as before; the other layers are held twice
+    while they are copied (a MeshSet of one layer costs what it did). Should building the new mesh fail, the old
+    layer is put back from ``arrays`` before the error propagates.
     """
-    ms.set_current_mesh(arrays.mesh_id)
+    target = arrays.mesh_id
+    record = _filter_record(ms)
+    visible = bool(ms.is_mesh_visible(target))
+    ms.set_current_mesh(target)
     ms.delete_current_mesh()
     try:
-        mesh = _new_mesh(V2, F2, vertex_attrs, face_attrs, wedge)
-    except BaseException:
-        original = _new_mesh(arrays.V, arrays.F, arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords)
-        _add_layer(ms, arrays, original, arrays.face_attrs)
-        raise
-    return _add_layer(ms, arrays, mesh, face_attrs, select_faces)
+        try:
+            mesh = _new_mesh(V2, F2, vertex_attrs, face_attrs, wedge)
+        except BaseException:
+            original = _new_mesh(arrays.V, arrays.F, arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords)
+            _put_layer(ms, arrays, original, arrays.face_attrs, None, visible)
+            raise
+        return _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible)
+    finally:
+        _restore_filter_record(ms, record)
+
+
+def layer_kept_note(ms):
+    """Why a filled layer cannot keep its id in ``ms`` (None when it can)."""
+    if ms.raster_number():
+        return ("the MeshSet holds rasters, which pymeshlab cannot copy back after clearing it: the filled layer "
+                "got a new id and was put last")
+    return None
+
+
+def mesh_ids(ms):
+    """Ids of the layers of ``ms``, in order (pymeshlab lists ids only one by one)."""
+    ids, i, n = [], 0, ms.mesh_number()
+    while len(ids) < n:
+        if ms.mesh_id_exists(i):
+            ids.append(i)
+        i += 1
+    return ids
+
+
+_PLACEHOLDER = None
+
+
+def _placeholder():
+    global _PLACEHOLDER
+    if _PLACEHOLDER is None:
+        _PLACEHOLDER = pymeshlab.Mesh(vertex_matrix=np.zeros((1, 3)))
+    return _PLACEHOLDER
+
+
+def _next_mesh_id(ms):
+    """The id pymeshlab's counter gives the next layer (found by adding a placeholder layer and deleting it)."""
+    current = ms.current_mesh_id() if ms.mesh_number() else None
+    ms.add_mesh(_placeholder(), "placeholder", set_as_current=True)
+    nxt = ms.current_mesh_id()
+    ms.delete_current_mesh()
+    if current is not None:
+        ms.set_current_mesh(current)
+    return nxt
+
+
+def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
+    """Add the filled ``mesh`` back at ``arrays.mesh_id`` (see :func:`replace_current_mesh`)."""
+    target = arrays.mesh_id
+    note = layer_kept_note(ms)
+    if note:
+        new_id = _add_layer(ms, arrays, mesh, face_attrs, select_faces)
+        if not visible:
+            ms.set_current_mesh_visibility(False)
+        return new_id, note
+    scratch = pymeshlab.MeshSet()
+    kept = {}  # id -> (position in scratch, label, visible, transform, textures)
+    for position, i in enumerate(mesh_ids(ms)):
+        m = ms.mesh(i)
+        scratch.add_mesh(m, m.label(), set_as_current=False)
+        if not np.array_equal(scratch.mesh(position).vertex_normal_matrix(), m.vertex_normal_matrix()):
+            # add_mesh recomputes per-vertex normals: a layer with its own (a scan's, a filter's) would lose them
+            scratch.clear()
+            note = (f"layer {i} ('{m.label()}') has per-vertex normals that pymeshlab's copy would recompute, so "
+                    "the MeshSet could not be rebuilt with the filled layer in its place: it got a new id and was "
+                    "put last")
+            new_id = _add_layer(ms, arrays, mesh, face_attrs, select_faces)
+            if not visible:
+                ms.set_current_mesh_visibility(False)
+            return new_id, note
+        kept[i] = (position, m.label(), bool(ms.is_mesh_visible(i)), np.array(m.transform_matrix(), np.float64),
+                   dict(m.textures()))
+    counter = max(_next_mesh_id(ms), target + 1)
+    ms.clear()  # resets the id counter to 0
+    for i in range(counter):
+        if i == target:
+            _add_layer(ms, arrays, mesh, face_attrs, select_faces)
+            if not visible:
+                ms.set_current_mesh_visibility(False)
+        elif i in kept:
+            position, label, shown, transform, textures = kept[i]
+            ms.add_mesh(scratch.mesh(position), label, set_as_current=True)
+            _restore_textures(ms, textures)
+            if not np.array_equal(transform, np.eye(4)):
+                ms.set_matrix(transformmatrix=transform, compose=False, freeze=False)
+            if not shown:
+                ms.set_current_mesh_visibility(False)
+            scratch.set_current_mesh(position)
+            scratch.delete_current_mesh()
+        else:  # an id whose layer was deleted earlier: keep it unused, as pymeshlab would
+            ms.add_mesh(_placeholder(), "placeholder", set_as_current=True)
+            ms.delete_current_mesh()
+        if (i in kept or i == target) and ms.current_mesh_id() != i:
+            raise RuntimeError(f"layer {i} came back as id {ms.current_mesh_id()}")  # pymeshlab changed its ids
+    ms.set_current_mesh(target)
+    return target, None
+
+
+def _filter_record(ms):
+    """pymeshlab's own filter-script record of ``ms`` (.mlx bytes), or None when it cannot be read."""
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "record.mlx")
+            ms.save_filter_script(path)
+            with open(path, "rb") as f:
+                return f.read()
+    except Exception:
+        return None
+
+
+def _restore_filter_record(ms, record):
+    """Put back pymeshlab's record saved by :func:`_filter_record` (pymeshlab's loader, its chatter silenced)."""
+    if record is None:
+        return
+    load = getattr(pymeshlab.MeshSet.load_filter_script, "pymeshlab_original", pymeshlab.MeshSet.load_filter_script)
+    clear = getattr(pymeshlab.MeshSet.clear_filter_script, "pymeshlab_original", pymeshlab.MeshSet.clear_filter_script)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "record.mlx")
+        with open(path, "wb") as f:
+            f.write(record)
+        with _quiet_stderr():  # the C++ loader prints every filter name it reads
+            clear(ms)
+            if b"<filter" in record:
+                load(ms, path)
+
+
+@contextlib.contextmanager
+def _quiet_stderr():
+    """Send file descriptor 2 to /dev/null for a moment (C++ output Python cannot redirect otherwise)."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):
+        yield
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
 
 
 def _new_mesh(V, F, vertex_attrs, face_attrs, wedge):
@@ -168,3 +337,36 @@ def _restore_textures(ms, textures):
             path = os.path.join(tmp, os.path.basename(name) or "texture.png")
             image.save(path)
             ms.set_texture_per_mesh(textname=path)
+
+
+_WRITABLE = {}  # extension -> error text or None, from a trial save
+
+
+def check_mesh_output_path(path):
+    """Refuse, before any work, an output path pymeshlab could not write a mesh to.
+
+    Raises
+    ------
+    ValueError
+        No extension, or one pymeshlab cannot save (found by saving a triangle in a scratch
+        folder once per extension), or a folder that does not exist or is not writable.
+    """
+    folder = os.path.dirname(os.path.abspath(path)) or "."
+    ext = os.path.splitext(path)[1].lower()
+    if not ext:
+        raise ValueError(f"output '{path}' has no extension: give a mesh format, e.g. .ply, .obj, .stl, .off")
+    if ext not in _WRITABLE:
+        ms = pymeshlab.MeshSet()
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.eye(3), face_matrix=np.array([[0, 1, 2]], np.int32)), "check")
+        with tempfile.TemporaryDirectory() as tmp:
+            try:
+                ms.save_current_mesh(os.path.join(tmp, "check" + ext))
+                _WRITABLE[ext] = None
+            except Exception as exc:  # pymeshlab: "Unknown format for save: ..."
+                _WRITABLE[ext] = str(exc)
+    if _WRITABLE[ext] is not None:
+        raise ValueError(f"output '{path}': pymeshlab cannot write '{ext}' files ({_WRITABLE[ext]})")
+    if not os.path.isdir(folder):
+        raise ValueError(f"output '{path}': folder '{folder}' does not exist")
+    if not os.access(folder, os.W_OK):
+        raise ValueError(f"output '{path}': folder '{folder}' is not writable")

@@ -32,7 +32,7 @@ def test_parse_fillers():
     assert fillers[0].params == {"iterations": 2, "fairing": "none"}
     assert fillers[1].params == {"maxholesize": "all", "refinehole": True}
     default = parse_fillers(None)
-    assert {f.filter for f in default} == set(meshlab_holefill.filter_list()) | {"meshing_close_holes"}
+    assert {f.filter for f in default} == set(meshlab_holefill.filter_list()) | {"meshing_close_holes", "cgal_liepa", "pymeshfix"}
     assert len(parse_fillers(None, refinehole=True)) == len(default) + 1
     with pytest.raises(ValueError, match="unknown filter 'no_such_filter'"):
         parse_fillers("no_such_filter")

@@ -494,8 +494,9 @@ def test_record_write_run_gives_the_same_mesh(tmp_path):
     params = {p.get("name"): p for p in ET.parse(first).getroot().findall("filter")[3]}
     assert ET.parse(first).getroot().findall("filter")[3].get("name") == OURS
     assert {name: p.get("type") for name, p in params.items()} == {
-        "MaxHoleSize": "RichInt", "Selected": "RichBool", "NewFaceSelected": "RichBool",
-        "SelfIntersection": "RichBool", "alpha": "RichFloat", "sigma_c": "RichFloat", "sigma_s": "RichFloat",
+        "MaxHoleSize": "RichInt", "MaxHoleDiameter": "RichAbsPerc", "Selected": "RichBool",
+        "NewFaceSelected": "RichBool", "SelfIntersection": "RichBool", "FillOutlines": "RichBool", "Workers": "RichInt",
+        "TimeLimit": "RichFloat", "alpha": "RichFloat", "sigma_c": "RichFloat", "sigma_s": "RichFloat",
         "iterations": "RichInt", "fairing": "RichEnum", "smoothing": "RichInt", "relaxation": "RichEnum",
         "neighbourhood": "RichEnum", "filter_guard": "RichFloat"}
     assert params["alpha"].get("value") == "1.3"

@@ -22,6 +22,7 @@ METRICS = [
     ("edge_ratio", "edge ratio", "one", "mean", "{:.2f}"),
     ("border_dihedral_mean_deg", "border crease °", "low", "mean", "{:.1f}"),
     ("border_dihedral_excess_deg", "crease − GT's °", "low", "mean", "{:.1f}"),
+    ("crease_error_mean_deg", "removed crease error °", "low", "mean", "{:.1f}"),
     ("intersecting_new_faces", "intersecting faces", "low", "sum", "{:d}"),
     ("new_vertices", "new V", None, "sum", "{:d}"),
     ("faces", "new F", None, "sum", "{:d}"),
@@ -29,7 +30,7 @@ METRICS = [
 CHART_METRICS = ["dist_patch_to_gt_mean_permille", "dist_gt_to_patch_mean_permille", "normal_dev_mean_deg",
                  "quality_mean", "quality_min", "edge_ratio", "border_dihedral_excess_deg", "seconds"]
 HEADINGS = {m[0]: m[1] for m in METRICS} | {"seconds": "seconds per hole"}
-SIZE_ORDER = ["small", "medium", "large", "irregular", "given", "natural", "outline"]
+SIZE_ORDER = ["small", "medium", "large", "irregular", "given", "crease", "crossing", "natural", "outline"]
 
 
 def short_label(label):

@@ -3,8 +3,11 @@
 A small software renderer on matplotlib: orthographic view along the hole's mean normal
 (tilted 20 degrees for depth cues), faces drawn far to near (painter's algorithm) with
 Lambert shading. The surrounding mesh is grey, back faces blue-grey; a patch is coloured by
-the distance of each face to the ground truth (one colour scale per hole, shared by all
-panels) or, without ground truth, by triangle quality 2r/R.
+the distance of each face to the ground truth or, without ground truth (a scan's own holes),
+by triangle quality 2r/R. Every panel of a hole's picture shares one colour scale, shown by
+the colour bar under the panels: distances on a logarithmic scale from the best filter's
+small distances to the worst filter's large ones (so 1.6 and 3.5 per mille differ even when
+another filter reaches 40), quality on 0..1.
 """
 from __future__ import annotations
 
@@ -100,11 +103,13 @@ def hole_figure(key, data, rows, labels, diag, path):
     surface = gt if has_gt else next(((p["V"], p["F"]) for p in data["patches"].values()), None)
     frame = view_frame(V0, context, loop, surface)
     if has_gt:
-        dists = [1000.0 * p["face_distance"] / diag for p in data["patches"].values() if "face_distance" in p]
-        vmax = max([float(np.percentile(d, 98)) for d in dists if len(d)] + [1e-6])
-        norm, cmap, bar_label = Normalize(0, vmax), colormaps["inferno_r"], "distance to ground truth (‰ of bbox diagonal)"
+        norm = distance_norm([1000.0 * p["face_distance"] / diag for p in data["patches"].values()
+                              if "face_distance" in p])
+        cmap = colormaps["inferno_r"]
+        bar_label = "distance to ground truth (‰ of bbox diagonal, log scale), one scale for all panels"
     else:
-        norm, cmap, bar_label = Normalize(0, 1), colormaps["RdYlGn"], "triangle quality 2r/R"
+        norm, cmap = Normalize(0, 1), colormaps["RdYlGn"]
+        bar_label = "triangle quality 2r/R (1 = equilateral), one scale for all panels"
     panels = (["ground truth"] if has_gt else []) + labels
     fig, axes = plt.subplots(1, len(panels), figsize=(2.9 * len(panels), 3.9), squeeze=False)
     axes = axes.ravel()
@@ -142,8 +147,9 @@ def hole_figure(key, data, rows, labels, diag, path):
         ax.set_yticks([])
         ax.set_title(title, fontsize=9)
     r0 = rows[0]
-    fig.suptitle(f"{key[0]} hole {key[1]}: {r0['size_class']} {r0['shape']}, {r0['boundary_edges']} edges",
-                 fontsize=11, y=0.99)
+    kind = r0["size_class"] if r0["shape"] in (r0["size_class"], "given") else f"{r0['size_class']} {r0['shape']}"
+    kind = {"natural": "natural hole", "outline": "island outline"}.get(kind, kind)
+    fig.suptitle(f"{key[0]} hole {key[1]}: {kind}, {r0['boundary_edges']} edges", fontsize=11, y=0.99)
     sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
     fig.tight_layout(rect=(0, 0.2, 1, 0.93))
     cax = fig.add_axes([0.3, 0.15, 0.4, 0.035])
@@ -152,10 +158,36 @@ def hole_figure(key, data, rows, labels, diag, path):
     plt.close(fig)
 
 
-def hole_pictures(comparison, directory, max_per_case=8):
+def distance_norm(distances):
+    """The colour scale shared by every panel of a hole: logarithmic over the panels' distances.
+
+    From the smallest panel's 5th percentile to the largest panel's 98th (a face farther is
+    drawn at the end colour), the range kept within four decades.
+
+    Parameters
+    ----------
+    distances : list of (q_i,) float  per panel, the distance of each patch face (‰)
+
+    Returns
+    -------
+    matplotlib.colors.LogNorm (clipping)
+    """
+    from matplotlib.colors import LogNorm
+
+    values = [np.asarray(d, float)[np.isfinite(d)] for d in distances]
+    values = [d for d in values if len(d)]
+    vmax = max([float(np.percentile(d, 98)) for d in values] + [1e-6])
+    vmin = min([float(np.percentile(d, 5)) for d in values] + [vmax])
+    vmin = min(max(vmin, vmax * 1e-4, 1e-9), vmax / 10.0)
+    return LogNorm(vmin, vmax, clip=True)
+
+
+def hole_pictures(comparison, directory, max_pictures=None):
     """One PNG per hole in ``directory/holes``; returns [(relative path, caption)].
 
-    For meshes with many natural holes only the ``max_per_case`` largest get a picture.
+    Every hole gets a picture unless ``max_pictures`` caps them per mesh (then the holes with the
+    most boundary edges); holes are named by their number, the boundary loop index that
+    ``meshlab-holefill holes`` and the filters' results use.
     """
     os.makedirs(os.path.join(directory, "holes"), exist_ok=True)
     labels = [f.label for f in comparison.fillers]
@@ -164,7 +196,9 @@ def hole_pictures(comparison, directory, max_per_case=8):
     for case in dict.fromkeys(k[0] for k in comparison.render):
         keys = [k for k in comparison.render if k[0] == case]
         sizes = {k: len(comparison.render[k]["loop"]) for k in keys}
-        keys = sorted(sorted(keys, key=lambda k: -sizes[k])[:max_per_case], key=lambda k: k[1])
+        if max_pictures is not None:
+            keys = sorted(keys, key=lambda k: -sizes[k])[:max_pictures]
+        keys = sorted(keys, key=lambda k: k[1])
         for key in keys:
             rows = [r for r in comparison.holes if r["case"] == key[0] and r["hole"] == key[1]]
             if not rows:
@@ -172,6 +206,12 @@ def hole_pictures(comparison, directory, max_per_case=8):
             safe = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in key[0])
             rel = os.path.join("holes", f"{safe}_hole{key[1]}.png")
             hole_figure(key, comparison.render[key], rows, labels, diags[key[0]], os.path.join(directory, rel))
-            out.append((rel, f"{key[0]} hole {key[1]} ({rows[0]['boundary_edges']} edges): ground truth and each "
-                             "filter's patch, coloured by distance to the ground truth (or by quality)."))
+            if rows[0]["ground_truth"]:
+                what = ("ground truth and each filter's patch, coloured by distance to the ground truth "
+                        "(one log scale for all panels: the colour bar)")
+            else:
+                what = "each filter's patch, coloured by triangle quality 2r/R (one scale for all panels: the colour bar)"
+            out.append((rel, f"{key[0]} hole {key[1]} ({rows[0]['boundary_edges']} edges, "
+                             f"{'island outline' if rows[0]['size_class'] == 'outline' else rows[0]['size_class']}): "
+                             f"{what}."))
     return out

@@ -13,10 +13,12 @@ import time
 
 import numpy as np
 
+from ..anchors import is_anchor
 from ..reference_targets import reference_table
 from .labels import METRICS, SIZE_ORDER, aggregate, short_label
 
-__all__ = ["failures", "hole_table", "markdown_table", "report_blocks", "size_table", "summary_blocks",
+__all__ = ["failures", "hole_table", "introduction", "markdown_table", "report_blocks", "size_table",
+           "summary_blocks",
            "summary_table", "to_html", "to_markdown", "wins"]
 
 def _fmt(value, fmt):
@@ -78,9 +80,12 @@ def summary_table(comparison):
     rows_by = {lab: [r for r in comparison.holes if r["filler"] == lab] for lab in labels}
     runs_by = {lab: [r for r in comparison.runs if r["filler"] == lab] for lab in labels}
     win = wins(comparison)
+    # "best distance on": holes with ground truth only (a scan's own holes have none)
+    has_gt = any(r["ground_truth"] for r in comparison.holes)
     keys = [m for m in METRICS if any(r.get(m[0]) is not None for r in comparison.holes)]
-    header = ["filter", "holes closed", "best distance on"] + [m[1] for m in keys] + ["originals changed",
-                                                                                         "seconds (all runs)"]
+    first = 3 if has_gt else 2
+    header = (["filter", "holes closed"] + ["best distance on"] * has_gt + [m[1] for m in keys]
+              + ["originals changed", "seconds (all runs)"])
     closed_counts = [sum(1 for r in rows_by[lab] if r.get("closed")) for lab in labels]
     # Only fillers that closed (nearly) the most holes compete for bold: a mean over fewer, easier holes
     # is no win; with a single contender nothing is bold.
@@ -96,11 +101,11 @@ def summary_table(comparison):
     for i, lab in enumerate(labels):
         hr = rows_by[lab]
         closed = sum(1 for r in hr if r.get("closed"))
-        line = [f"`{lab}`", f"{closed}/{len(hr)}", str(win[lab])] + [c[0][i] for c in columns]
+        line = [f"`{lab}`", f"{closed}/{len(hr)}"] + [str(win[lab])] * has_gt + [c[0][i] for c in columns]
         line += [str(sum(r.get("originals_changed") or 0 for r in runs_by[lab])),
                  f"{sum(r.get('seconds') or 0 for r in runs_by[lab]):.2f}"]
         table.append(line)
-        bold.append({3 + j for j, c in enumerate(columns) if i in c[1]})
+        bold.append({first + j for j, c in enumerate(columns) if i in c[1]})
     return header, table, bold
 
 
@@ -120,6 +125,7 @@ def size_table(comparison, key="dist_patch_to_gt_mean_permille", fmt="{:.3f}", b
     """
     labels = [f.label for f in comparison.fillers]
     sizes = [s for s in SIZE_ORDER if any(r["size_class"] == s and (r["ground_truth"] or not key.startswith("dist"))
+                                          and (not key.startswith("crease") or r.get(key) is not None)
                                           for r in comparison.holes)]
     header = ["holes"] + [f"`{short_label(lab)}`" for lab in labels]
     table, bold = [], []
@@ -176,8 +182,9 @@ def failures(comparison):
     for r in comparison.runs:
         if r["status"] != "ok":
             lines.append(f"{r['case']} / `{r['filler']}`: **{r['status']}**: {r.get('error')}")
+    failed_runs = {(r["case"], r["filler"]) for r in comparison.runs if r["status"] != "ok"}
     for r in comparison.holes:
-        if not r.get("closed") and not r.get("reason", "").startswith(("timeout", "crashed", "error")):
+        if not r.get("closed") and (r["case"], r["filler"]) not in failed_runs:
             lines.append(f"{r['case']} hole {r['hole']} ({r['boundary_edges']} edges) / `{r['filler']}`: {r['reason']}")
     return lines
 
@@ -267,6 +274,11 @@ def summary_blocks(comparison):
                    ("table", *size_table(comparison))]
     blocks += [("p", "Mean triangle quality 2r/R of the new faces per hole size:"),
                ("table", *size_table(comparison, "quality_mean", "{:.3f}", "high"))]
+    if any(r.get("crease_error_mean_deg") is not None for r in comparison.holes):
+        blocks += [("p", "Removed crease error (degrees; holes whose removed surface has edges sharper than 30°): "
+                         "per crease edge, |its dihedral angle − the patch's best-matching dihedral within one edge "
+                         "length| (0 when none: flat there), length-weighted mean; a flat cap scores the crease angle:"),
+                   ("table", *size_table(comparison, "crease_error_mean_deg", "{:.1f}", "low"))]
     baseline = "meshing_close_holes (all holes)"
     if any(f.label == baseline for f in comparison.fillers):
         header, rows, bold = reference_table(comparison, baseline)
@@ -277,6 +289,70 @@ def summary_blocks(comparison):
                              "a whole island of the scan:"),
                        ("table", header, rows, bold)]
     return blocks
+
+
+def introduction(comparison):
+    """The paragraph saying what is measured, for the kinds of hole in the comparison.
+
+    Distances to a ground truth are explained only where some hole has one (holes cut into a
+    closed mesh, or given); a scan's own holes (no ground truth) are judged by the patch alone.
+    """
+    has_gt = any(r["ground_truth"] for r in comparison.holes)
+    scans = [c["case"] for c in comparison.cases if c["kind"] == "natural holes"]
+    text = []
+    if has_gt:
+        text.append("Distances are in per mille (‰) of the mesh's bounding-box diagonal, between the patch and the "
+                    "removed ground-truth surface: 20,000 points spread by area over one surface (seeded, so a "
+                    "figure depends only on the two surfaces), each at its exact distance from the other surface "
+                    "(MeshLab's per-vertex distance filter).")
+    if scans:
+        text.append(f"{', '.join(scans)} {'is a mesh' if len(scans) == 1 else 'are meshes'} with holes of "
+                    f"{'its' if len(scans) == 1 else 'their'} own (a scan): there is no true surface under "
+                    "them, so each patch is judged by itself (triangle quality, edge ratio, border crease, "
+                    "intersections, time). Holes are numbered by boundary loop, as `meshlab-holefill holes` and the "
+                    "filters' results number them; loops that outline a whole island are listed as `outline`, apart "
+                    "from the holes.")
+    text.append("Quality is Field's 2r/R (1 = equilateral). Edge ratio = mean new edge length / mean edge length "
+                "around the hole. Border crease = angle between the normals of the mesh face and the patch face at "
+                "each hole border edge" + ("; 'crease − GT's' compares it with the ground truth's." if has_gt else ".")
+                + (" 'Removed crease error' measures the creases inside the removed surface (edges sharper than 30°): "
+                   "per crease edge the difference between its dihedral angle and the patch's best-matching one "
+                   "within an edge length (0 where the patch is flat there), length-weighted "
+                   "(`metrics.crease_metrics`)." if has_gt else "")
+                + " Means are over the holes each filter closed; in the summary the best value per column is bold "
+                "among the filters that closed at least 90 % as many holes as the best one.")
+    return " ".join(text)
+
+
+def _per_hole_text(comparison):
+    has_gt = any(r["ground_truth"] for r in comparison.holes)
+    has_scan = any(not r["ground_truth"] for r in comparison.holes)
+    if has_gt and has_scan:
+        return ("Patch→GT mean distance (‰) where the hole has ground truth, else the mean quality of the new "
+                "triangles; the best filter per hole in bold.")
+    if has_gt:
+        return "Patch→GT mean distance (‰) per hole; the best filter per hole in bold."
+    return "Mean quality 2r/R of the new triangles per hole; the best filter per hole in bold."
+
+
+def _anchor_note(comparison):
+    """A paragraph on the third-party fillers in the comparison (what their per-hole figures mean)."""
+    names = {f.filter for f in comparison.fillers if is_anchor(f.filter)}
+    if not names:
+        return []
+    text = "Third-party anchors: "
+    parts = []
+    if "cgal_liepa" in names:
+        parts.append("`cgal_liepa` is CGAL's triangulate_refine_and_fair_hole (Liepa: triangulation, refinement, "
+                     "fairing), called once per hole with its own time")
+    if "pymeshfix" in names:
+        parts.append("`pymeshfix` is MeshFix's fill_small_boundaries, called once for the whole mesh (it cannot "
+                     "fill one chosen hole): its patches are still made hole by hole, so distances and qualities "
+                     "are per hole as for the others, but its seconds per hole are the run time shared out")
+    skipped = sorted({r["filler"] for r in comparison.runs if r["status"] == "skipped"})
+    tail = f" Skipped (package not installed): {', '.join(f'`{s}`' for s in skipped)}." if skipped else ""
+    return [("p", text + "; ".join(parts) + ". Their output is mapped back to the original numbering, so every "
+                  "metric is computed the same way." + tail)]
 
 
 def report_blocks(comparison, pictures, command=None):
@@ -298,19 +374,11 @@ def report_blocks(comparison, pictures, command=None):
               ("p", f"{time.strftime('%Y-%m-%d %H:%M')}, {settings['cores']} cores, "
                     f"{comparison.wall_seconds:.1f} s wall time (runs and metrics). Meshes: {cases}. "
                     + (f"Command: `{command}`." if command else "")),
-              ("p", "Distances are in per mille (‰) of the mesh's bounding-box diagonal, between the patch and the "
-                    "removed ground-truth surface: 20,000 points spread by area over one surface (seeded, so a "
-                    "figure depends only on the two surfaces), each at its exact distance from the other surface "
-                    "(MeshLab's per-vertex distance filter). Quality is Field's "
-                    "2r/R (1 = equilateral). Edge ratio = mean new edge length / mean edge length around the hole. "
-                    "Border crease = angle between the normals of the mesh face and the patch face at each hole "
-                    "border edge; 'crease − GT's' compares it with the ground truth's. Means are over the holes each "
-                    "filter closed; in the summary the best value per column is bold among the filters that closed "
-                    "at least 90 % as many holes as the best one."),
+              ("p", introduction(comparison)),
+              *_anchor_note(comparison),
               ("h", 2, "Summary"), *summary_blocks(comparison),
               ("h", 2, "Per hole"),
-              ("p", "Patch→GT mean distance (‰) where the hole has ground truth, else the mean quality of the new "
-                    "triangles; the best filter per hole in bold."),
+              ("p", _per_hole_text(comparison)),
               ("table", *hole_table(comparison))]
     fails = failures(comparison)
     blocks += [("h", 2, "Failures and open holes"), ("list", fails) if fails else ("p", "None.")]
@@ -320,9 +388,13 @@ def report_blocks(comparison, pictures, command=None):
     blocks += [("h", 2, "Pictures")]
     for path, caption in pictures:
         blocks.append(("img", path, caption))
+    cut = any(c["kind"] == "cut holes" for c in comparison.cases)
     blocks += [("h", 2, "Settings"),
                ("list", [f"`{f['label']}`: `{f['filter']}` {json.dumps(f['params'])}" for f in settings["fillers"]]
-                + [f"holes per closed mesh: {settings['holes']}, sizes {settings['sizes']}, seed {settings['seed']}, "
-                   f"timeout {settings['timeout']} s per run"]),
+                + ([f"holes per closed mesh: {settings['holes']}, sizes {settings['sizes']}, seed {settings['seed']}"]
+                   if cut else [])
+                + ([f"natural holes evaluated up to {settings['maxholesize']} boundary edges"]
+                   if any(c["kind"] == "natural holes" for c in comparison.cases) else [])
+                + [f"timeout {settings['timeout']} s per run"]),
               ("p", "All numbers per hole and filter: `results.csv`, `results.json`.")]
     return blocks

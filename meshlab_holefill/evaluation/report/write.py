@@ -14,7 +14,31 @@ from .plots import chart_pictures
 from .render import hole_pictures
 from .tables import report_blocks, to_html, to_markdown
 
-__all__ = ["write_csv", "write_json", "write_report"]
+__all__ = ["INSTALL_BENCH", "check_report_dependencies", "write_csv", "write_json", "write_report"]
+
+INSTALL_BENCH = 'pip install "meshlab_holefill[bench]"'
+
+
+def check_report_dependencies(pictures=True):
+    """Raise ModuleNotFoundError, with the install command, when the report's pictures cannot be drawn.
+
+    The charts and hole pictures need matplotlib, which is in the ``bench`` extra, not a core
+    dependency; tables, results.json and results.csv need nothing more. Called by
+    ``compare(report=...)`` before anything runs, so a missing matplotlib costs no runs.
+
+    Parameters
+    ----------
+    pictures : bool  whether charts and pictures will be drawn (without them nothing is needed)
+    """
+    if not pictures:
+        return
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError as exc:
+        raise ModuleNotFoundError(
+            f"the comparison report's charts and pictures need matplotlib, which is not installed ({exc}); "
+            f"install it with: {INSTALL_BENCH}  (or write the report without pictures: "
+            "pictures=False, meshlab-holefill compare --no-pictures)", name="matplotlib") from exc
 
 
 def _scalar_rows(comparison):
@@ -43,7 +67,7 @@ def write_csv(comparison, path):
         writer.writerows(rows)
 
 
-def write_report(comparison, directory, pictures=True, command=None):
+def write_report(comparison, directory, pictures=True, command=None, max_pictures=None):
     """Write the whole report into ``directory`` (created).
 
     Parameters
@@ -52,11 +76,13 @@ def write_report(comparison, directory, pictures=True, command=None):
     directory : str
     pictures : bool  also the charts and one picture per hole
     command : str, optional  the command line, quoted in the report
+    max_pictures : int, optional  picture at most this many holes per mesh (the largest); default all
 
     Returns
     -------
     str  the path of report.md
     """
+    check_report_dependencies(pictures)
     os.makedirs(directory, exist_ok=True)
     for run in comparison.runs:  # per-hole time for filters that give none: the run split over its holes
         holes = [r for r in comparison.holes if r["case"] == run["case"] and r["filler"] == run["filler"]]
@@ -67,7 +93,7 @@ def write_report(comparison, directory, pictures=True, command=None):
     pics = []
     if pictures:
         pics += chart_pictures(comparison, directory)
-        pics += hole_pictures(comparison, directory)
+        pics += hole_pictures(comparison, directory, max_pictures)
     blocks = report_blocks(comparison, pics, command)
     with open(os.path.join(directory, "report.md"), "w") as fh:
         fh.write(to_markdown(blocks))
