@@ -81,7 +81,9 @@ def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, l
     local_mesh = np.where(local_mesh >= k, local_mesh + p, local_mesh)
     allF = np.concatenate([patch_faces, local_mesh])
     q = len(patch_faces)
-    hits = faces_intersecting(X, allF, np.arange(q), np.arange(len(allF)))
+    # weld=False: the patch is joined to the mesh by index; a vertex of another part at the same
+    # place is a contact (MeshLab's per-face test reports it), not a shared vertex.
+    hits = faces_intersecting(X, allF, np.arange(q), np.arange(len(allF)), weld=False)
     return hits
 
 
@@ -119,7 +121,7 @@ def crossing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
     if len(near) == 0:
         return list(range(len(patches)))
     faces = np.concatenate([np.arange(start[j], start[j + 1]) for j in near])
-    pairs = intersecting_pairs(V2, F2, faces, faces)
+    pairs = intersecting_pairs(V2, F2, faces, faces, weld=False)
     owner = np.searchsorted(start, pairs, side="right") - 1
     crossing = {tuple(sorted(p)) for p in owner[owner[:, 0] != owner[:, 1]].tolist()}
     kept = []

@@ -25,7 +25,11 @@ really overlap:
   cross or one face contains the other's edges.
 
 Vertices are shared if they have the same index *or* identical coordinates, so
-unwelded meshes (e.g. from STL) do not report their seams.
+unwelded meshes (e.g. from STL) do not report their seams; with ``weld=False`` only the
+same index is shared, and faces that touch at coincident but distinct vertices intersect
+(as in MeshLab's per-face self-intersection test). The filters' crossing checks use
+``weld=False``: a patch is joined to the mesh by index only, so a coincident vertex of another
+part is a contact with that part.
 
 Tolerance: an edge meets a face if it passes within ``tol`` of it (a slab of
 half-thickness ``tol`` around the face, grown by ``tol`` in the plane, with
@@ -51,7 +55,7 @@ CHUNK = 200_000  # candidate pairs processed at once, bounds temporary memory
 __all__ = ["intersecting_pairs", "faces_intersecting"]
 
 
-def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE):
+def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE, weld=True):
     """Pairs of intersecting faces, one from `query` and one from `against`.
 
     Parameters
@@ -67,6 +71,8 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE)
         Contact distance, see module docstring.  Default: scale-aware.
     fold_angle : float
         Opening angle (radians) below which faces sharing an edge overlap.
+    weld : bool
+        Vertices with identical coordinates count as shared (default); False: only equal indices.
 
     Returns
     -------
@@ -97,8 +103,11 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE)
         return out[0]
     used = np.unique(F[np.concatenate([q, a])])
     P = V[used] + 0.0  # +0.0 turns -0.0 into 0.0 so the welding below sees them equal
-    canon = np.zeros(len(V), np.int64)
-    canon[used] = np.unique(P, axis=0, return_inverse=True)[1].ravel()
+    if weld:
+        canon = np.zeros(len(V), np.int64)
+        canon[used] = np.unique(P, axis=0, return_inverse=True)[1].ravel()
+    else:
+        canon = np.arange(len(V), dtype=np.int64)
     in_q = np.zeros(len(F), bool)
     in_q[q] = True
     in_a = np.zeros(len(F), bool)
@@ -123,7 +132,7 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE)
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
-def faces_intersecting(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE):
+def faces_intersecting(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE, weld=True):
     """Faces of `query` that intersect at least one other face of `against`.
 
     Parameters are as for :func:`intersecting_pairs`.
@@ -133,7 +142,7 @@ def faces_intersecting(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE)
     faces : (k,) int64
         Sorted unique face indices into `F`.
     """
-    pairs = intersecting_pairs(V, F, query, against, tol, fold_angle=fold_angle)
+    pairs = intersecting_pairs(V, F, query, against, tol, fold_angle=fold_angle, weld=weld)
     # a pair of two faces that are both in both sets is listed once, either way round
     flipped = pairs[np.isin(pairs[:, 1], query) & np.isin(pairs[:, 0], against), 1]
     return np.unique(np.concatenate([pairs[:, 0], flipped]))

@@ -70,6 +70,17 @@ PARAMS = [
               "RBF kernel width sigma as a fraction of the training set's RMS radius (Sec. 2.2; not given in "
               "the paper). 0.25 overfits on irregular meshes, 1.0 smooths curvature away.",
               minimum=1e-3, maximum=100.0),
+    ParamSpec("laplacian_frame", "enum", "global",
+              "What the LS-SVM learns (Sec. 2.2, 3.3): 'global' (the paper as printed: each global coordinate "
+              "component of the Laplacian as a function of the same coordinate component, Eq. 9) or 'normal' "
+              "(a reading: the Laplacian's normal component divided by the squared local edge length, a "
+              "scale-free mean curvature, as a function of the position; rotation-invariant and independent "
+              "of the patch's resolution; the patch's Laplacian is that curvature times its own squared edge "
+              "length along its normal).", choices=("global", "normal")),
+    ParamSpec("model_selection", "enum", "fixed",
+              "LS-SVM kernel width and gamma: 'fixed' (kernel_width, gamma) or 'loo' (chosen from the data by "
+              "the closed-form leave-one-out error of the LS-SVM over widths 0.25-2 of the RMS radius and "
+              "gamma 1-1000).", choices=("fixed", "loo")),
     ParamSpec("poisson_iterations", "int", 1,
               "Poisson solves (Sec. 3.4): the patch's cotangent Laplacian depends on the positions, so further "
               "solves use the previous result's weights.", minimum=1, maximum=50),
@@ -125,19 +136,24 @@ def training_set(ctx, layers):
     delta : (l, 3) float64  Laplacians delta_i (Eq. 1-3)
     """
     V, F = ctx.vertices, ctx.faces
-    layer = (ctx.depth >= 1) & (ctx.depth <= layers)
-    he, _ = boundary_halfedges(F)
-    on_border = np.zeros(len(V), bool)
-    on_border[he.ravel()] = True
-    # The outermost ring of the context is an artificial border; it lies deeper than any layer.
-    rows = np.flatnonzero(layer & ~on_border)
+    rows = training_rows(ctx, layers)
     if len(rows) == 0:
         return np.zeros((0, 3)), np.zeros((0, 3))
     L = normalized_cotangent_laplacian(V, F)
     return V[rows].copy(), np.asarray(L[rows] @ V)
 
 
-def fit_laplacian_regressors(X, delta, gamma, kernel_width):
+def training_rows(ctx, layers):
+    """Context vertices of the training set (:func:`training_set`): depths 1..k, off every border."""
+    layer = (ctx.depth >= 1) & (ctx.depth <= layers)
+    he, _ = boundary_halfedges(ctx.faces)
+    on_border = np.zeros(len(ctx.vertices), bool)
+    on_border[he.ravel()] = True
+    # The outermost ring of the context is an artificial border; it lies deeper than any layer.
+    return np.flatnonzero(layer & ~on_border)
+
+
+def fit_laplacian_regressors(X, delta, gamma, kernel_width, model_selection="fixed"):
     """LS-SVM regression functions f_x, f_y, f_z of Sec. 3.4 (Eq. 9, 14, 15).
 
     f_d maps a coordinate component V_id to the same component of the Laplacian delta_id.
@@ -153,13 +169,87 @@ def fit_laplacian_regressors(X, delta, gamma, kernel_width):
     list of 3 LSSVMRegressor, one per axis
     """
     radius = float(np.sqrt(((X - X.mean(axis=0)) ** 2).sum(axis=1).mean()))
-    width = kernel_width * (radius if radius > 0 else 1.0)
-    return [lssvm_fit(X[:, d], delta[:, d], gamma=gamma, width=width) for d in range(3)]
+    scale = radius if radius > 0 else 1.0
+    out = []
+    for d in range(3):
+        g, width = select_model(X[:, d], delta[:, d], scale, gamma, kernel_width, model_selection)
+        out.append(lssvm_fit(X[:, d], delta[:, d], gamma=g, width=width))
+    return out
 
 
 def predict_laplacians(regressors, X):
     """Delta'_d = [f_d(v'_1d), ..., f_d(v'_nd)] for patch vertices X (Eq. 19), (n, 3)."""
     return np.stack([regressors[d](X[:, d]) for d in range(3)], axis=1)
+
+
+LOO_WIDTHS = (0.25, 0.5, 1.0, 2.0)
+LOO_GAMMAS = (1.0, 10.0, 100.0, 1000.0)
+
+
+def loo_error(x, y, gamma, width):
+    """Mean squared leave-one-out residual of an LS-SVM fit, in closed form (Cawley & Talbot 2004).
+
+    With C the KKT matrix of Eq. 14 and (b, a) = C^-1 (0, y), the residual at sample i of the
+    fit without sample i is a_i / (C^-1)_ii.
+    """
+    from .lssvm import kkt_matrix
+    C = kkt_matrix(x, gamma, width)
+    Ci = np.linalg.inv(C)
+    sol = Ci @ np.concatenate([[0.0], y])
+    r = sol[1:] / np.diag(Ci)[1:]
+    return float(np.mean(r * r))
+
+
+def select_model(x, y, scale, gamma, kernel_width, model_selection):
+    """(gamma, width) for one regression: the given ones, or the leave-one-out best of the grid."""
+    if model_selection != "loo" or len(x) < 8:
+        return gamma, kernel_width * scale
+    best = min(((loo_error(x, y, g, w * scale), g, w) for w in LOO_WIDTHS for g in LOO_GAMMAS))
+    return best[1], best[2] * scale
+
+
+def vertex_edge_scale(X, F, n=None):
+    """Mean squared length of the edges at each vertex, (n,) (0 where a vertex has none)."""
+    n = len(X) if n is None else n
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    l2 = ((X[E[:, 0]] - X[E[:, 1]]) ** 2).sum(axis=1)
+    total = np.bincount(E.ravel(), weights=np.repeat(l2, 2), minlength=n)
+    count = np.bincount(E.ravel(), minlength=n)
+    return np.where(count > 0, total / np.maximum(count, 1), 0.0)
+
+
+class NormalFrameRegressor:
+    """LS-SVM of the scale-free normal Laplacian t = (delta . n) / l^2 over positions (laplacian_frame='normal').
+
+    Positions are taken relative to the training set's centroid and divided by its RMS radius;
+    the patch's Laplacian at a vertex is t(x) l'^2 n', with l'^2 the mean squared edge length
+    at the vertex and n' its normal in the patch being repositioned (Eq. 19 in a local frame).
+    """
+
+    def __init__(self, X, delta, normals, edge_scale, gamma, kernel_width, model_selection="fixed"):
+        self.centre = X.mean(axis=0)
+        radius = float(np.sqrt(((X - self.centre) ** 2).sum(axis=1).mean())) or 1.0
+        self.radius = radius
+        t = (delta * normals).sum(axis=1) / np.maximum(edge_scale, 1e-300)
+        x = (X - self.centre) / radius
+        self.gamma, width = select_model(x, t, 1.0, gamma, kernel_width, model_selection)
+        self.model = lssvm_fit(x, t, gamma=self.gamma, width=width)
+
+    def laplacians(self, X, F, rows):
+        """Predicted Laplacians (len(rows), 3) at patch vertices ``rows`` of the patch (X, F)."""
+        from ...geometry.quality import vertex_normals
+        N = vertex_normals(X, F, len(X))[rows]
+        t = self.model((X[rows] - self.centre) / self.radius)
+        return (t * vertex_edge_scale(X, F)[rows])[:, None] * N
+
+
+def patch_laplacians(regressors, X, F, free):
+    """Right-hand side of Eq. 18 at the free patch vertices (zero without regressors)."""
+    if regressors is None:
+        return np.zeros((int(free.sum()), 3))
+    if isinstance(regressors, NormalFrameRegressor):
+        return regressors.laplacians(X, F, np.flatnonzero(free))
+    return predict_laplacians(regressors, X[free])
 
 
 def poisson_reposition(X, F, fixed, regressors=None, iterations=1, update_rhs=False, relax_ctx=None):
@@ -204,11 +294,11 @@ def poisson_reposition(X, F, fixed, regressors=None, iterations=1, update_rhs=Fa
     if not free.any():
         return X, F, info
     first_change = None
-    rhs = predict_laplacians(regressors, X[free]) if regressors is not None else np.zeros((free.sum(), 3))
+    rhs = patch_laplacians(regressors, X, F, free)
     for _ in range(iterations):
         L = normalized_cotangent_laplacian(X, F)
         if update_rhs and regressors is not None:
-            rhs = predict_laplacians(regressors, X[free])
+            rhs = patch_laplacians(regressors, X, F, free)
         A_ff = L[free][:, free].tocsc()
         B = rhs - L[free][:, ~free] @ X[~free]
         Y = X.copy()
@@ -287,7 +377,8 @@ def reposition(ctx, X, F, regressors, iterations, relax):
 
 
 def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=2, gamma=10.0,
-         kernel_width=0.5, poisson_iterations=1, laplacian_prediction="lssvm", relax=True):
+         kernel_width=0.5, poisson_iterations=1, laplacian_prediction="lssvm", relax=True,
+         laplacian_frame="global", model_selection="fixed"):
     """Fill one hole by Xu et al.'s steps (Sec. 3.2-3.4); Sec. 3.1 ran before as ``PREPARE``.
 
     The training set and regression (Sec. 3.3, 2.2) come first; then the initial patches of
@@ -358,8 +449,13 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=2
     if laplacian_prediction == "lssvm":
         samples_X, samples_delta = training_set(ctx, min(layers, RINGS - 1))
         samples = len(samples_X)
-        if samples:
-            regressors = fit_laplacian_regressors(samples_X, samples_delta, gamma, kernel_width)
+        if samples and laplacian_frame == "normal":
+            rows = training_rows(ctx, min(layers, RINGS - 1))
+            scale = vertex_edge_scale(ctx.vertices, ctx.faces)[rows]
+            regressors = NormalFrameRegressor(samples_X, samples_delta, ctx.normals[rows], scale, gamma,
+                                              kernel_width, model_selection)
+        elif samples:
+            regressors = fit_laplacian_regressors(samples_X, samples_delta, gamma, kernel_width, model_selection)
     t1 = time.perf_counter()
     failures = []
     for X0, F0, stats in initial_patches(ctx, merge_factor, failures):
