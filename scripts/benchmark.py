@@ -361,6 +361,58 @@ def batch_throughput(out, files=24, workers=(1, 2)):
     return "\n".join(lines)
 
 
+# ------------------------------------------------------------------------ speed against CGAL
+
+def speed_table(result, anchor="cgal_liepa"):
+    """Per-hole fill seconds of every filler against CGAL's Liepa fill, on the holes with ground truth.
+
+    Each filler is timed on the holes that it and the anchor both closed (the filters' own per-hole
+    time, measured in the same run and worker harness); the ratio is its total over the anchor's.
+    """
+    rows = [r for r in result.holes if r.get("ground_truth")]
+    anchor_rows = {(r["case"], r["hole"]): r for r in rows if r["filler"] == anchor and r.get("closed")
+                   and r.get("seconds") is not None}
+    if not anchor_rows:
+        return None
+    out = []
+    for label in dict.fromkeys(r["filler"] for r in rows):
+        mine = [r for r in rows if r["filler"] == label and r.get("closed") and r.get("seconds") is not None
+                and (r["case"], r["hole"]) in anchor_rows]
+        if not mine:
+            continue
+        seconds = sum(r["seconds"] for r in mine)
+        base = sum(anchor_rows[(r["case"], r["hole"])]["seconds"] for r in mine)
+        slowest = max(mine, key=lambda r: r["seconds"])
+        out.append([f"`{short_label(label)}`", str(len(mine)), f"{seconds:.2f}", f"{base:.2f}",
+                    f"{seconds / base:.1f}" if base > 0 else "–",
+                    f"{slowest['seconds']:.2f} ({slowest['case']}, {slowest['boundary_edges']} edges)"])
+    return (["filler", "holes", "seconds", f"`{anchor}` seconds", "× CGAL", "slowest hole"], out)
+
+
+# ------------------------------------------------------------------------ holes on all cores
+
+def workers_speedup(filters=("meshing_close_holes_min_angle_bilateral", "meshing_close_holes_curve_unfolding",
+                             "meshing_close_holes_lssvm_poisson", "meshing_close_holes_differential_evolution"),
+                    mesh=os.path.join(SAMPLES, "rangemaps", "face000.ply"), counts=(1, 2)):
+    """Whole-run seconds of each filter on a scan with ``workers`` = 1 and 2, and whether the meshes are equal."""
+    rows = []
+    for name in filters:
+        seconds, meshes = [], []
+        for workers in counts:
+            ms = pymeshlab.MeshSet()
+            ms.load_new_mesh(mesh)
+            t = time.perf_counter()
+            res = getattr(ms, name)(workers=workers)
+            seconds.append(time.perf_counter() - t)
+            m = ms.current_mesh()
+            meshes.append((m.vertex_matrix(), m.face_matrix(), res["closed_holes"]))
+        same = all(np.array_equal(a, b) for a, b in zip(meshes[0][:2], meshes[-1][:2]))
+        rows.append([f"`{short_label(name)}`", str(meshes[0][2])] + [f"{x:.2f}" for x in seconds]
+                    + [f"{seconds[0] / seconds[-1]:.2f}", "yes" if same else "**no**"])
+    header = ["filter", "holes closed"] + [f"workers={c} (s)" for c in counts] + ["speed-up", "same mesh"]
+    return header, rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--filters", default=DEFAULT_FILTERS,
@@ -384,6 +436,7 @@ def main(argv=None):
                     help="replace the README's Results section with this run's tables")
     ap.add_argument("--batch", action="store_true",
                     help="also batch throughput (files per minute) with 1 and 2 dask workers, and the speed-up")
+    ap.add_argument("--workers", action="store_true", help="also face000.ply with workers=1 and 2")
     ap.add_argument("--batch-files", type=int, default=24, help="files in the batch throughput run (default 24)")
     args = ap.parse_args(argv)
     command = ".venv/bin/python scripts/benchmark.py " + " ".join(argv if argv is not None else sys.argv[1:])
@@ -405,6 +458,10 @@ def main(argv=None):
                 + ", ".join(f"{c['case']} ({len(c['holes'])} {c['kind']})" for c in result.cases)
                 + f". Full report: `{suite_dir}/report.md` (tables, charts, a picture of every hole).\n\n"
                 + to_markdown(summary_blocks(result)))
+        speed = speed_table(result)
+        if speed is not None:
+            text += ("\n\n**Speed against CGAL** (the filters' own per-hole seconds on the cut holes that both they and "
+                     "`cgal_liepa` closed, same run and workers):\n\n" + markdown_table(*speed) + "\n")
     # timing runs: each filter once, with its defaults (variants only change accuracy)
     plain = [f for f in fillers if not f.params or f.filter == BASELINE]
     if args.scaling:
@@ -423,6 +480,9 @@ def main(argv=None):
         text += (f"\n**Speed case** (three holes of about 50, 200 and 250 boundary edges, here {edges}, in the "
                  "bunny Loop-subdivided once; reference for `min_angle_bilateral`: whole run under 1.5 s):\n\n"
                  + markdown_table(*scaling_table(rows)) + "\n")
+    if args.workers:
+        text += ("\n**Holes on all cores** (face000.ply, whole run of each filter in one process, `workers=1` "
+                 "then `workers=2`):\n\n" + markdown_table(*workers_speedup()) + "\n")
     if args.papers and result is not None:
         papers = papers_table(result, command, args.seed, max(args.timeout, 180.0))
         with open(os.path.join(args.out, "papers.md"), "w") as fh:

@@ -1,1 +1,21 @@
-"""core."""
+"""The filter contract on arrays: holes and their context, patches, parameters, attributes, the pipeline.
+
+Imports ``errors`` and ``geometry`` only (no pymeshlab). Modules:
+
+- ``holes``: boundary loops (vectorised), :class:`HoleContext`, island outlines, per-hole measures.
+- ``patch``: :class:`Patch` (new vertices and faces in loop-local numbering), validation, merge.
+- ``parameters``: :class:`ParamSpec`, :func:`resolve_params`, :class:`Percentage`.
+- ``attributes``: :class:`MeshArrays`, attributes of new elements and of refined borders.
+- ``crossings``: patches against the mesh near them, against each other, at shared vertices.
+- ``parallel``: holes filled in forked worker processes, with a time limit per hole.
+- ``pipeline``: :func:`fill_mesh_holes`, what every filter does around its algorithm.
+"""
+from .attributes import MeshArrays
+from .holes import BoundaryLoop, HoleContext, boundary_loops, hole_context, hole_measures
+from .parameters import ParamSpec, Percentage, resolve_params
+from .patch import Patch, merge_patches, validate_patch
+from .pipeline import COMMON_PARAMS, FilledMesh, fill_mesh_holes
+
+__all__ = ["BoundaryLoop", "COMMON_PARAMS", "FilledMesh", "HoleContext", "MeshArrays", "ParamSpec", "Patch",
+           "Percentage", "boundary_loops", "fill_mesh_holes", "hole_context", "hole_measures", "merge_patches",
+           "resolve_params", "validate_patch"]
