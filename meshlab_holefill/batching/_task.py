@@ -14,6 +14,7 @@ import threading
 import time
 import traceback
 
+from ..evaluation.isolation import process_memory_mb
 from ._inputs import sha256_file
 
 # How often one file may be started in one run: the first try and one retry.
@@ -46,17 +47,6 @@ def _plain(value):
     return str(value)
 
 
-def _rss_mb(field):
-    try:
-        with open("/proc/self/status") as fh:
-            for line in fh:
-                if line.startswith(field + ":"):
-                    return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return None
-
-
 def _reset_peak():
     """Start a new peak-memory window for this worker process; returns the scope of later figures.
 
@@ -73,7 +63,7 @@ def _reset_peak():
 
 
 def _peak_mb():
-    peak = _rss_mb("VmHWM")
+    peak = process_memory_mb("VmHWM")
     if peak is None:  # no /proc: the lifetime peak (ru_maxrss, KiB on Linux and the BSDs)
         import resource
 

@@ -24,7 +24,7 @@ from ..meshlab.mesh_files import mesh_arrays, meshset_from_arrays
 from ..meshlab.registration import apply_filter, parse_text_value
 
 __all__ = ["IsolatedRunner", "check_not_bootstrapping", "execute_task", "json_safe", "peak_memory_since",
-           "reset_peak_memory", "worker_main"]
+           "process_memory_mb", "reset_peak_memory", "worker_main"]
 
 
 def json_safe(value):
@@ -51,7 +51,7 @@ def _worker_params(params):
             for key, value in params.items()}
 
 
-def _rss_mb(field):
+def process_memory_mb(field):
     """A memory figure of this process from /proc/self/status in MB (None where there is no /proc)."""
     try:
         with open("/proc/self/status") as fh:
@@ -81,12 +81,12 @@ def reset_peak_memory():
             fh.write("5")
     except OSError:
         return None
-    return _rss_mb("VmRSS")
+    return process_memory_mb("VmRSS")
 
 
 def peak_memory_since(start_mb):
     """Peak resident memory above ``start_mb`` since :func:`reset_peak_memory`, in MB (None if unknown)."""
-    peak = _rss_mb("VmHWM")
+    peak = process_memory_mb("VmHWM")
     return None if start_mb is None or peak is None else max(peak - start_mb, 0.0)
 
 

@@ -105,7 +105,7 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
     layer is put back from ``arrays`` before the error propagates.
     """
     target = arrays.mesh_id
-    record = _filter_record(ms)
+    record = filter_record(ms)
     visible = bool(ms.is_mesh_visible(target))
     ms.set_current_mesh(target)
     ms.delete_current_mesh()
@@ -212,7 +212,7 @@ def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
     return target, None
 
 
-def _filter_record(ms):
+def filter_record(ms):
     """pymeshlab's own filter-script record of ``ms`` (.mlx bytes), or None when it cannot be read."""
     try:
         with tempfile.TemporaryDirectory() as tmp:
@@ -225,7 +225,7 @@ def _filter_record(ms):
 
 
 def _restore_filter_record(ms, record):
-    """Put back pymeshlab's record saved by :func:`_filter_record` (pymeshlab's loader, its chatter silenced)."""
+    """Put back pymeshlab's record saved by :func:`filter_record` (pymeshlab's loader, its chatter silenced)."""
     if record is None:
         return
     load = getattr(pymeshlab.MeshSet.load_filter_script, "pymeshlab_original", pymeshlab.MeshSet.load_filter_script)

@@ -6,8 +6,6 @@ the command line, and the MeshLab ``.mlx`` names.
 """
 from __future__ import annotations
 
-import os
-import tempfile
 import weakref
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -18,7 +16,7 @@ import pymeshlab
 from ..core import parameters as _parameters
 from ..core.parameters import MLX_TYPES, FilterParameterError, ParamSpec, Percentage  # noqa: F401 (re-exported)
 from .exceptions import pymeshlab_filter_list, raises_meshset_errors
-from .meshset_io import current_mesh_exists
+from .meshset_io import current_mesh_exists, filter_record
 
 def shown_value(value):
     """A parameter value as a user wrote it (pymeshlab's value types have no readable repr)."""
@@ -204,7 +202,7 @@ def apply_filter(ms, name, **kwargs):
         result = {} if result is None else result
         call = FilterCall(name, dict(kwargs), defaults=defaults)
         if _DEPTH == 0:
-            call.meshlab_record = _meshlab_record_of_last_call(ms)
+            call.meshlab_record = filter_record(ms)  # pymeshlab's record just after the call
     else:
         raise FilterParameterError(f"unknown filter '{name}': not one of ours ({', '.join(filter_list())}) "
                                    "nor a pymeshlab filter")
@@ -263,18 +261,6 @@ def _parameter_values(ms, name):
     try:
         return ms.filter_parameter_values(name)
     except Exception:  # e.g. a missing component: the filter itself will say so
-        return None
-
-
-def _meshlab_record_of_last_call(ms):
-    """pymeshlab's own record of the filters applied to ``ms`` (.mlx bytes), read just after a built-in call."""
-    try:
-        with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, "record.mlx")
-            ms.save_filter_script(path)
-            with open(path, "rb") as f:
-                return f.read()
-    except Exception:  # the record only makes the written .mlx complete; never fail a filter for it
         return None
 
 

@@ -318,21 +318,13 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
 
     Examples
     --------
-    A round hole in the middle of a bowl-shaped grid, filled from its HoleContext:
+    A round hole in a bowl-shaped grid, triangulated, refined and smoothed by the bilateral filter:
 
-    >>> import numpy as np
-    >>> from meshlab_holefill.core.holes import boundary_loops, hole_context
-    >>> from meshlab_holefill.core.patch import validate_patch
-    >>> x, y = np.meshgrid(np.linspace(-1, 1, 11), np.linspace(-1, 1, 11))
-    >>> V = np.c_[x.ravel(), y.ravel(), 0.2 * (x ** 2 + y ** 2).ravel()]
-    >>> i = (np.arange(10)[:, None] * 11 + np.arange(10)).ravel()
-    >>> F = np.concatenate([np.c_[i, i + 1, i + 12], np.c_[i, i + 12, i + 11]])
-    >>> F = F[np.linalg.norm(V[F].mean(axis=1)[:, :2], axis=1) > 0.45]
-    >>> loop = min(boundary_loops(F), key=len)  # the hole, not the grid's outer border
+    >>> from meshlab_holefill.core import examples, hole_context
+    >>> V, F, loop = examples.bowl_with_hole()
     >>> ctx = hole_context(V, F, loop, rings=RINGS)
-    >>> patch = fill(ctx)
-    >>> validate_patch(patch, ctx.points, ctx.forbidden_edges)  # closes the loop exactly once
-    >>> len(patch.faces) == 2 * len(patch.vertices) + len(loop) - 2  # a disc (Euler)
+    >>> patch = fill(ctx, iterations=3)
+    >>> examples.is_disc_patch(patch, ctx)  # closes the loop exactly once, as a disc
     True
     """
     k = ctx.size
