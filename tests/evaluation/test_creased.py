@@ -55,7 +55,7 @@ def test_crease_metric_exact_patch_scores_zero_flat_cap_scores_the_angle(theta, 
     gV = gV @ R.T + t
     exact = crease_metrics(gV, gF, gV, gF)
     assert exact["crease_edges"] == 12 and exact["crease_error_mean_deg"] < 1e-6
-    assert exact["crease_gt_deg"] == pytest.approx(theta, abs=1e-6)
+    assert exact["crease_gt_deg"] == pytest.approx(theta, abs=1e-4)
     # the same folded surface triangulated with the other diagonals still has the crease edges
     cells = gF.reshape(-1, 2, 3)  # cell (p, q, r, s) as faces (p, q, r), (p, r, s): use (p, q, s), (q, r, s)
     p, q, r, s = cells[:, 0, 0], cells[:, 0, 1], cells[:, 0, 2], cells[:, 1, 2]
@@ -65,8 +65,8 @@ def test_crease_metric_exact_patch_scores_zero_flat_cap_scores_the_angle(theta, 
     fV, fF = grid(12)
     fV = fV @ R.T + t
     flat = crease_metrics(gV, gF, fV, fF)
-    assert flat["crease_error_mean_deg"] == pytest.approx(theta, abs=1e-6)
-    assert flat["crease_patch_deg"] == pytest.approx(0.0, abs=1e-6)
+    assert flat["crease_error_mean_deg"] == pytest.approx(theta, abs=1e-4)
+    assert flat["crease_patch_deg"] == pytest.approx(0.0, abs=1e-4)
 
 
 def test_crease_metric_gentle_fold_or_flat_ground_truth_has_no_crease():
@@ -77,7 +77,7 @@ def test_crease_metric_gentle_fold_or_flat_ground_truth_has_no_crease():
 def test_crease_metric_half_fold_scores_half():
     gV, gF = folded_grid(90.0)
     pV, pF = folded_grid(45.0)
-    assert crease_metrics(gV, gF, pV, pF)["crease_error_mean_deg"] == pytest.approx(45.0, abs=1e-6)
+    assert crease_metrics(gV, gF, pV, pF)["crease_error_mean_deg"] == pytest.approx(45.0, abs=1e-4)
 
 
 @pytest.mark.parametrize("name", [n for n in CREASED_CASES if n != "interpenetrating"])
