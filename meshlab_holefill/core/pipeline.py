@@ -235,14 +235,13 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     if refinement is not None:
         arrays = refine_mesh_arrays(arrays, refinement)
         V, F = arrays.V, arrays.F
+        incidence = vertex_face_incidence(F, len(V))
         for i, loop, count in zip(todo, refinement.loops, refinement.split_counts):
             loops[i] = loop
             report[i]["split_boundary_edges"] = int(count)
     elif prepare is not None:
         for i in todo:
             report[i]["split_boundary_edges"] = 0
-    if refinement is not None:
-        incidence = vertex_face_incidence(F, len(V))
     contexts, context_seconds = {}, {}
     for i in todo:
         t0 = time.perf_counter()
@@ -254,9 +253,11 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
         context_seconds[i] = time.perf_counter() - t0
     keys = {i: _context_key(ctx) for i, ctx in contexts.items()}
     refill = [i for i in contexts if i not in fills or fills[i][0] != keys[i]]
+    def filled_one(position):  # fill_contexts counts positions in ``refill``; the caller wants hole ids
+        progress(refill[position], len(refill))
+
     outcomes = fill_contexts(fill, [contexts[i] for i in refill], fill_kwargs, workers=params["workers"],
-                             timelimit=params["timelimit"],
-                             progress=progress and (lambda position: progress(refill[position], len(refill))))
+                             timelimit=params["timelimit"], progress=filled_one if progress else None)
     for i, (outcome, seconds) in zip(refill, outcomes):
         fills[i] = (keys[i], outcome, context_seconds[i] + seconds)
     filled = []  # (hole id, context, patch, seconds) of patches that passed validation
