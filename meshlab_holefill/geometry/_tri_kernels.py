@@ -1,0 +1,327 @@
+"""Compiled kernels of the triangle-triangle queries (numba): the broad phase and the narrow phase.
+
+`intersections.intersecting_pairs` used to test candidate pairs with numpy expressions over
+(k, 3, 3) arrays, a hundred temporaries per call, after a cKDTree search for the candidates;
+together they took most of the crossing checks' time. Here each pair is tested by scalar code
+that does, element by element, the same IEEE operations in the same order as that numpy code
+(no fastmath, no contraction to FMA; row norms add the squares left to right as numpy's
+add.reduce does, row dots in numpy's einsum order, see `_dot`), so every predicate, tolerance and
+boolean answer is the same bit for bit. tests/geometry/test_tri_kernels.py checks the whole query,
+the candidate pairs and the pair verdicts against that numpy code, kept as the reference in
+tests/intersections_numpy.py. The one transcendental step, the arctan2 of a shared-edge fold,
+stays in numpy (its SIMD arctan2 may differ from libm's in the last bits): `narrow_codes`
+returns its two arguments.
+
+`box_pairs` replaces the cKDTree search by a uniform grid of the face boxes and keeps the same
+pairs: boxes overlap (query boxes grown by tol) *and* centroids lie within the radius-bin bound
+the tree search used (squared distance summed as cKDTree sums it, against the squared bound).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["box_pairs", "narrow_codes", "NO", "HIT", "FOLD"]
+
+NO, HIT, FOLD = 0, 1, 2  # narrow_codes: no contact, contact, shared edge whose fold angle decides
+
+
+# ---------------------------------------------------------------- broad phase
+
+@njit(cache=True)
+def _grow(buf, n):
+    out = np.empty(2 * buf.shape[0] + 16, np.int64)
+    for k in range(n):  # a loop: slice assignment costs seconds of compile time
+        out[k] = buf[k]
+    return out
+
+
+@njit(cache=True)
+def _cell(x, origin, cell, dim):
+    c = int(math.floor((x - origin) / cell))
+    return min(max(c, 0), dim - 1)
+
+
+@njit(cache=True)
+def box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, dims):
+    """Local index pairs (iq, ja): boxes [lo_q, hi_q] and [lo_a, hi_a] overlap on every axis
+    and the squared centroid distance is <= ub2[bin_q[iq], bin_a[ja]].
+
+    A uniform grid (cells of size `cell` from `origin`, dims (3,) cells per axis): the `against`
+    boxes are listed in every cell they touch, and each query box tests the boxes listed in the
+    cells it touches, each once. Two boxes that overlap share a point, hence a cell (the cell
+    index is monotonic in the coordinate, and clamping to the grid keeps it so). Pairs come in
+    no particular order.
+    """
+    nq, na = lo_q.shape[0], lo_a.shape[0]
+    d0, d1, d2 = dims[0], dims[1], dims[2]
+    start = np.zeros(d0 * d1 * d2 + 1, np.int64)
+    rng = np.empty((na, 6), np.int64)
+    for j in range(na):
+        for k in range(3):
+            rng[j, k] = _cell(lo_a[j, k], origin[k], cell, dims[k])
+            rng[j, 3 + k] = _cell(hi_a[j, k], origin[k], cell, dims[k])
+        for x in range(rng[j, 0], rng[j, 3] + 1):
+            for y in range(rng[j, 1], rng[j, 4] + 1):
+                for z in range(rng[j, 2], rng[j, 5] + 1):
+                    start[(x * d1 + y) * d2 + z + 1] += 1
+    for c in range(d0 * d1 * d2):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    items = np.empty(start[-1], np.int64)
+    for j in range(na):
+        for x in range(rng[j, 0], rng[j, 3] + 1):
+            for y in range(rng[j, 1], rng[j, 4] + 1):
+                for z in range(rng[j, 2], rng[j, 5] + 1):
+                    c = (x * d1 + y) * d2 + z
+                    items[fill[c]] = j
+                    fill[c] += 1
+    seen = np.full(na, -1, np.int64)  # last query face that tested each against face
+    out_i = np.empty(max(16, 8 * (nq + na)), np.int64)
+    out_j = np.empty(out_i.shape[0], np.int64)
+    n = 0
+    for i in range(nq):
+        x0, x1 = _cell(lo_q[i, 0], origin[0], cell, d0), _cell(hi_q[i, 0], origin[0], cell, d0)
+        y0, y1 = _cell(lo_q[i, 1], origin[1], cell, d1), _cell(hi_q[i, 1], origin[1], cell, d1)
+        z0, z1 = _cell(lo_q[i, 2], origin[2], cell, d2), _cell(hi_q[i, 2], origin[2], cell, d2)
+        for x in range(x0, x1 + 1):
+            for y in range(y0, y1 + 1):
+                for z in range(z0, z1 + 1):
+                    c = (x * d1 + y) * d2 + z
+                    for r in range(start[c], start[c + 1]):
+                        j = items[r]
+                        if seen[j] == i:
+                            continue
+                        seen[j] = i
+                        if _pair_ok(i, j, lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2):
+                            if n == out_i.shape[0]:
+                                out_i, out_j = _grow(out_i, n), _grow(out_j, n)
+                            out_i[n], out_j[n] = i, j
+                            n += 1
+    return out_i[:n].copy(), out_j[:n].copy()
+
+
+@njit(cache=True)
+def _pair_ok(i, j, lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2):
+    for k in range(3):
+        if not (lo_q[i, k] <= hi_a[j, k] and lo_a[j, k] <= hi_q[i, k]):
+            return False
+    s = 0.0  # cKDTree's squared Euclidean distance: 0.0, then += d * d per coordinate
+    for k in range(3):
+        d = cq[i, k] - ca[j, k]
+        s += d * d
+    return s <= ub2[bin_q[i], bin_a[j]]
+
+
+# ---------------------------------------------------------------- vector helpers (3-tuples)
+
+@njit(cache=True)
+def _sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+@njit(cache=True)
+def _add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+@njit(cache=True)
+def _scale(a, t):
+    return (a[0] * t, a[1] * t, a[2] * t)
+
+
+@njit(cache=True)
+def _div(a, t):
+    return (a[0] / t, a[1] / t, a[2] / t)
+
+
+@njit(cache=True)
+def _dot(a, b):
+    """np.einsum("ij,ij->i") (and "kij,kj->ki") on rows of three, bit for bit.
+
+    numpy's einsum sums two lanes at a time (SIMD, from a zero accumulator): lane 0 gets products
+    0 and 2, lane 1 product 1, and the lanes are added last. tests/geometry/test_tri_kernels.py
+    checks this against np.einsum.
+    """
+    return ((a[0] * b[0] + 0.0) + a[2] * b[2]) + (a[1] * b[1] + 0.0)
+
+
+@njit(cache=True)
+def _norm(a):
+    s = 0.0  # np.linalg.norm(axis=1): sqrt of add.reduce of the squares
+    s += a[0] * a[0]
+    s += a[1] * a[1]
+    s += a[2] * a[2]
+    return math.sqrt(s)
+
+
+@njit(cache=True)
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@njit(cache=True)
+def _unit(a):
+    ln = _norm(a)
+    return _div(a, ln if ln > 0 else 1.0)
+
+
+@njit(cache=True)
+def _npmax(a, b):
+    """np.maximum: NaN if either is NaN (ties of +-0 may differ in sign only, which no caller sees)."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a >= b else b
+
+
+@njit(cache=True)
+def _npmin(a, b):
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a <= b else b
+
+
+@njit(cache=True)
+def _row(V, F, f, k):
+    v = F[f, k]
+    return (V[v, 0], V[v, 1], V[v, 2])
+
+
+# ---------------------------------------------------------------- narrow phase
+
+@njit(cache=True)
+def _unit_normal(t0, t1, t2, tol):
+    """intersections._unit_normal for one triangle: (normal, degenerate)."""
+    n = _cross(_sub(t1, t0), _sub(t2, t0))
+    ln = _norm(n)
+    longest = _npmax(_npmax(_norm(_sub(t0, t1)), _norm(_sub(t1, t2))), _norm(_sub(t2, t0)))
+    deg = ln <= tol * longest
+    return _div(n, 1.0 if deg else ln), deg
+
+
+@njit(cache=True)
+def _beyond(t0, n, deg, s0, s1, s2, tol):
+    """intersections._beyond_plane: triangle s lies wholly more than tol to one side of t's plane."""
+    if deg:
+        return False
+    d0 = _dot(_sub(s0, t0), n)
+    d1 = _dot(_sub(s1, t0), n)
+    d2 = _dot(_sub(s2, t0), n)
+    return (d0 > tol and d1 > tol and d2 > tol) or (d0 < -tol and d1 < -tol and d2 < -tol)
+
+
+@njit(cache=True)
+def _step(c0, c1, ok, t0, t1):
+    """One Liang-Barsky constraint of intersections._clip (inside where c0 + t (c1 - c0) >= 0)."""
+    ok = ok and (c0 >= 0 or c1 >= 0)
+    den = c0 - c1
+    t = c0 / (1.0 if den == 0 else den)
+    if c0 < 0 and c1 >= 0:
+        t0 = _npmax(t0, t)
+    if c0 >= 0 and c1 < 0:
+        t1 = _npmin(t1, t)
+    return ok, t0, t1
+
+
+@njit(cache=True)
+def _edges_meet(S0, S1, S2, T0, T1, T2, nt, shs, degs, degt, one, S, tol):
+    """intersections._edges_meet for one pair: some edge of triangle S0S1S2 meets T0T1T2."""
+    if degt:
+        return False
+    Ts = (S0, S1, S2)
+    Tt = (T0, T1, T2)
+    # the target's clipping directions, as _clip computes them for every edge (same values)
+    ms = (_unit(_cross(nt, _sub(T1, T0))), _unit(_cross(nt, _sub(T2, T1))), _unit(_cross(nt, _sub(T0, T2))))
+    us = (_unit(_add(_unit(_sub(T1, T0)), _unit(_sub(T2, T0)))),
+          _unit(_add(_unit(_sub(T2, T1)), _unit(_sub(T0, T1)))),
+          _unit(_add(_unit(_sub(T0, T2)), _unit(_sub(T1, T2)))))
+    for k in range(3):
+        incident = shs[k] or shs[(k + 1) % 3]
+        if one and incident and not degs:
+            continue
+        P0, P1 = Ts[k], Ts[(k + 1) % 3]
+        grow = 0.0 if (one and degs) else tol
+        d0, d1 = _dot(_sub(P0, T0), nt), _dot(_sub(P1, T0), nt)
+        ok, t0, t1 = True, 0.0, 1.0
+        ok, t0, t1 = _step(tol - d0, tol - d1, ok, t0, t1)
+        ok, t0, t1 = _step(tol + d0, tol + d1, ok, t0, t1)
+        for e in range(3):
+            a = Tt[e]
+            ok, t0, t1 = _step(_dot(_sub(P0, a), ms[e]) + grow, _dot(_sub(P1, a), ms[e]) + grow, ok, t0, t1)
+            ok, t0, t1 = _step(_dot(_sub(P0, a), us[e]) + grow, _dot(_sub(P1, a), us[e]) + grow, ok, t0, t1)
+        if not (ok and t0 <= t1):
+            continue
+        if not one:
+            return True
+        D = _sub(P1, P0)
+        f0 = _norm(_sub(_add(P0, _scale(D, t0)), S))
+        f1 = _norm(_sub(_add(P0, _scale(D, t1)), S))
+        if _npmax(f0, f1) > tol:
+            return True
+    return False
+
+
+@njit(cache=True)
+def narrow_codes(V, F, canon, I, J, in_q, in_a, tol):
+    """For global face pairs (I, J): NO, HIT or FOLD per pair, and the fold's arctan2 arguments.
+
+    The pair filter, plane rejection and narrow test of intersections.intersecting_pairs (mirrored
+    pairs, self-pairs and pairs one face's slab separates give NO). A FOLD pair (a shared edge
+    between non-degenerate faces) intersects iff np.arctan2(fy, fx) < fold_angle.
+    """
+    k = I.shape[0]
+    code = np.zeros(k, np.int8)
+    fy = np.zeros(k)
+    fx = np.zeros(k)
+    for p in range(k):
+        i, j = I[p], J[p]
+        # (i, j) and (j, i) are both generated when both faces are in both sets
+        if i == j or (i > j and in_q[j] and in_a[i]):
+            continue
+        A0, A1, A2 = _row(V, F, i, 0), _row(V, F, i, 1), _row(V, F, i, 2)
+        B0, B1, B2 = _row(V, F, j, 0), _row(V, F, j, 1), _row(V, F, j, 2)
+        n1, deg1 = _unit_normal(A0, A1, A2, tol)
+        n2, deg2 = _unit_normal(B0, B1, B2, tol)
+        if _beyond(A0, n1, deg1, B0, B1, B2, tol) or _beyond(B0, n2, deg2, A0, A1, A2, tol):
+            continue
+        C1 = (canon[F[i, 0]], canon[F[i, 1]], canon[F[i, 2]])
+        C2 = (canon[F[j, 0]], canon[F[j, 1]], canon[F[j, 2]])
+        sh1 = (C1[0] == C2[0] or C1[0] == C2[1] or C1[0] == C2[2],
+               C1[1] == C2[0] or C1[1] == C2[1] or C1[1] == C2[2],
+               C1[2] == C2[0] or C1[2] == C2[1] or C1[2] == C2[2])
+        sh2 = (C2[0] == C1[0] or C2[0] == C1[1] or C2[0] == C1[2],
+               C2[1] == C1[0] or C2[1] == C1[1] or C2[1] == C1[2],
+               C2[2] == C1[0] or C2[2] == C1[1] or C2[2] == C1[2])
+        nsh = min(int(sh1[0]) + int(sh1[1]) + int(sh1[2]), int(sh2[0]) + int(sh2[1]) + int(sh2[2]))
+        good = not deg1 and not deg2
+        if nsh >= 3:
+            if good:
+                code[p] = HIT
+        elif nsh == 2:
+            if good:
+                # intersections._folded: opening angle around the shared edge
+                A, B = (A0, A1, A2), (B0, B1, B2)
+                o1 = 0 if not sh1[0] else (1 if not sh1[1] else (2 if not sh1[2] else 0))
+                o2 = 0 if not sh2[0] else (1 if not sh2[1] else (2 if not sh2[2] else 0))
+                P, Q = A[(o1 + 1) % 3], A[(o1 + 2) % 3]
+                e = _unit(_sub(Q, P))
+                ua, ub = _sub(A[o1], P), _sub(B[o2], P)
+                ua = _sub(ua, _scale(e, _dot(ua, e)))
+                ub = _sub(ub, _scale(e, _dot(ub, e)))
+                code[p] = FOLD
+                fy[p] = _norm(_cross(ua, ub))
+                fx[p] = _dot(ua, ub)
+        else:
+            one = nsh == 1
+            s = 0 if sh1[0] else (1 if sh1[1] else (2 if sh1[2] else 0))  # argmax of sh1
+            S = A0 if s == 0 else (A1 if s == 1 else A2)
+            if (_edges_meet(A0, A1, A2, B0, B1, B2, n2, sh1, deg1, deg2, one, S, tol)
+                    or _edges_meet(B0, B1, B2, A0, A1, A2, n1, sh2, deg2, deg1, one, S, tol)):
+                code[p] = HIT
+    return code, fy, fx

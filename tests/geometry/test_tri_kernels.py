@@ -1,0 +1,171 @@
+"""The compiled triangle-triangle query gives exactly the answers of the numpy code it replaced.
+
+The reference is that numpy code, kept verbatim in tests/intersections_numpy.py: the same
+candidate pairs from the broad phase, the same narrow-phase verdicts pair by pair, and the same
+result from `intersecting_pairs`, on random soups built to hit the predicates' special cases:
+shared vertices and edges (by index and, for welding, by coordinates), duplicate faces, repeated
+indices, coplanar and collinear faces from integer grids, near touches at the tolerance, and faces
+of very different sizes (several radius bins).
+"""
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+import intersections_numpy as R
+from meshlab_holefill.geometry import _tri_kernels as K
+from meshlab_holefill.geometry import intersections as I
+
+
+@st.composite
+def soups(draw):
+    """(V, F): a few points, some copied (unwelded twins), and faces over them."""
+    n = draw(st.integers(3, 9))
+    kind = draw(st.sampled_from(["grid", "planar", "float", "near", "sizes"]))
+    if kind in ("grid", "planar", "near"):
+        P = np.array(draw(st.lists(st.lists(st.integers(-2, 2), min_size=3, max_size=3), min_size=n, max_size=n)),
+                     float)
+        if kind == "planar":
+            P[:, 2] = 0.0
+        if kind == "near":  # offsets around the default tolerance (1e-9 of the diagonal)
+            e = draw(st.lists(st.sampled_from([0.0, 1e-9, -1e-9, 3e-9, -3e-9, 1e-8, 2e-10]), min_size=3 * n,
+                              max_size=3 * n))
+            P += np.reshape(e, (n, 3))
+    else:
+        P = np.array(draw(st.lists(st.lists(st.floats(-3, 3), min_size=3, max_size=3), min_size=n, max_size=n)))
+        if kind == "sizes":
+            P *= np.array(draw(st.lists(st.sampled_from([1.0, 1e-2, 1e-4, 30.0]), min_size=n, max_size=n)))[:, None]
+    if draw(st.booleans()):  # rotate and scale: coplanar faces off the axes, rounding in play
+        quat = draw(st.lists(st.floats(-1, 1), min_size=4, max_size=4).filter(lambda q: np.linalg.norm(q) > 0.1))
+        P = Rotation.from_quat(quat).apply(P) * draw(st.sampled_from([1.0, 1e-3, 7.0, 1e4])) + draw(
+            st.sampled_from([0.0, 1.0, -1e3]))
+    twins = draw(st.lists(st.integers(0, n - 1), max_size=3))
+    P = np.vstack([P, P[twins]]) if twins else P
+    nv = len(P)
+    idx = st.integers(0, nv - 1)
+    faces = draw(st.lists(st.tuples(idx, idx, idx), min_size=1, max_size=10))
+    # faces across an edge of an earlier face (shared edges, folds, duplicates)
+    for f, w, flip in draw(st.lists(st.tuples(st.integers(0, 99), idx, st.booleans()), max_size=6)):
+        a, b, _ = faces[f % len(faces)]
+        faces.append((b, a, w) if flip else (a, b, w))
+    return P, np.array(faces, np.int64)
+
+
+@st.composite
+def queries(draw):
+    V, F = draw(soups())
+    m = len(F)
+    sub = st.lists(st.integers(0, m - 1), min_size=1, max_size=m)
+    q = draw(st.one_of(st.just(list(range(m))), sub))
+    a = draw(st.one_of(st.just(list(range(m))), sub))
+    tol = draw(st.sampled_from([None, None, 0.0, 1e-6, 0.1]))
+    fold = draw(st.sampled_from([I.FOLD_ANGLE, I.FOLD_ANGLE, 0.3]))
+    weld = draw(st.booleans())
+    return V, F, q, a, tol, fold, weld
+
+
+@settings(max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(queries())
+def test_intersecting_pairs_equal_numpy(case):
+    V, F, q, a, tol, fold, weld = case
+    got = I.intersecting_pairs(V, F, q, a, tol, fold_angle=fold, weld=weld)
+    ref = R.intersecting_pairs(V, F, q, a, tol, fold_angle=fold, weld=weld)
+    assert got.dtype == ref.dtype and np.array_equal(got, ref)
+    assert np.array_equal(I.faces_intersecting(V, F, q, a, tol, fold_angle=fold, weld=weld),
+                          R.faces_intersecting(V, F, q, a, tol, fold_angle=fold, weld=weld))
+
+
+def _reference_codes(V, F, canon, i, j, in_q, in_a, tol, fold):
+    """The numpy pipeline of one candidate chunk (as intersections_numpy.intersecting_pairs runs it)."""
+    keep = (i != j) & ~((i > j) & in_q[j] & in_a[i])
+    out = np.zeros(len(i), bool)
+    idx = np.flatnonzero(keep)
+    T1, T2 = V[F[i[idx]]], V[F[j[idx]]]
+    maybe = ~(R._beyond_plane(T1, T2, tol) | R._beyond_plane(T2, T1, tol))
+    idx = idx[maybe]
+    out[idx] = R._narrow(T1[maybe], T2[maybe], canon[F[i[idx]]], canon[F[j[idx]]], tol, fold)
+    return out
+
+
+def _kernel_hits(V, F, canon, i, j, in_q, in_a, tol, fold):
+    code, fy, fx = K.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
+    hit = code == K.HIT
+    f = code == K.FOLD
+    hit[f] = np.arctan2(fy[f], fx[f]) < fold
+    return hit
+
+
+@settings(max_examples=300, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), scale=st.sampled_from([1.0, 1e-6, 1e5]),
+       grid=st.booleans(), tol=st.sampled_from([1e-9, 1e-3, 0.05, 0.0]), fold=st.sampled_from([1e-3, 0.5]))
+def test_narrow_phase_equals_numpy_pair_by_pair(seed, scale, grid, tol, fold):
+    """Thousands of pairs per example, many sharing a vertex or an edge, from a small point set."""
+    rng = np.random.default_rng(seed)
+    n = 12
+    P = rng.integers(-2, 3, (n, 3)).astype(float) if grid else rng.normal(size=(n, 3))
+    if grid and rng.random() < 0.5:
+        P[:, rng.integers(3)] = 0.0  # all coplanar
+    P = P * scale
+    F = rng.integers(0, n, (400, 3))
+    F[:50, 2] = F[:50, 1]  # repeated indices: degenerate faces
+    i, j = rng.integers(0, 400, 3000), rng.integers(0, 400, 3000)
+    in_q, in_a = rng.random(400) < 0.7, rng.random(400) < 0.7
+    canon = np.arange(n)
+    t = tol * scale
+    ref = _reference_codes(P, F, canon, i, j, in_q, in_a, t, fold)
+    assert np.array_equal(_kernel_hits(P, F, canon, i, j, in_q, in_a, t, fold), ref)
+    assert ref.any() and not ref.all()
+
+
+@settings(max_examples=300, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), n=st.integers(1, 300), m=st.integers(1, 300),
+       spread=st.sampled_from([0.0, 1e-3, 1.0]), flat=st.booleans())
+def test_broad_phase_equals_kdtree_search(seed, n, m, spread, flat):
+    """The sweep keeps exactly the pairs the radius-binned cKDTree search and box test kept."""
+    rng = np.random.default_rng(seed)
+    sizes = 10.0 ** rng.integers(-4, 1, (n + m, 1, 1))  # faces of very different sizes
+    T = rng.uniform(0, 3, (n + m, 1, 3)) + rng.normal(0, 1, (n + m, 3, 3)) * sizes * (spread + 0.05)
+    if flat:
+        T[..., 0] = 1.5  # a planar set: the sweep must not run along the flat axis
+    Tq, Ta = T[:n], T[n:]
+    tol = 1e-9 * 3
+    blocks = list(R._candidates(Tq, Ta, tol))
+    ref = {(int(x), int(y)) for b in blocks for x, y in zip(*b)}
+    iq, ja = I._candidates(Tq, Ta, tol)
+    got = list(zip(iq.tolist(), ja.tolist()))
+    assert len(got) == len(set(got))
+    assert set(got) == ref
+
+
+def test_real_patch_queries_equal_numpy():
+    """A closed sphere with pushed vertices, against itself: many shared edges and vertices."""
+    import pymeshlab
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = ms.current_mesh().vertex_matrix().copy(), ms.current_mesh().face_matrix().astype(np.int64)
+    rng = np.random.default_rng(0)
+    for push in (0.0, 0.3, 1.2):
+        W = V.copy()
+        W[rng.integers(0, len(V), 20)] *= 1 - push
+        allf = np.arange(len(F))
+        for weld in (True, False):
+            got = I.intersecting_pairs(W, F, allf[:200], allf, weld=weld)
+            assert np.array_equal(got, R.intersecting_pairs(W, F, allf[:200], allf, weld=weld))
+    assert len(got) > 0
+
+
+def test_row_dot_and_norm_sum_as_numpy_does():
+    """_dot adds in np.einsum's order and _norm in np.linalg.norm's, zeros' signs included."""
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(3000, 3)) * np.exp(3 * rng.normal(size=(3000, 1)))
+    Y = rng.normal(size=(3000, 3))
+    X[:300] *= rng.integers(0, 2, (300, 3))  # zeros ...
+    Y[:300] *= rng.choice([-1.0, 1.0], (300, 3)) * rng.integers(0, 2, (300, 3))  # ... and negative zeros
+    dots = np.array([K._dot(tuple(x), tuple(y)) for x, y in zip(X, Y)])
+    assert dots.tobytes() == np.einsum("ij,ij->i", X, Y).tobytes()
+    T = np.stack([X[:1000], X[1000:2000], X[2000:]], axis=1)
+    n = Y[:1000]
+    d3 = np.array([[K._dot(tuple(T[k, i]), tuple(n[k])) for i in range(3)] for k in range(1000)])
+    assert d3.tobytes() == np.einsum("kij,kj->ki", T, n).tobytes()
+    norms = np.array([K._norm(tuple(x)) for x in X])
+    assert norms.tobytes() == np.linalg.norm(X, axis=1).tobytes()
