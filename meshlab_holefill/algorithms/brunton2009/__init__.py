@@ -12,14 +12,18 @@ Where each step lives:
   (:func:`embedding_energy`, :func:`minimise_embedding_energy`, :func:`embed_patch`).
 * Beyond the paper: the development fallback
   (:mod:`meshlab_holefill.geometry.development`, shared with Xu et al.), the crossing repair and
-  the quality swaps (:mod:`.curve_unfolding`: :func:`repair_crossings`, :func:`improve_by_swaps`).
+  the quality swaps (:mod:`.curve_unfolding`: :func:`repair_crossings`, :func:`improve_by_swaps`);
+  the resampling of the energy's patch at the surrounding density
+  (:func:`.unfolded_triangulation.resample_patch`, option ``density``) and the sliver repair
+  (:mod:`.slivers`, option ``slivers``).
 * The filter (``fill``, ``PARAMS``, ``RINGS``): :mod:`.curve_unfolding`.
 """
 from .curve_unfolding import PARAMS, RINGS, fill, improve_by_swaps, repair_crossings
 from .embedding import embed_patch, embedding_energy, minimise_embedding_energy
-from .unfolded_triangulation import constrained_delaunay, refine_planar, triangulate_and_embed
+from .slivers import repair_slivers
+from .unfolded_triangulation import constrained_delaunay, refine_planar, resample_patch, triangulate_and_embed
 from .unfolding import anneal_loop, unfold_loop
 
 __all__ = ["fill", "PARAMS", "RINGS", "anneal_loop", "unfold_loop", "constrained_delaunay", "refine_planar",
            "triangulate_and_embed", "embedding_energy", "minimise_embedding_energy", "embed_patch",
-           "repair_crossings", "improve_by_swaps"]
+           "repair_crossings", "improve_by_swaps", "resample_patch", "repair_slivers"]

@@ -28,7 +28,12 @@ the boundary vertices involved and fills the rest of the loop again (:func:`repa
 ``swaps`` improves the connectivity of the embedded patch by quality-improving edge swaps, the
 energy solved again after each round (:func:`improve_by_swaps`);
 ``max_domain_area`` refuses planar domains many times larger than the missing surface, whose
-patches bulge out of it (long strip-shaped holes, :func:`domains_within_area`).
+patches bulge out of it (long strip-shaped holes, :func:`domains_within_area`);
+``density='surrounding'`` (default) samples the energy's patch at the surrounding mesh's density
+(mean new edge 0.8 of the surrounding one before, 0.99 now;
+:func:`.unfolded_triangulation.resample_patch`; ``'twice'`` and ``'equilateral'`` keep the
+refinement's own patch); ``slivers`` lifts the triangles still below quality 0.3 by local moves,
+splits and collapses (:func:`.slivers.repair_slivers`).
 """
 from __future__ import annotations
 
@@ -38,13 +43,14 @@ import numpy as np
 
 from ...geometry.flips import relax_edges
 from ...geometry.intersections import faces_intersecting
-from ...geometry.quality import triangle_quality
+from ...geometry.quality import edge_lengths, triangle_quality
 from ...geometry.topology import edge_pair_set
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
-from .embedding import embed_patch
-from .unfolded_triangulation import triangulate_and_embed
+from .embedding import embed_patch, relax_patch
+from .slivers import repair_slivers
+from .unfolded_triangulation import DENSITIES, resample_patch, surrounding_edge_length, triangulate_and_embed
 from ...geometry.development import boundary_gap_angles, develop_loop, developed_area, simple_development, simple_developments
 from ...geometry.triangulate import polygon_perimeter, polygon_signed_area
 from .unfolding import linear_motion_is_simple, unfold_loop
@@ -56,6 +62,7 @@ RINGS = 2
 
 MAX_REPAIR_ROUNDS = 4  # rounds of ear clipping when a patch crosses its surroundings
 MAX_SWAP_ROUNDS = 4  # rounds of quality-improving edge swaps, each followed by a new energy solve
+RESAMPLE_TOLERANCE = 0.1  # density 'surrounding': a patch whose mean edge is within 10 % of the surroundings' is kept
 GOOD_QUALITY = 0.3  # repair stops trying domains at a clean patch of this minimum quality (poor triangles are below it)
 
 PARAMS = [
@@ -92,6 +99,16 @@ PARAMS = [
     ParamSpec("refinement", "bool", True,
               "Refine the planar triangulation after Chew to angles in [30, 120] degrees and edges at most twice "
               "the surrounding edges (Sec. 3.3); off keeps the Steiner-free CDT of Sec. 3.2."),
+    ParamSpec("density", "enum", "surrounding",
+              "Density of the patch (Sec. 3.3), against the mean edge e of the faces around the hole: "
+              "'twice' = refinement area bound e^2/sqrt(3), the paper's 'edges at most twice the surrounding "
+              "ones' exactly (mean new edge 0.9 e); 'equilateral' = the equilateral area of e, the reading used "
+              "before (0.8 e); 'surrounding' = the 'equilateral' patch as the shape, sampled again at e (the "
+              "paper's aim, 'match the resolution of the surrounding mesh') when it is more than 10 % off: its "
+              "planar domain refined with the bound e^2/sqrt(3) corrected by the measured ratio, the new vertices "
+              "placed on the patch (the uniform-umbrella energy's shape depends on the resolution, so it is not "
+              "solved again at e).",
+              choices=DENSITIES),
     ParamSpec("fallback", "bool", True,
               "Beyond the paper: when the first annealing run gives no simple projection, unfold the loop by "
               "developing it with the surrounding surface's angles (loops wrapped around a tube or knob)."),
@@ -108,6 +125,11 @@ PARAMS = [
               "Beyond the paper: after each energy solve, move the interior vertices within their tangent planes "
               "until the uniform umbrella U has no tangential part (the energy's shape, evenly spaced); E_DF "
               "alone squeezes triangles next to long border edges and wide openings."),
+    ParamSpec("slivers", "bool", True,
+              "Beyond the paper: after the swaps, lift the triangles below quality 0.3 by tangential moves, "
+              "splits and collapses of the new vertices around them (up to 10 rounds), kept only when the "
+              "minimum quality rises without folding or crossing the mesh more (a cap on a border edge whose "
+              "inner vertex the energy pulled onto it cannot be swapped)."),
     ParamSpec("max_domain_area", "float", 6.0,
               "Beyond the paper: planar domains (the unfolding, the developments the repair tries) enclosing more "
               "than this multiple of the missing surface's area (estimated by developing the loop with the "
@@ -181,14 +203,16 @@ def clip_ears(ctx, Q, keep, ears, bad_vertices):
     return np.asarray(keep, np.int64), ears, clipped
 
 
-def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangential=False):
+def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangential=False, density="surrounding",
+                     record=None):
     """Repair (beyond the paper, option ``repair``): a patch that crosses nothing, best quality first.
 
     ``domains`` are planar polygons of the loop, the unfolding used first (its patch given as
     ``vertices``, ``faces``), then the loop's simple developments (:func:`..geometry.development.simple_developments`).
     When the first patch crosses the surrounding mesh, the patches of the other domains are
     tried as they are, least relaxed first, and the one of best minimum quality that crosses
-    nothing is taken (the first reaching GOOD_QUALITY = 0.3 ends the search):
+    nothing is taken (the first reaching RESAMPLE_TOLERANCE = 0.1  # density 'surrounding': a patch whose mean edge is within 10 % of the surroundings' is kept
+GOOD_QUALITY = 0.3 ends the search):
     the triangulation near a folded border face depends on the domain, and a domain whose
     patch clears the fold needs no clipped ear (an ear at a wide corner is a sliver;
     measured on bunny10k_textured's 22-edge hole: ear 0.116, the 0.2-relaxed development's
@@ -201,7 +225,7 @@ def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangenti
     ctx : HoleContext
     domains : list of ((k, 2) float64, str, float or None)  polygon, unfolding name, development blend
     vertices, faces : the patch of the first domain
-    energy, refinement, tangential : see :func:`triangulate_and_embed`
+    energy, refinement, tangential, density, record : see :func:`triangulate_and_embed`
 
     Returns
     -------
@@ -218,7 +242,7 @@ def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangenti
     patches = [(vertices, faces, bad)]
     clean = []
     for domain, name, relax in domains[1:]:
-        V, F = triangulate_and_embed(ctx, domain, np.arange(m), [], energy, refinement, tangential)
+        V, F = triangulate_and_embed(ctx, domain, np.arange(m), [], energy, refinement, tangential, density, record)
         b = crossing_faces(ctx, V, F)
         patches.append((V, F, b))
         if len(b) == 0:
@@ -242,7 +266,8 @@ def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangenti
             if clipped_now == 0:
                 break
             n_clipped += clipped_now
-            vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement, tangential)
+            vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement, tangential,
+                                                    density, record)
             bad = crossing_faces(ctx, vertices, faces)
         if best is None or len(bad) < best[0]:
             best = (len(bad), vertices, faces, n_clipped, name, relax)
@@ -258,7 +283,8 @@ def _quality_improving(V, F, A, B, replaced):
     return new > old + 1e-9
 
 
-def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, crossings=None, tangential=False):
+def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, crossings=None, tangential=False,
+                     resolve=True):
     """Quality-improving edge swaps followed by a new energy solve (beyond the paper, option ``swaps``).
 
     Sec. 3.3 places the interior vertices by a uniform-Laplacian energy on the connectivity
@@ -281,6 +307,11 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
     rounds : int
     crossings : int, optional  faces of the given patch crossing the mesh (computed when needed)
     tangential : bool  see :func:`.embedding.embed_patch`
+    resolve : bool
+        Solve the energy again after each round (default). False keeps the vertices where they
+        are (a patch sampled from the energy's shape on a finer refinement, density
+        'surrounding': a new solve on the coarser connectivity would change the shape) and only
+        relaxes them tangentially on the new connectivity if ``tangential``.
 
     Returns
     -------
@@ -303,7 +334,10 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
         if swapped == 0:
             break
         total += swapped
-        interior = embed_patch(ctx, s, F, energy=energy, tangential=tangential)
+        if resolve:
+            interior = embed_patch(ctx, s, F, energy=energy, tangential=tangential)
+        else:
+            interior = relax_patch(ctx, X[ctx.size:], F) if tangential else X[ctx.size:]
         X = np.concatenate([ctx.points, interior])
         sc = score(X, F)
         if sc <= best[0]:
@@ -358,6 +392,12 @@ def domains_within_area(P, gap_angles, domains, max_ratio):
     return kept
 
 
+def _edge_ratio(ctx, vertices, faces):
+    """Mean patch edge (each face's three edges) over the mean edge of the faces around the hole."""
+    e = surrounding_edge_length(ctx)
+    return float(edge_lengths(np.concatenate([ctx.points, vertices]), faces).mean() / e) if e > 0 else 1.0
+
+
 def _corner_angle(P, keep, v):
     i = keep.index(v)
     a, b = P[keep[i - 1]] - P[v], P[keep[(i + 1) % len(keep)]] - P[v]
@@ -366,7 +406,7 @@ def _corner_angle(P, keep, v):
 
 def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000, step_bound="global",
          energy="area", refinement=True, fallback=True, repair=True, swaps=True, tangential=True, seed=0,
-         area_rows="mesh", max_domain_area=6.0):
+         area_rows="mesh", max_domain_area=6.0, density="surrounding", slivers=True):
     """Fill one hole by unfolding, triangulation and embedding (Sec. 3.1-3.3).
 
     The loop is unfolded into a simple planar polygon (:func:`.unfolding.unfold_loop`, Sec.
@@ -390,8 +430,11 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         E_AREA or E_DF (Sec. 3.3); ``area_rows`` ({'mesh', 'interior'}) chooses E_AREA's rows.
     refinement : bool
         Planar refinement of Sec. 3.3.
-    fallback, repair, swaps, tangential : bool
-        Beyond the paper: development fallback, crossing repair, quality swaps, tangential relaxation.
+    density : {'surrounding', 'twice', 'equilateral'}
+        Its area bound (:func:`.unfolded_triangulation.triangulate_and_embed`).
+    fallback, repair, swaps, tangential, slivers : bool
+        Beyond the paper: development fallback, crossing repair, quality swaps, tangential relaxation,
+        sliver repair (:func:`.slivers.repair_slivers`).
     seed : int
         Seed of the annealing.
     area_rows : {'mesh', 'interior'}
@@ -462,21 +505,42 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     if method == "development":
         relax = used
     t1 = time.perf_counter()
-    vertices, faces = triangulate_and_embed(ctx, Q, np.arange(m), [], energy, refinement, tangential)
+    records = []  # planar triangulations of the patches built, for the resampling
+    vertices, faces = triangulate_and_embed(ctx, Q, np.arange(m), [], energy, refinement, tangential, density,
+                                            records)
     t2 = time.perf_counter()
     n_bad, clipped = 0, 0
     if repair:
         n_bad, vertices, faces, clipped, method, used = repair_crossings(
-            ctx, domains, vertices, faces, energy, refinement, tangential)
+            ctx, domains, vertices, faces, energy, refinement, tangential, density, records)
         if method == "development":
             relax = used
     n_swaps = 0
     t3 = time.perf_counter()
+    planar = next((r for r in records if r.faces.shape == faces.shape and np.array_equal(r.faces, faces)), None)
     if swaps:
         vertices, faces, n_swaps = improve_by_swaps(ctx, vertices, faces, energy,
                                                     crossings=int(n_bad) if repair else None,
                                                     tangential=tangential)
     t4 = time.perf_counter()
+    resampled = False
+    if (refinement and density == "surrounding" and planar is not None and len(vertices)
+            and abs(_edge_ratio(ctx, vertices, faces) - 1.0) > RESAMPLE_TOLERANCE):
+        def finish(V, F):
+            return improve_by_swaps(ctx, V, F, energy, tangential=tangential, resolve=False)[:2]
+
+        resampled_patch = resample_patch(ctx, planar, vertices, tangential=tangential,
+                                         finish=finish if swaps else None)
+        # The sampled patch lies on the shape; it is kept unless it crosses more of the mesh.
+        if len(crossing_faces(ctx, *resampled_patch)) <= n_bad:
+            vertices, faces = resampled_patch
+            resampled = True
+    t5 = time.perf_counter()
+    sliver_rounds = 0
+    if slivers:
+        vertices, faces, sliver_rounds = repair_slivers(ctx, vertices, faces,
+                                                        lambda V, F: len(crossing_faces(ctx, V, F)))
+    t6 = time.perf_counter()
     info = {
         "unfolding": method,
         "restarts": unfold_info["restarts"],
@@ -491,5 +555,9 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         "embedding_seconds": t2 - t1,
         "repair_seconds": t3 - t2,
         "swap_seconds": t4 - t3,
+        "resampled": resampled,
+        "resample_seconds": t5 - t4,
+        "sliver_rounds": sliver_rounds,
+        "sliver_seconds": t6 - t5,
     }
     return Patch(vertices=vertices, faces=faces, info=info)

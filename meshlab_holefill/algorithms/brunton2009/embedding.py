@@ -33,7 +33,7 @@ from ...geometry.laplacian import uniform_laplacian
 from ...errors import HoleFillError
 
 __all__ = ["umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy", "vertex_normals",
-           "tangent_frames", "tangential_relaxation", "embed_patch"]
+           "tangent_frames", "tangential_relaxation", "embed_patch", "relax_patch"]
 
 
 def umbrella_operator(F, n):
@@ -270,9 +270,19 @@ def embed_patch(ctx, n_interior, F, energy="fairing", boundary=None, extra_faces
     -------
     interior : (n_interior, 3) float64
     """
-    boundary = np.arange(ctx.size) if boundary is None else np.asarray(boundary, np.int64)
     if n_interior == 0:
         return np.zeros((0, 3))
+    X, joint, free = _joint_mesh(ctx, n_interior, F, boundary, extra_faces)
+    R = energy_rows(joint, len(X), free, order=2 if energy == "fairing" else 1, anchors=energy == "area")
+    X = minimise_embedding_energy(X, R, free)
+    if tangential:
+        X = tangential_relaxation(X, joint, np.flatnonzero(free))
+    return X[len(ctx.vertices):]
+
+
+def _joint_mesh(ctx, n_interior, F, boundary=None, extra_faces=None, interior=None):
+    """The patch joined to the surrounding faces: positions (interior rows zero unless given), faces, free mask."""
+    boundary = np.arange(ctx.size) if boundary is None else np.asarray(boundary, np.int64)
     n_ctx = len(ctx.vertices)
     to_joint = np.concatenate([boundary, n_ctx + np.arange(n_interior)])
     parts = [np.asarray(ctx.faces, np.int64).reshape(-1, 3), to_joint[np.asarray(F, np.int64)]]
@@ -281,10 +291,22 @@ def embed_patch(ctx, n_interior, F, energy="fairing", boundary=None, extra_faces
     n = n_ctx + n_interior
     X = np.zeros((n, 3))
     X[:n_ctx] = ctx.vertices
-    free = np.arange(n) >= n_ctx
-    joint = np.concatenate(parts)
-    R = energy_rows(joint, n, free, order=2 if energy == "fairing" else 1, anchors=energy == "area")
-    X = minimise_embedding_energy(X, R, free)
-    if tangential:
-        X = tangential_relaxation(X, joint, np.flatnonzero(free))
-    return X[n_ctx:]
+    if interior is not None:
+        X[n_ctx:] = interior
+    return X, np.concatenate(parts), np.arange(n) >= n_ctx
+
+
+def relax_patch(ctx, interior, F, boundary=None, extra_faces=None):
+    """:func:`tangential_relaxation` of a placed patch's interior vertices, on the patch joined to its surroundings.
+
+    Parameters as :func:`embed_patch`; ``interior`` (s, 3) float64 the current interior positions.
+
+    Returns
+    -------
+    interior : (s, 3) float64
+    """
+    interior = np.asarray(interior, np.float64)
+    if len(interior) == 0:
+        return interior
+    X, joint, free = _joint_mesh(ctx, len(interior), F, boundary, extra_faces, interior)
+    return tangential_relaxation(X, joint, np.flatnonzero(free))[len(ctx.vertices):]

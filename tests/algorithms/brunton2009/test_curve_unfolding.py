@@ -445,9 +445,10 @@ def test_relaxed_development_unfolds_the_wrapped_torus_hole(torus_wrapped_hole):
 
 def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wrapped_hole):
     ctx = torus_wrapped_hole
-    # tangential=False: the swaps alone, and the energy must then be solved exactly.
-    plain = cu.fill(ctx, max_restarts=2, swaps=False, tangential=False, energy="fairing")
-    swapped = cu.fill(ctx, max_restarts=2, tangential=False, energy="fairing")
+    # tangential=False: the swaps alone, and the energy must then be solved exactly. The step on the
+    # energy's own patch (density='equilateral': no resampling afterwards; no sliver repair).
+    plain = cu.fill(ctx, max_restarts=2, swaps=False, tangential=False, energy="fairing", density="equilateral", slivers=False)
+    swapped = cu.fill(ctx, max_restarts=2, tangential=False, energy="fairing", density="equilateral", slivers=False)
     q0 = triangle_quality(plain.all_points(ctx.points), plain.faces)
     q1 = triangle_quality(swapped.all_points(ctx.points), swapped.faces)
     assert q0.min() < 0.3 <= q1.min() and q1.mean() >= max(q0.mean(), 0.85)
@@ -463,7 +464,7 @@ def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wra
                                    energy_rows(joint, n_ctx + s, free, 2), free)
     assert np.abs(gradient).max() < 1e-10
     # Likewise the least-squares mesh (E_AREA with the loop rows) after its own swaps.
-    swapped = cu.fill(ctx, max_restarts=2, tangential=False, energy="area")
+    swapped = cu.fill(ctx, max_restarts=2, tangential=False, energy="area", density="equilateral", slivers=False)
     assert swapped.info["edge_swaps"] > 0
     s = len(swapped.vertices)
     joint = np.concatenate([ctx.faces, np.where(swapped.faces < ctx.size, swapped.faces,
@@ -523,8 +524,9 @@ def test_tangential_relaxation_lifts_the_triangles_fairing_squeezes_on_scan_hole
     assert outline_ratios(V, F, [loops[i]])[0] < 0.9  # a hole, not an island's outline
     ctx = hole_context(V, F, loops[i], rings=cu.RINGS)
     bound = corner_quality_bound(V, F, loops[i].vertices)
-    faired = cu.fill(ctx, tangential=False, energy="fairing")
-    relaxed = cu.fill(ctx, energy="fairing")
+    # The step on the energy's own patch (no resampling to the surrounding density, no sliver repair).
+    faired = cu.fill(ctx, tangential=False, energy="fairing", density="equilateral", slivers=False)
+    relaxed = cu.fill(ctx, energy="fairing", density="equilateral", slivers=False)
     q0 = triangle_quality(faired.all_points(ctx.points), faired.faces)
     q1 = triangle_quality(relaxed.all_points(ctx.points), relaxed.faces)
     # E_DF alone squeezes a triangle below 0.3 although no border corner forces it.

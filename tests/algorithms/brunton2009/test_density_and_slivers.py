@@ -1,0 +1,145 @@
+"""Curve unfolding: the patch's density matches the surrounding mesh and it leaves no unforced sliver."""
+
+import numpy as np
+import pymeshlab
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
+from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
+from meshlab_holefill.algorithms.brunton2009.slivers import folds, repair_slivers
+from meshlab_holefill.core.holes import boundary_loops, hole_context
+from meshlab_holefill.core.patch import validate_patch
+from meshlab_holefill.evaluation.metrics import corner_quality_bound
+from meshlab_holefill.geometry.quality import edge_lengths, triangle_quality
+
+from conftest import cut_disks, mesh_arrays
+
+
+def _sphere(subdiv=4):
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=subdiv)
+    return mesh_arrays(ms)
+
+
+def _torus():
+    ms = pymeshlab.MeshSet()
+    ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=96, vsubdiv=48)
+    return mesh_arrays(ms)
+
+
+def _holes(V, F, centre, radius):
+    _, F_cut, _ = cut_disks(V, F, [centre], radius)
+    return F_cut, [lp for lp in boundary_loops(F_cut) if lp.closed]
+
+
+def _fill(V, F, loop, **params):
+    ctx = hole_context(V, F, loop, rings=cu.RINGS)
+    patch = cu.fill(ctx, **params)
+    X = np.concatenate([ctx.points, patch.vertices])
+    near = np.isin(F, loop.vertices).any(axis=1)
+    ratio = edge_lengths(X, patch.faces).mean() / edge_lengths(V, F[near]).mean()  # as the benchmark's edge ratio
+    return ctx, patch, X, float(ratio)
+
+
+def _assert_density_and_quality(V, F, loop, ctx, patch, X, ratio):
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    assert 0.9 <= ratio <= 1.1
+    bound = corner_quality_bound(V, F, loop.vertices)
+    assert triangle_quality(X, patch.faces).min() >= min(0.1, bound) - 1e-9
+
+
+@settings(max_examples=6, deadline=None)
+@given(theta=st.floats(0.2, 2.9), phi=st.floats(0.0, 2 * np.pi), radius=st.floats(0.3, 0.7))
+def test_sphere_holes_match_the_surrounding_density_without_slivers(theta, phi, radius):
+    V, F = _sphere()
+    centre = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+    F_cut, loops = _holes(V, F, centre, radius)
+    loop = max(loops, key=len)
+    if len(loop) < 30:  # a patch of a few faces is mostly its border edges: no density to match
+        return
+    ctx, patch, X, ratio = _fill(V, F_cut, loop)
+    _assert_density_and_quality(V, F_cut, loop, ctx, patch, X, ratio)
+    # The shape is the energy's: on the sphere the patch stays as close as the finer reading's.
+    fine = cu.fill(ctx, density="equilateral")
+    deviation = np.abs(np.linalg.norm(patch.vertices, axis=1) - 1.0).mean()
+    fine_deviation = np.abs(np.linalg.norm(fine.vertices, axis=1) - 1.0).mean()
+    assert deviation <= 1.25 * fine_deviation + 2e-4
+
+
+@pytest.mark.parametrize("centre, radius", [((1.4, 0.0, 0.0), 0.35), ((0.0, 1.0, 0.4), 0.3), ((0.6, 0.0, 0.0), 0.3)])
+def test_torus_holes_match_the_surrounding_density_without_slivers(centre, radius):
+    V, F = _torus()
+    F_cut, loops = _holes(V, F, np.asarray(centre, float), radius)
+    loop = max(loops, key=len)
+    ctx, patch, X, ratio = _fill(V, F_cut, loop)
+    _assert_density_and_quality(V, F_cut, loop, ctx, patch, X, ratio)
+    assert patch.info["resampled"]
+    # Near the torus: the patch's vertices stay within a few per cent of the tube radius.
+    tube = np.hypot(np.hypot(patch.vertices[:, 0], patch.vertices[:, 1]) - 1.0, patch.vertices[:, 2]) - 0.4
+    assert np.abs(tube).mean() < 0.02
+
+
+def test_the_previous_reading_is_finer_than_the_surroundings():
+    """The measured reason for the default: the equilateral bound leaves a mean edge near 0.8."""
+    V, F = _sphere()
+    F_cut, loops = _holes(V, F, np.array([0.0, 0.0, 1.0]), 0.6)
+    loop = max(loops, key=len)
+    _, _, _, ratio_old = _fill(V, F_cut, loop, density="equilateral")
+    _, _, _, ratio_twice = _fill(V, F_cut, loop, density="twice")
+    _, _, _, ratio_new = _fill(V, F_cut, loop)
+    assert ratio_old < 0.88 < ratio_twice and 0.95 <= ratio_new <= 1.05
+
+
+def test_twice_bound_keeps_every_refined_edge_at_most_twice_the_surrounding_one():
+    e = 0.1
+    m = 60
+    t = np.linspace(0, 2 * np.pi, m, endpoint=False)
+    Q = np.c_[np.cos(t), np.sin(t)] * (e / (2 * np.sin(np.pi / m)))
+    points, F = tri.refine_planar(Q, e, max_area=tri.area_bound(e, "twice"))
+    X = np.c_[points, np.zeros(len(points))]
+    assert edge_lengths(X, F).max() <= 2 * e + 1e-12
+    assert tri.area_bound(e, "twice") > tri.area_bound(e, "equilateral")
+
+
+def test_sample_patch_reproduces_the_patch_at_its_own_vertices_and_interpolates_inside():
+    Q = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+    points, F = tri.refine_planar(Q, 0.3)
+    X = np.c_[points, points[:, 0] * 2 + points[:, 1]]  # a plane: barycentric sampling is exact
+    targets = np.random.default_rng(0).uniform(0.05, 0.95, (50, 2))
+    Y = tri.sample_patch(points, F, X, np.concatenate([points[4:], targets]))
+    assert np.allclose(Y[: len(points) - 4], X[4:])
+    assert np.allclose(Y[len(points) - 4:, 2], targets[:, 0] * 2 + targets[:, 1])
+
+
+def test_repair_slivers_lifts_a_cap_pulled_onto_a_border_edge():
+    V, F = _sphere(3)
+    F_cut, loops = _holes(V, F, np.array([0.0, 0.0, 1.0]), 0.5)
+    loop = max(loops, key=len)
+    ctx = hole_context(V, F_cut, loop, rings=cu.RINGS)
+    patch = cu.fill(ctx, slivers=False)
+    X = np.concatenate([ctx.points, patch.vertices])
+    k = ctx.size
+    # Pull the inner vertex of a border-edge triangle almost onto that edge: a sliver.
+    f = next(i for i, t in enumerate(patch.faces) if (t < k).sum() == 2)
+    a, b = sorted(patch.faces[f][patch.faces[f] < k])
+    v = int(patch.faces[f][patch.faces[f] >= k][0])
+    Y = X.copy()
+    Y[v] = 0.5 * (X[a] + X[b]) + 0.03 * (X[v] - 0.5 * (X[a] + X[b]))
+    q0 = triangle_quality(Y, patch.faces).min()
+    assert q0 < 0.1
+    V2, F2, rounds = repair_slivers(ctx, Y[k:], patch.faces, lambda W, G: len(cu.crossing_faces(ctx, W, G)))
+    Z = np.concatenate([ctx.points, V2])
+    assert rounds > 0 and triangle_quality(Z, F2).min() >= 0.1
+    assert not folds(Z, F2)
+    validate_patch(type(patch)(vertices=V2, faces=F2), ctx.points, ctx.forbidden_edges)
+
+
+def test_repair_slivers_leaves_a_good_patch_alone():
+    V, F = _sphere(3)
+    F_cut, loops = _holes(V, F, np.array([0.0, 0.0, 1.0]), 0.5)
+    ctx = hole_context(V, F_cut, max(loops, key=len), rings=cu.RINGS)
+    patch = cu.fill(ctx)
+    V2, F2, rounds = repair_slivers(ctx, patch.vertices, patch.faces, lambda W, G: 0, floor=0.05)
+    assert rounds == 0 and V2 is patch.vertices and F2 is patch.faces
