@@ -469,8 +469,9 @@ def main(argv=None):
         with open(os.path.join(args.out, "scaling.json"), "w") as fh:
             json.dump(rows, fh, indent=1)
         text += ("\n**Scaling** (the same three holes, ~20/60/150 boundary edges, in the bunny subdivided; "
-                 "'filling the holes' is the filters' own per-hole time, the rest is the O(n) boundary search, "
-                 "mesh transfer and merge; 'peak MB' is the worker's peak resident memory while it builds the "
+                 "'filling the holes' is the sum of the filters' own per-hole times (holes are filled two at a "
+                 "time, `workers` = one per core, so the sum can exceed the whole run; 'rest' is then negative), the "
+                 "rest is the O(n) boundary search, mesh transfer and merge; 'peak MB' is the worker's peak resident memory while it builds the "
                  "MeshSet and runs the filter, above its memory before):\n\n" + markdown_table(*scaling_table(rows)) + f"\n\nPlot: `{args.out}/scaling.png`.\n")
     if args.speed_case:
         rows = scaling_run(plain, args.seed, 2, max(args.timeout, 180.0), None, SPEED_CASE_SIZES, first_level=1)
