@@ -6,7 +6,7 @@ import numpy as np
 from .quality import corner_angles, cross_rows, face_normals
 from .topology import interior_edges, undirected_keys
 
-__all__ = ["circumcenters", "min_angle_scores", "relax_edges"]
+__all__ = ["circumcenters", "folds", "min_angle_scores", "relax_edges"]
 
 
 def circumcenters(V, F):
@@ -253,3 +253,15 @@ def _independent_swaps(cand, f1, f2, priority, new_key, face_count, scored):
         chosen = chosen[np.argsort(-priority[chosen], kind="stable")]
     _, first = np.unique(new_key[chosen], return_index=True)
     return chosen[first]
+
+
+def folds(X, F):
+    """Does the patch fold: a degenerate triangle, or two neighbours at a dihedral over 120 degrees?"""
+    N = face_normals(X, F, normalize=False)
+    area2 = np.linalg.norm(N, axis=1)
+    scale = np.ptp(X, axis=0).max() or 1.0
+    if np.any(area2 <= 1e-12 * scale * scale):
+        return True
+    E, f1, _, f2, _ = interior_edges(F, len(X))
+    U = N / area2[:, None]
+    return bool(np.any(np.einsum("ij,ij->i", U[f1], U[f2]) < -0.5))

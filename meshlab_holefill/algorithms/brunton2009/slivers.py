@@ -17,28 +17,16 @@ import numpy as np
 
 from ...core.patch import Patch, validate_patch
 from ...errors import HoleFillError
+from ...geometry.flips import folds
 from ...geometry.laplacian import adjacency_matrix
-from ...geometry.quality import face_normals, triangle_quality
-from ...geometry.topology import interior_edges
+from ...geometry.quality import triangle_quality
 from ..hu2012.tangential_smoothing import tangential_smoothing
 
-__all__ = ["SLIVER_FLOOR", "SLIVER_ROUNDS", "repair_slivers", "folds"]
+__all__ = ["SLIVER_FLOOR", "SLIVER_ROUNDS", "repair_slivers"]
 
 SLIVER_FLOOR = 0.3  # triangles below this quality are repaired (the benchmark's "poor" triangles)
 SLIVER_ROUNDS = 10  # rounds of moves, splits and collapses (as Hu et al.'s smoothing option)
 SLIVER_RINGS = 2  # rings of vertices around the poor triangles that may move
-
-
-def folds(X, F):
-    """Does the patch fold: a degenerate triangle, or two neighbours at a dihedral over 120 degrees?"""
-    N = face_normals(X, F, normalize=False)
-    area2 = np.linalg.norm(N, axis=1)
-    scale = np.ptp(X, axis=0).max() or 1.0
-    if np.any(area2 <= 1e-12 * scale * scale):
-        return True
-    E, f1, _, f2, _ = interior_edges(F, len(X))
-    U = N / area2[:, None]
-    return bool(np.any(np.einsum("ij,ij->i", U[f1], U[f2]) < -0.5))
 
 
 def _quality_improving(V, F, A, B, replaced):

@@ -33,7 +33,8 @@ from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
 from .lssvm import lssvm_fit
-from .poisson_patch import context_hits, folds, initial_patches, normalized_cotangent_laplacian, relax_patch, repair_slivers
+from ...geometry.flips import folds
+from .poisson_patch import context_hits, initial_patches, normalized_cotangent_laplacian, relax_patch, repair_slivers
 
 __all__ = ["fill", "PARAMS", "RINGS", "PREPARE", "prepare_boundary", "training_set", "fit_laplacian_regressors",
            "predict_laplacians", "poisson_reposition", "reposition"]

@@ -14,12 +14,11 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .advancing_front import advancing_front_triangulation
-from ...geometry.flips import relax_edges
+from ...geometry.flips import folds, relax_edges
 from ...geometry.intersections import faces_intersecting
 from ...geometry.laplacian import adjacency_matrix, cotangent_laplacian, tangential_umbrella_smoothing
-from ...geometry.quality import face_normals, triangle_quality, vertex_normals
+from ...geometry.quality import triangle_quality, vertex_normals
 from ...geometry.segments import polygon_edges_touch
-from ...geometry.topology import interior_edges
 from ...errors import HoleFillError
 
 __all__ = ["normalized_cotangent_laplacian", "reference_normals", "planar_boundaries", "harmonic_lift",
@@ -232,18 +231,6 @@ def _fixed_edges(ctx):
     k = ctx.size
     loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
     return np.concatenate([loop_edges, np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2)])
-
-
-def folds(X, F):
-    """Does the patch fold: a degenerate triangle, or two neighbours at a dihedral over 120 degrees?"""
-    N = face_normals(X, F, normalize=False)
-    area2 = np.linalg.norm(N, axis=1)
-    scale = np.ptp(X, axis=0).max() or 1.0
-    if np.any(area2 <= 1e-12 * scale * scale):
-        return True
-    E, f1, _, f2, _ = interior_edges(F, len(X))
-    U = N / area2[:, None]
-    return bool(np.any(np.einsum("ij,ij->i", U[f1], U[f2]) < -0.5))
 
 
 def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3):

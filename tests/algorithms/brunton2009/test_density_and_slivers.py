@@ -8,7 +8,8 @@ from hypothesis import strategies as st
 
 from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
 from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
-from meshlab_holefill.algorithms.brunton2009.slivers import folds, repair_slivers
+from meshlab_holefill.algorithms.brunton2009.slivers import repair_slivers
+from meshlab_holefill.geometry.flips import folds
 from meshlab_holefill.core.holes import boundary_loops, hole_context
 from meshlab_holefill.core.patch import validate_patch
 from meshlab_holefill.evaluation.metrics import corner_quality_bound

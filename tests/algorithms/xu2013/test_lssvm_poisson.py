@@ -501,7 +501,7 @@ def _fold_case():
 def test_poisson_solve_folded_across_one_edge_is_kept_when_a_swap_unfolds_it():
     # The path of 335d403: a solve that turns one quad over is kept with the quad's other diagonal
     # instead of being discarded. The right-hand side is set so that the solve lands exactly on T.
-    from meshlab_holefill.algorithms.xu2013.poisson_patch import folds
+    from meshlab_holefill.geometry.flips import folds
 
     X, F, T, ctx = _fold_case()
     free = np.arange(len(X)) >= ctx.size
