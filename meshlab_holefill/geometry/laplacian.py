@@ -7,7 +7,7 @@ import scipy.sparse as sp
 from .quality import corner_angles, unique_edges, vertex_normals
 
 __all__ = ["adjacency_matrix", "tangential_umbrella_smoothing", "uniform_laplacian", "cotangent_weights",
-           "cotangent_laplacian", "lowest_dirichlet_frequency"]
+           "cotangent_laplacian", "lowest_dirichlet_frequency", "vertices_near"]
 
 
 def adjacency_matrix(F, n):
@@ -137,3 +137,23 @@ def lowest_dirichlet_frequency(F, n, free, adjacency=None):
 
     # Shift-invert about 0: S is positive definite when every free component touches the boundary.
     return float(eigsh(S, k=1, sigma=0.0, which="LM", return_eigenvectors=False)[0])
+
+
+def vertices_near(F, n, faces, rings):
+    """Vertices of ``faces`` and those within ``rings`` edges of them, as an (n,) bool mask.
+
+    Parameters
+    ----------
+    F : (m, 3) int
+    n : int
+        Vertex count.
+    faces : (m,) bool or (k,) int
+        The faces to start from (e.g. triangles below a quality floor).
+    rings : int
+    """
+    A = adjacency_matrix(F, n)
+    region = np.zeros(n, bool)
+    region[F[faces].ravel()] = True
+    for _ in range(rings):
+        region |= (A @ region.astype(np.float64)) > 0
+    return region

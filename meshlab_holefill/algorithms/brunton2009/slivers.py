@@ -18,7 +18,7 @@ import numpy as np
 from ...core.patch import Patch, validate_patch
 from ...errors import HoleFillError
 from ...geometry.flips import folds
-from ...geometry.laplacian import adjacency_matrix
+from ...geometry.laplacian import vertices_near
 from ...geometry.quality import triangle_quality
 from ..hu2012.tangential_smoothing import tangential_smoothing
 
@@ -77,11 +77,7 @@ def repair_slivers(ctx, vertices, faces, count_crossings, floor=SLIVER_FLOOR, ro
         qv = triangle_quality(V, G)
         if qv.min() >= floor:
             break
-        A = adjacency_matrix(G, len(V))
-        region = np.zeros(len(V), bool)
-        region[G[qv < floor].ravel()] = True
-        for _ in range(rings):
-            region |= (A @ region.astype(np.float64)) > 0
+        region = vertices_near(G, len(V), qv < floor, rings)
         region[:k] = False
         if not region.any():
             break

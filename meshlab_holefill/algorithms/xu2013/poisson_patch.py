@@ -16,7 +16,8 @@ import scipy.sparse.linalg as spla
 from .advancing_front import advancing_front_triangulation
 from ...geometry.flips import folds, relax_edges
 from ...geometry.intersections import faces_intersecting
-from ...geometry.laplacian import adjacency_matrix, cotangent_laplacian, tangential_umbrella_smoothing
+from ...geometry.laplacian import (cotangent_laplacian, tangential_umbrella_smoothing,
+                                   vertices_near)
 from ...geometry.quality import triangle_quality, vertex_normals
 from ...geometry.segments import polygon_edges_touch
 from ...errors import HoleFillError
@@ -267,11 +268,7 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
     for _ in range(rounds):
         if len(q) == 0 or q.min() >= floor:
             break
-        A = adjacency_matrix(F, len(X))
-        region = np.zeros(len(X), bool)
-        region[F[q < floor].ravel()] = True
-        for _ in range(rings):
-            region |= (A @ region.astype(np.float64)) > 0
+        region = vertices_near(F, len(X), q < floor, rings)
         region &= ~np.asarray(fixed, bool)
         if not region.any():
             break
