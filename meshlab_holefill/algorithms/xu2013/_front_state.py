@@ -57,12 +57,64 @@ class FrontState:
         self.vertex_nodes = {i: {i} for i in range(k)}
         for i in range(k):
             self._grid_add(i)
+        self._init_arrays(points)
         self.front_size = {0: k}
         self.next_label = 1
         self.heap = []
         self.blocked = []
         self.stats = {"steps": 0, "rule1": 0, "rule2": 0, "rule3": 0, "merges": 0, "splits": 0,
                       "rejected": 0, "obstacle_tests": 0}
+
+    # ----------------------------------------------------------------- array mirrors
+    def _init_arrays(self, points):
+        """Array copies of the positions and nodes for the compiled step tests (:mod:`._front_kernels`).
+
+        ``Pa`` (vertices, 3), per node ``na_vertex``, ``na_next``, ``na_front``, ``na_alive``,
+        and ``alive`` the alive nodes (in no particular order; ``n_alive`` of them, node i at
+        ``alive_at[i]``). Capacities double as the front grows.
+        """
+        k = self.k
+        cap = max(4 * k, 64)
+        self.Pa = np.empty((cap, 3))
+        self.Pa[:k] = points
+        self.na_vertex = np.empty(cap, np.int64)
+        self.na_vertex[:k] = np.arange(k)
+        self.na_next = np.empty(cap, np.int64)
+        self.na_next[:k] = (np.arange(k) + 1) % k
+        self.na_front = np.zeros(cap, np.int64)
+        self.na_alive = np.zeros(cap, np.bool_)
+        self.na_alive[:k] = True
+        self.alive = np.empty(cap, np.int64)
+        self.alive[:k] = np.arange(k)
+        self.alive_at = np.empty(cap, np.int64)
+        self.alive_at[:k] = np.arange(k)
+        self.n_alive = k
+
+    @staticmethod
+    def _grown(a, n):
+        if n < len(a):
+            return a
+        b = np.empty((2 * len(a),) + a.shape[1:], a.dtype)
+        b[:len(a)] = a
+        return b
+
+    def _add_vertex(self, pos, normal, size):
+        i = len(self.P)
+        self.P.append(pos)
+        self.N.append(normal)
+        self.S.append(size)
+        self.Pa = self._grown(self.Pa, i)
+        self.Pa[i] = pos
+        return i
+
+    def _link(self, a, b):
+        self.node_next[a] = b
+        self.node_prev[b] = a
+        self.na_next[a] = b
+
+    def _set_front(self, i, label):
+        self.node_front[i] = label
+        self.na_front[i] = label
 
     # ----------------------------------------------------------------- bookkeeping
     def _key(self, pos):
@@ -101,6 +153,16 @@ class FrontState:
         self.node_version.append(0)
         self.node_theta.append(0.0)
         self.node_plane.append(None)
+        self.na_vertex = self._grown(self.na_vertex, i)
+        self.na_next = self._grown(self.na_next, i)
+        self.na_front = self._grown(self.na_front, i)
+        self.na_alive = self._grown(self.na_alive, i)
+        self.alive_at = self._grown(self.alive_at, i)
+        self.na_vertex[i], self.na_next[i], self.na_front[i], self.na_alive[i] = vertex, -1, label, True
+        self.alive = self._grown(self.alive, self.n_alive)
+        self.alive[self.n_alive] = i
+        self.alive_at[i] = self.n_alive
+        self.n_alive += 1
         nodes = self.vertex_nodes.setdefault(vertex, set())
         if not nodes:
             self._grid_add(vertex)
@@ -109,6 +171,13 @@ class FrontState:
 
     def _kill_node(self, i):
         self.node_alive[i] = False
+        if self.na_alive[i]:
+            self.na_alive[i] = False
+            # Swap-remove from the alive list.
+            at, last = self.alive_at[i], self.alive[self.n_alive - 1]
+            self.alive[at] = last
+            self.alive_at[last] = at
+            self.n_alive -= 1
         self.node_version[i] += 1
         v = self.node_vertex[i]
         nodes = self.vertex_nodes[v]
@@ -157,10 +226,7 @@ class FrontState:
             size = (self.S[v] + self.S[p] + self.S[q]) / 3.0
             normal = unit(tuple(self.N[v][i] + self.N[p][i] + self.N[q][i] for i in range(3)))
             for temp in sorted(new_pos, reverse=True):
-                ids[temp] = len(self.P)
-                self.P.append(new_pos[temp])
-                self.N.append(normal)
-                self.S.append(size)
+                ids[temp] = self._add_vertex(new_pos[temp], normal, size)
         faces = [tuple(ids.get(x, x) for x in f) for f in faces]
         sequence = [ids.get(x, x) for x in sequence]
         directed = []
@@ -184,8 +250,7 @@ class FrontState:
         self._kill_node(node)
         chain = [prev] + [self._new_node(x, label) for x in sequence] + [nxt]
         for a, b in zip(chain[:-1], chain[1:]):
-            self.node_next[a] = b
-            self.node_prev[b] = a
+            self._link(a, b)
         dirty = set(chain)
         self.front_size[label] += len(sequence) - 1
         if self.front_size[label] <= 2:
@@ -212,8 +277,8 @@ class FrontState:
         self.stats["splits"] += 1
         label = self.node_front[w]
         wn, un = self.node_next[w], self.node_next[u]
-        self.node_next[w], self.node_prev[un] = un, w
-        self.node_next[u], self.node_prev[wn] = wn, u
+        self._link(w, un)
+        self._link(u, wn)
         # Walk both cycles in lockstep: the shorter one is found in O(its length).
         a, b, la, lb = self.node_next[w], self.node_next[u], 1, 1
         while a != w and b != u:
@@ -233,7 +298,7 @@ class FrontState:
             new_label = self.next_label
             self.next_label += 1
             for x in cycle:
-                self.node_front[x] = new_label
+                self._set_front(x, new_label)
             self.front_size[new_label] = short_len
         self.front_size[label] = long_len
         if long_len <= 2:

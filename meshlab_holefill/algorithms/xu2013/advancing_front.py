@@ -56,6 +56,7 @@ import math
 import numpy as np
 
 from ...errors import HoleFillError
+from ._front_kernels import front_edges_crossed, merge_target, near_any
 from ._front_obstacles import FrontObstacles
 from ._front_state import FrontState
 from ._front_predicates import cross, direction_angle, dot, norm, scaled, segments_cross, sub, unit
@@ -82,6 +83,8 @@ FRONT_GROWTH_LIMIT = 1.3
 # A new vertex must keep this fraction of its target edge length away from the surrounding
 # mesh: closer, the front is running over the existing surface instead of across the hole.
 HOVER_FACTOR = 0.35
+# The exponent of the compiled kernels' squares, passed at run time (see _front_kernels).
+TWO = 2.0
 
 
 class _AdvancingFront(FrontState):
@@ -149,16 +152,15 @@ class _AdvancingFront(FrontState):
                 self.max_edge = max(self.max_edge, norm(sub(P[x], P[y])))
         reach = 3.0 * self.max_edge + (1.0 + self.merge_factor) * self.S_max + self.longest_edge
         r2 = reach * reach
-        points = [P[x] for x in verts]
         still = []
-        for b in self.blocked:
-            if not self.node_alive[b]:
-                continue
-            X = P[self.node_vertex[b]]
-            if any((X[0] - Y[0]) ** 2 + (X[1] - Y[1]) ** 2 + (X[2] - Y[2]) ** 2 <= r2 for Y in points):
-                heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
-            else:
-                still.append(b)
+        if self.blocked:
+            near = near_any(np.array(self.blocked, np.int64), self.Pa[sorted(verts)], r2, self.Pa, self.na_vertex,
+                            self.na_alive, TWO)
+            for b, hit in zip(self.blocked, near.tolist()):
+                if hit > 0:
+                    heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
+                elif hit == 0:
+                    still.append(b)
         self.stats["kept_blocked"] = self.stats.get("kept_blocked", 0) + len(still)
         self.blocked = still
 
@@ -249,14 +251,8 @@ class _AdvancingFront(FrontState):
             for u in (p, q):
                 if sum((pos[i] - self.P[u][i]) ** 2 for i in range(3)) < radius * radius:
                     return None
-            near = sorted(self._near(pos, radius))
-            target = -1
-            for _, u in near:
-                if u == v or u == p or u == q:
-                    continue
-                if self._same_front_node(u, self.node_front[node]) >= 0:
-                    target = u
-                    break
+            target = merge_target(np.array(pos), radius, v, p, q, self.node_front[node], self.Pa, self.na_vertex,
+                                  self.na_front, self.alive, self.n_alive, self.cell, TWO)
             if target < 0:
                 target = -j
                 new_pos[target] = pos
@@ -351,41 +347,11 @@ class _AdvancingFront(FrontState):
                     self.front_edges[(b, a)] = unit(tuple(map(float, c)))
 
     def _no_crossing(self, node, new_edges, new_pos, m):
-        """No new edge crosses a nearby front edge, in the plane of the front angle."""
-        V = self.P[self.node_vertex[node]]
-        segs = [(self._pos(a, new_pos), self._pos(b, new_pos)) for a, b in new_edges]
-        reach = max(max(norm(sub(s0, V)), norm(sub(s1, V))) for s0, s1 in segs) + self.longest_edge
-        e1 = unit(cross(m, (1.0, 0.0, 0.0) if abs(m[0]) < 0.9 else (0.0, 1.0, 0.0)))
-        e2 = cross(m, e1)
-
-        def flat(x):
-            return (dot(x, e1), dot(x, e2))
-
-        flat_new = [(flat(s0), flat(s1)) for s0, s1 in segs]
-        lo_x = min(min(s0[0], s1[0]) for s0, s1 in flat_new)
-        hi_x = max(max(s0[0], s1[0]) for s0, s1 in flat_new)
-        lo_y = min(min(s0[1], s1[1]) for s0, s1 in flat_new)
-        hi_y = max(max(s0[1], s1[1]) for s0, s1 in flat_new)
-        seen = set()
-        flat_cache = {}
-        for _, x in self._near(V, reach):
-            for nx in self.vertex_nodes[x]:
-                y = self.node_vertex[self.node_next[nx]]
-                if (x, y) in seen:
-                    continue
-                seen.add((x, y))
-                fx = flat_cache.get(x) or flat_cache.setdefault(x, flat(self.P[x]))
-                fy = flat_cache.get(y) or flat_cache.setdefault(y, flat(self.P[y]))
-                if max(fx[0], fy[0]) < lo_x or min(fx[0], fy[0]) > hi_x or \
-                        max(fx[1], fy[1]) < lo_y or min(fx[1], fy[1]) > hi_y:
-                    continue
-                for (a, b), (f0, f1) in zip(new_edges, flat_new):
-                    if a == x or a == y or b == x or b == y:
-                        continue
-                    if segments_cross(f0, f1, fx, fy):
-                        return False
-        return True
-
+        """No new edge crosses a nearby front edge, in the plane of the front angle (compiled test)."""
+        seg = np.array([(self._pos(a, new_pos), self._pos(b, new_pos)) for a, b in new_edges])
+        return not front_edges_crossed(np.array(new_edges, np.int64), seg, self.Pa[self.node_vertex[node]],
+                                       np.array(m), self.longest_edge, self.Pa, self.na_vertex, self.na_next,
+                                       self.alive, self.n_alive, self.cell, TWO)
 
 
 def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75, max_faces=None,
