@@ -71,6 +71,20 @@ def min_point_triangle_distance(x, V, F, cand, radius):
 # through libm's pow like Python's ``x ** 2`` (pow(x, 2) is not always x * x bit for bit).
 
 
+# pow costs ~10 multiplications; a distance whose product form exceeds the bound by this
+# factor (far beyond the few ulps by which the two forms can differ) is beyond it either way.
+_CLEARLY_BEYOND = 1.0 + 1e-12
+
+
+@njit(cache=True)
+def _beyond(X, Y, r2, two):
+    """Is |X - Y|^2 > r2, with the squares as Python's ``(X[i] - Y[i]) ** 2``?"""
+    a, b, c = X[0] - Y[0], X[1] - Y[1], X[2] - Y[2]
+    if a * a + b * b + c * c > r2 * _CLEARLY_BEYOND:
+        return True
+    return not (a ** two + b ** two + c ** two <= r2)
+
+
 @njit(cache=True)
 def _cell(x, c):
     return math.floor(x / c)
@@ -104,8 +118,10 @@ def merge_target(pos, radius, v, p, q, label, P, node_vertex, node_front, alive,
         if u == v or u == p or u == q:
             continue
         X = P[u]
+        if _beyond(X, pos, r2, two):
+            continue
         d = (X[0] - pos[0]) ** two + (X[1] - pos[1]) ** two + (X[2] - pos[2]) ** two
-        if d <= r2 and (d < best_d or (d == best_d and u < best_u)) and _in_query_cells(X, pos, radius, cell):
+        if (d < best_d or (d == best_d and u < best_u)) and _in_query_cells(X, pos, radius, cell):
             best_d, best_u = d, u
     return best_u
 
@@ -187,8 +203,7 @@ def front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_
         n = alive[t]
         x = node_vertex[n]
         X = P[x]
-        d = (X[0] - V[0]) ** two + (X[1] - V[1]) ** two + (X[2] - V[2]) ** two
-        if not (d <= r2_reach) or not _in_query_cells(X, V, reach, cell):
+        if _beyond(X, V, r2_reach, two) or not _in_query_cells(X, V, reach, cell):
             continue
         y = node_vertex[node_next[n]]
         Y = P[y]
@@ -220,8 +235,7 @@ def near_any(nodes, points, r2, P, node_vertex, node_alive, two):
         X = P[node_vertex[b]]
         out[i] = 0
         for j in range(points.shape[0]):
-            Y = points[j]
-            if (X[0] - Y[0]) ** two + (X[1] - Y[1]) ** two + (X[2] - Y[2]) ** two <= r2:
+            if not _beyond(X, points[j], r2, two):
                 out[i] = 1
                 break
     return out
