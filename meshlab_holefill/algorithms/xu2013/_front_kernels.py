@@ -353,3 +353,63 @@ def triangles_cross_faces(new_faces, corners, V, F, cand, n_cand, k, tol):
                     if segment_hits_triangle(V[o[j]], V[o[(j + 1) % 3]], T[0], T[1], T[2], tol):
                         return True
     return False
+
+
+@njit(cache=True)
+def _direction_angle(r0, r1, r2, d0, d1, d2, m):
+    """:func:`._front_predicates.direction_angle` on scalars."""
+    c0, c1, c2 = _cross_into(r0, r1, r2, d0, d1, d2)
+    t = math.atan2(m[0] * c0 + m[1] * c1 + m[2] * c2,
+                   (r0 * d0 + r1 * d1 + r2 * d2) - (r0 * m[0] + r1 * m[1] + r2 * m[2]) * (d0 * m[0] + d1 * m[1] + d2 * m[2]))
+    return t + 2.0 * math.pi if t < 0.0 else t
+
+
+@njit(cache=True)
+def _at(x, new_pos, P):
+    """Position of vertex x: a temporary id -1, -2 of the step is row -x - 1 of new_pos."""
+    return new_pos[-x - 1] if x < 0 else P[x]
+
+
+@njit(cache=True)
+def step_geometry_valid(faces, new_pos, behind, m, tiny, fold_min_cos, edge_ids, edge_nodes, angle_margin, V,
+                        longest_edge, P, node_vertex, node_next, node_plane, node_theta, alive, n_alive, cell, two):
+    """The geometric checks of one step (:meth:`._AdvancingFront._valid`, before the obstacles).
+
+    Each new triangle of ``faces`` (f, 3) (vertex ids, temporary ids for ``new_pos``) faces
+    the way of m by more than ``tiny`` and does not fold onto the triangle behind a front edge
+    it consumes (``behind[f, j]`` the normal behind its edge j, NaN where none) by more than
+    arccos(fold_min_cos); each new edge ``edge_ids[i]`` leaves its existing ends (nodes
+    ``edge_nodes[i]``, -1 for a new vertex) strictly inside their front angles,
+    ``angle_margin`` from either side; no new edge crosses a nearby front edge
+    (:func:`front_edges_crossed`).
+    """
+    for f in range(faces.shape[0]):
+        A, B, C = _at(faces[f, 0], new_pos, P), _at(faces[f, 1], new_pos, P), _at(faces[f, 2], new_pos, P)
+        n0, n1, n2 = _cross_into(B[0] - A[0], B[1] - A[1], B[2] - A[2], C[0] - A[0], C[1] - A[1], C[2] - A[2])
+        if n0 * m[0] + n1 * m[1] + n2 * m[2] <= tiny:
+            return False
+        for j in range(3):
+            b = behind[f, j]
+            if not math.isnan(b[0]) and b[0] * n0 + b[1] * n1 + b[2] * n2 < fold_min_cos * _norm3(n0, n1, n2):
+                return False
+    ne = edge_ids.shape[0]
+    for i in range(ne):
+        for j in range(2):
+            nx = edge_nodes[i, j]
+            if nx < 0:
+                continue
+            X = P[node_vertex[nx]]
+            R = P[node_vertex[node_next[nx]]]
+            Y = _at(edge_ids[i, 1 - j], new_pos, P)
+            phi = _direction_angle(R[0] - X[0], R[1] - X[1], R[2] - X[2], Y[0] - X[0], Y[1] - X[1], Y[2] - X[2],
+                                   node_plane[nx])
+            if not (angle_margin < phi < node_theta[nx] - angle_margin):
+                return False
+    if ne == 0:
+        return True
+    seg = np.empty((ne, 2, 3))
+    for i in range(ne):
+        seg[i, 0] = _at(edge_ids[i, 0], new_pos, P)
+        seg[i, 1] = _at(edge_ids[i, 1], new_pos, P)
+    return not front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_next, alive, n_alive,
+                                   cell, two)

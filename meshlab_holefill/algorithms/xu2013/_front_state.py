@@ -70,7 +70,7 @@ class FrontState:
         """Array copies of the positions and nodes for the compiled step tests (:mod:`._front_kernels`).
 
         ``Pa`` (vertices, 3), per node ``na_vertex``, ``na_next``, ``na_front``, ``na_alive``,
-        and ``alive`` the alive nodes (in no particular order; ``n_alive`` of them, node i at
+        ``na_theta``, ``na_plane``, and ``alive`` the alive nodes (in no particular order; ``n_alive`` of them, node i at
         ``alive_at[i]``). Capacities double as the front grows.
         """
         k = self.k
@@ -84,6 +84,8 @@ class FrontState:
         self.na_front = np.zeros(cap, np.int64)
         self.na_alive = np.zeros(cap, np.bool_)
         self.na_alive[:k] = True
+        self.na_theta = np.zeros(cap)
+        self.na_plane = np.zeros((cap, 3))
         self.alive = np.empty(cap, np.int64)
         self.alive[:k] = np.arange(k)
         self.alive_at = np.empty(cap, np.int64)
@@ -158,6 +160,8 @@ class FrontState:
         self.na_front = self._grown(self.na_front, i)
         self.na_alive = self._grown(self.na_alive, i)
         self.alive_at = self._grown(self.alive_at, i)
+        self.na_theta = self._grown(self.na_theta, i)
+        self.na_plane = self._grown(self.na_plane, i)
         self.na_vertex[i], self.na_next[i], self.na_front[i], self.na_alive[i] = vertex, -1, label, True
         self.alive = self._grown(self.alive, self.n_alive)
         self.alive[self.n_alive] = i
@@ -192,6 +196,8 @@ class FrontState:
         theta, m = front_angle(self.P[v], self.P[p], self.P[q], self.N[v])
         self.node_theta[i] = theta
         self.node_plane[i] = m
+        self.na_theta[i] = theta
+        self.na_plane[i] = m
         self.node_version[i] += 1
         heapq.heappush(self.heap, (theta, i, self.node_version[i]))
 

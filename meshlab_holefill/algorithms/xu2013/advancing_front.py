@@ -56,10 +56,10 @@ import math
 import numpy as np
 
 from ...errors import HoleFillError
-from ._front_kernels import front_edges_crossed, merge_target, near_any
+from ._front_kernels import merge_target, near_any, step_geometry_valid
 from ._front_obstacles import FrontObstacles
 from ._front_state import FrontState
-from ._front_predicates import cross, direction_angle, dot, norm, scaled, segments_cross, sub, unit
+from ._front_predicates import cross, dot, norm, scaled, sub, unit
 
 __all__ = ["advancing_front_triangulation"]
 
@@ -85,6 +85,7 @@ FRONT_GROWTH_LIMIT = 1.3
 HOVER_FACTOR = 0.35
 # The exponent of the compiled kernels' squares, passed at run time (see _front_kernels).
 TWO = 2.0
+_NO_NORMAL = (math.nan, math.nan, math.nan)  # no known triangle behind a front edge
 
 
 class _AdvancingFront(FrontState):
@@ -298,31 +299,26 @@ class _AdvancingFront(FrontState):
             new_edges.append((a, b))
         v = self.node_vertex[node]
         scale = self.S[v]
-        tiny = 1e-10 * scale * scale
-        for a, b, c in faces:
-            A, B, C = self._pos(a, new_pos), self._pos(b, new_pos), self._pos(c, new_pos)
-            nrm = cross(sub(B, A), sub(C, A))
-            if dot(nrm, m) <= tiny:
-                return False
-            # No fold onto the triangle behind a consumed front edge.
-            for e in ((a, b), (b, c), (c, a)):
-                behind = self.front_edges.get(e)
-                if behind is not None and dot(behind, nrm) < FOLD_MIN_COS * norm(nrm):
-                    return False
-        # New edges leave existing front vertices strictly inside their front angle.
+        # The node of each existing end of a new edge, on this front (a new edge must leave
+        # from inside its front angle there).
+        edge_nodes = []
         for a, b in new_edges:
-            for x, y in ((a, b), (b, a)):
-                if x < 0:
-                    continue
-                nx = self._same_front_node(x, label)
-                if nx < 0:
-                    return False
-                X = self.P[x]
-                ref = sub(self.P[self.node_vertex[self.node_next[nx]]], X)
-                phi = direction_angle(ref, sub(self._pos(y, new_pos), X), self.node_plane[nx])
-                if not (ANGLE_MARGIN < phi < self.node_theta[nx] - ANGLE_MARGIN):
-                    return False
-        if new_edges and not self._no_crossing(node, new_edges, new_pos, m):
+            ends = [-1, -1]
+            for j, x in enumerate((a, b)):
+                if x >= 0:
+                    ends[j] = self._same_front_node(x, label)
+                    if ends[j] < 0:
+                        return False
+            edge_nodes.append(ends)
+        positions = np.empty((2, 3))
+        for temp, pos in new_pos.items():
+            positions[-temp - 1] = pos
+        behind = [[self.front_edges.get(e) or _NO_NORMAL for e in ((a, b), (b, c), (c, a))] for a, b, c in faces]
+        if not step_geometry_valid(
+                np.array(faces, np.int64), positions, np.array(behind), self.na_plane[node], 1e-10 * scale * scale,
+                FOLD_MIN_COS, np.array(new_edges, np.int64).reshape(-1, 2), np.array(edge_nodes, np.int64).reshape(-1, 2),
+                ANGLE_MARGIN, self.Pa[v], self.longest_edge, self.Pa, self.na_vertex, self.na_next, self.na_plane,
+                self.na_theta, self.alive, self.n_alive, self.cell, TWO):
             return False
         if self.obstacles is None:
             return True
@@ -345,13 +341,6 @@ class _AdvancingFront(FrontState):
                 if (b, a) in self.front_edges and a < k and b < k:
                     c = cross(sub(OV[f[1]], OV[f[0]]), sub(OV[f[2]], OV[f[0]]))
                     self.front_edges[(b, a)] = unit(tuple(map(float, c)))
-
-    def _no_crossing(self, node, new_edges, new_pos, m):
-        """No new edge crosses a nearby front edge, in the plane of the front angle (compiled test)."""
-        seg = np.array([(self._pos(a, new_pos), self._pos(b, new_pos)) for a, b in new_edges])
-        return not front_edges_crossed(np.array(new_edges, np.int64), seg, self.Pa[self.node_vertex[node]],
-                                       np.array(m), self.longest_edge, self.Pa, self.na_vertex, self.na_next,
-                                       self.alive, self.n_alive, self.cell, TWO)
 
 
 def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75, max_faces=None,
