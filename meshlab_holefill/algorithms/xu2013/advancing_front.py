@@ -410,3 +410,21 @@ def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75,
     if front.obstacles is not None:
         stats["obstacle_tests"] = front.obstacles.tests
     return new_vertices, faces, stats
+
+
+def warm_up():
+    """Load (or compile) the front's numba kernels now, by running the front on a small hole.
+
+    The kernels are compiled lazily, on first use, and cached on disk; loading them takes a
+    few tenths of a second per process. A caller about to fork worker processes can call this
+    first, so that the workers inherit the loaded kernels instead of each loading them again
+    inside its first hole's time.
+    """
+    t = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t), 0.1 * np.cos(3 * t)], axis=1)
+    outer = 1.5 * ring
+    V = np.concatenate([ring, outer])
+    k = len(ring)
+    F = [(i, (i + 1) % k, k + i) for i in range(k)] + [((i + 1) % k, k + (i + 1) % k, k + i) for i in range(k)]
+    advancing_front_triangulation(ring, obstacles=(V, np.array(F)))
+    near_any(np.zeros(1, np.int64), ring[[0]], 1.0, ring, np.zeros(1, np.int64), np.ones(1, np.bool_), TWO)

@@ -195,3 +195,11 @@ def test_obstacle_grid_lists_every_face_in_every_cell_it_meets():
     assert obstacles.candidates([10.2, 10.2, 9.9], [10.3, 10.3, 10.1]).tolist() == [1]
     assert obstacles.candidates([20.0, 20, 20], [21.0, 21, 21]).tolist() == []
     assert obstacles.candidates([-50.0, -50, -50], [50.0, 50, 50]).tolist() == [0, 1]
+
+
+def test_warm_up_loads_every_kernel_the_front_calls():
+    from meshlab_holefill.algorithms.xu2013.advancing_front import warm_up
+    warm_up()
+    for name in ("merge_target", "step_geometry_valid", "near_any", "obstacle_candidates", "min_point_triangle_distance",
+                 "triangles_cross_faces"):
+        assert len(getattr(K, name).signatures) >= 1, name
