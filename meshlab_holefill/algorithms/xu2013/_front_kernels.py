@@ -1,8 +1,13 @@
-"""Compiled kernels of the advancing front's obstacle tests (numba).
+"""Compiled kernels of the advancing front's per-step tests (numba).
 
-:func:`min_point_triangle_distance` does, per triangle, the IEEE operations of
-:func:`._front_predicates.point_triangle_distance` in the same order (no fastmath), so its
-minimum is bit for bit the numpy function's (tests/algorithms/xu2013/test_front_kernels.py).
+The checks of one step (:meth:`.advancing_front._AdvancingFront._valid`), the merge-target
+search of Step 4, the release of refused nodes and the obstacle tests, over array mirrors of
+the front's state (:class:`._front_state.FrontState`). Each does the IEEE operations of the
+Python predicates it replaces (:mod:`._front_predicates`, kept as their reference) in the same
+order, without fastmath, so the front takes the same decisions in the same order
+(tests/algorithms/xu2013/test_front_compiled.py and test_front_kernels.py compare them).
+:func:`min_point_triangle_distance` gives bit for bit the minimum of
+:func:`._front_predicates.point_triangle_distance`.
 """
 from __future__ import annotations
 
@@ -105,8 +110,8 @@ def merge_target(pos, radius, v, p, q, label, P, node_vertex, node_front, alive,
     """The vertex a new vertex at ``pos`` merges with (Sec. 3.2, Step 4), or -1.
 
     The nearest (by squared distance, then by id) vertex within ``radius`` that has a node on
-    front ``label``, other than v, p and q: the first of ``sorted(_near(pos, radius))`` that
-    :meth:`._AdvancingFront._build` accepts.
+    front ``label``, other than v, p and q, found as by a query of a uniform grid of cell
+    ``cell`` (the cells of the box pos +- radius, then the exact squared distance).
     """
     r2 = radius * radius
     best_d, best_u = np.inf, -1

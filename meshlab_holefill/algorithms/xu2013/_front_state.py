@@ -5,12 +5,11 @@ angle, the angle rules, the merges, the checks); :class:`FrontState` keeps the b
 step changes (Step 5): the vertex positions, normals and sizing values, the faces and edges
 made, the directed front edges with the normal of the triangle behind each, and the fronts as
 cyclic linked lists of nodes (a vertex is on two fronts after a split), with a heap of their
-angles and a uniform grid over the front vertices for neighbourhood queries.
+angles, and array mirrors of positions and nodes for the compiled step tests.
 """
 from __future__ import annotations
 
 import heapq
-import math
 
 import numpy as np
 
@@ -42,9 +41,8 @@ class FrontState:
             self.front_edges[(i, j)] = None
         for a, b in np.asarray(forbidden_edges, np.int64).reshape(-1, 2).tolist():
             self.edges.add((min(a, b), max(a, b)))
-        # Uniform grid over the front vertices for neighbourhood queries.
+        # Cell of the uniform grids of neighbourhood queries (the kernels' query boxes, the obstacles).
         self.cell = max(2.0 * float(np.mean(lengths)), 1e-300)
-        self.grid = {}
         # Nodes of the cyclic front lists.
         self.node_vertex = list(range(k))
         self.node_prev = [(i - 1) % k for i in range(k)]
@@ -55,8 +53,6 @@ class FrontState:
         self.node_theta = [0.0] * k
         self.node_plane = [None] * k
         self.vertex_nodes = {i: {i} for i in range(k)}
-        for i in range(k):
-            self._grid_add(i)
         self._init_arrays(points)
         self.front_size = {0: k}
         self.next_label = 1
@@ -119,32 +115,6 @@ class FrontState:
         self.na_front[i] = label
 
     # ----------------------------------------------------------------- bookkeeping
-    def _key(self, pos):
-        c = self.cell
-        return (math.floor(pos[0] / c), math.floor(pos[1] / c), math.floor(pos[2] / c))
-
-    def _grid_add(self, vertex):
-        self.grid.setdefault(self._key(self.P[vertex]), set()).add(vertex)
-
-    def _near(self, pos, radius):
-        """Front vertices within ``radius`` of pos (superset from the grid, then exact)."""
-        x0, y0, z0 = self._key((pos[0] - radius, pos[1] - radius, pos[2] - radius))
-        x1, y1, z1 = self._key((pos[0] + radius, pos[1] + radius, pos[2] + radius))
-        r2 = radius * radius
-        out = []
-        P, grid = self.P, self.grid
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                for iz in range(z0, z1 + 1):
-                    cell = grid.get((ix, iy, iz))
-                    if cell:
-                        for u in cell:
-                            x = P[u]
-                            d = (x[0] - pos[0]) ** 2 + (x[1] - pos[1]) ** 2 + (x[2] - pos[2]) ** 2
-                            if d <= r2:
-                                out.append((d, u))
-        return out
-
     def _new_node(self, vertex, label):
         i = len(self.node_vertex)
         self.node_vertex.append(vertex)
@@ -167,10 +137,7 @@ class FrontState:
         self.alive[self.n_alive] = i
         self.alive_at[i] = self.n_alive
         self.n_alive += 1
-        nodes = self.vertex_nodes.setdefault(vertex, set())
-        if not nodes:
-            self._grid_add(vertex)
-        nodes.add(i)
+        self.vertex_nodes.setdefault(vertex, set()).add(i)
         return i
 
     def _kill_node(self, i):
@@ -184,10 +151,7 @@ class FrontState:
             self.n_alive -= 1
         self.node_version[i] += 1
         v = self.node_vertex[i]
-        nodes = self.vertex_nodes[v]
-        nodes.discard(i)
-        if not nodes:
-            self.grid[self._key(self.P[v])].discard(v)
+        self.vertex_nodes[v].discard(i)
 
     def _update_node(self, i):
         v = self.node_vertex[i]

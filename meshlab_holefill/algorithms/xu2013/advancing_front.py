@@ -47,6 +47,9 @@ fan. The run stops with :class:`HoleFillError` when no step is possible, when th
 past 1.3 times the boundary's vertex count plus 20 (the front has left the hole: it runs over
 the surrounding surface or out of a hole wrapped around a tube), or past a bound on the
 triangle count: it always ends.
+
+The checks and the merge-target search run as numba kernels (:mod:`._front_kernels`) over
+array mirrors of the front; the bookkeeping (heap, linked lists, edge sets) stays in Python.
 """
 from __future__ import annotations
 
