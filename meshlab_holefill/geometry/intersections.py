@@ -105,7 +105,7 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     P = V[used] + 0.0  # +0.0 turns -0.0 into 0.0 so the welding below sees them equal
     if weld:
         canon = np.zeros(len(V), np.int64)
-        canon[used] = np.unique(P, axis=0, return_inverse=True)[1].ravel()
+        canon[used] = _row_ranks(P)
     else:
         canon = np.arange(len(V), dtype=np.int64)
     in_q = np.zeros(len(F), bool)
@@ -169,3 +169,21 @@ def _candidates(Tq, Ta, tol):
     dims = (np.floor(span / cell) + 1).astype(np.int64)
     return K.box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bq.ravel().astype(np.int64), ba.ravel().astype(np.int64),
                        ub * ub, origin, cell, dims)
+
+
+def _row_ranks(P):
+    """Rank of each row of P among its distinct rows in lexicographic order, (n,) int64.
+
+    np.unique(P, axis=0, return_inverse=True)[1] (equal rows get equal ranks), by a lexsort of the
+    columns instead of unique's sort of a structured view, which is several times slower.
+    """
+    if len(P) == 0:
+        return np.zeros(0, np.int64)
+    order = np.lexsort(P.T[::-1])
+    S = P[order]
+    new_row = np.empty(len(P), bool)
+    new_row[0] = True
+    new_row[1:] = np.any(S[1:] != S[:-1], axis=1)
+    ranks = np.empty(len(P), np.int64)
+    ranks[order] = np.cumsum(new_row) - 1
+    return ranks

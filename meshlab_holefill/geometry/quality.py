@@ -125,7 +125,13 @@ def corner_angles(V, F):
 def unique_edges(F):
     """Undirected edges of a face list, sorted per row and unique, (e, 2) int64."""
     E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64), axis=1)
-    return np.unique(E, axis=0)
+    if len(E) == 0:
+        return E.reshape(0, 2)
+    # One int64 key per row, ordered as the rows are lexicographically: np.unique on the keys is
+    # the row-wise unique without its structured-dtype sort (several times slower).
+    n = int(E.max()) + 1
+    keys = np.unique(E[:, 0] * n + E[:, 1])
+    return np.stack([keys // n, keys % n], axis=1)
 
 
 def mean_edge_length(V, F):
