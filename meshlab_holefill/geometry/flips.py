@@ -144,7 +144,7 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         lo, hi = np.minimum(c, d), np.maximum(c, d)
         new_key = lo * n + hi
         cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        existing = np.unique(cur[:, 0] * n + cur[:, 1])
+        existing = np.sort(cur[:, 0] * n + cur[:, 1])  # duplicates do not matter to _in_sorted
         ok_s = passes & keeps_orientation & (c_ != d_) & ~_in_sorted(new_key[s], existing)
         if len(fixed):
             old_key = np.minimum(a_, b_) * n + np.maximum(a_, b_)
@@ -165,8 +165,8 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
 
 
 def _in_sorted(x, table):
-    """np.isin(x, table) for a sorted, duplicate-free int ``table`` (a binary search; isin's setup
-    dominates on the few hundred keys of a patch)."""
+    """np.isin(x, table) for a sorted int ``table`` (a binary search; isin's setup dominates on the
+    few hundred keys of a patch). Repeated keys in ``table`` are fine: searchsorted finds the first."""
     if len(table) == 0:
         return np.zeros(len(x), bool)
     pos = np.minimum(np.searchsorted(table, x), len(table) - 1)

@@ -81,14 +81,14 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     """
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(np.asarray(F, dtype=np.int64).reshape(-1, 3))
-    q = np.unique(np.asarray(query, dtype=np.int64).ravel())
-    a = np.unique(np.asarray(against, dtype=np.int64).ravel())
+    q = _sorted_unique(np.asarray(query, dtype=np.int64).ravel())
+    a = _sorted_unique(np.asarray(against, dtype=np.int64).ravel())
     empty = np.empty((0, 2), np.int64)
     if len(q) == 0 or len(a) == 0:
         return empty
 
     if tol is None:
-        P = V[np.unique(F[np.concatenate([q, a])])]
+        P = V[_used_vertices(F, np.concatenate([q, a]), len(V))]
         diag = np.linalg.norm(P.max(0) - P.min(0))
         tol = 1e-9 * diag + 1e-13 * np.abs(P).max()
     tol = float(tol)
@@ -101,7 +101,7 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     a, Ta = a[inside], Ta[inside]
     if len(a) == 0:
         return empty
-    used = np.unique(F[np.concatenate([q, a])])
+    used = _used_vertices(F, np.concatenate([q, a]), len(V))
     P = V[used] + 0.0  # +0.0 turns -0.0 into 0.0 so the welding below sees them equal
     if weld:
         canon = np.zeros(len(V), np.int64)
@@ -187,3 +187,17 @@ def _row_ranks(P):
     ranks = np.empty(len(P), np.int64)
     ranks[order] = np.cumsum(new_row) - 1
     return ranks
+
+
+def _sorted_unique(x):
+    """np.unique(x) for an int array, skipping the sort when x already increases (an arange, usually)."""
+    if len(x) and np.all(x[1:] > x[:-1]):
+        return x
+    return np.unique(x)
+
+
+def _used_vertices(F, faces, n):
+    """np.unique(F[faces]) by marking the n vertices (sorted, as unique returns them)."""
+    mark = np.zeros(n, bool)
+    mark[F[faces]] = True
+    return np.flatnonzero(mark)

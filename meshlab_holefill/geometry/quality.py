@@ -133,13 +133,15 @@ def corner_angles(V, F):
 
 def unique_edges(F):
     """Undirected edges of a face list, sorted per row and unique, (e, 2) int64."""
-    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64), axis=1)
-    if len(E) == 0:
-        return E.reshape(0, 2)
-    # One int64 key per row, ordered as the rows are lexicographically: np.unique on the keys is
-    # the row-wise unique without its structured-dtype sort (several times slower).
-    n = int(E.max()) + 1
-    keys = np.unique(E[:, 0] * n + E[:, 1])
+    F = np.asarray(F).astype(np.int64, copy=False).reshape(-1, 3)
+    if len(F) == 0:
+        return np.zeros((0, 2), np.int64)
+    # One int64 key min * n + max per edge, ordered as the sorted rows are lexicographically:
+    # sorting the keys is the row-wise unique without its structured-dtype sort (several times slower).
+    n = int(F.max()) + 1
+    G = np.roll(F, -1, axis=1)
+    keys = np.sort((np.minimum(F, G) * n + np.maximum(F, G)).ravel())
+    keys = keys[np.concatenate([[True], keys[1:] != keys[:-1]])]
     return np.stack([keys // n, keys % n], axis=1)
 
 

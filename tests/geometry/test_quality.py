@@ -68,3 +68,15 @@ def test_corner_sums_adds_like_add_at_in_corner_order():
         for k in range(3):
             np.add.at(expected, F[:, k], C)
         np.testing.assert_array_equal(corner_sums(F, C, n), expected)
+
+
+def test_unique_edges_equals_the_row_wise_unique_of_the_sorted_edges():
+    from meshlab_holefill.geometry.quality import unique_edges
+
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        F = rng.integers(0, int(rng.integers(1, 60)), (int(rng.integers(0, 50)), 3))
+        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64), axis=1)
+        got = unique_edges(F)
+        assert got.dtype == np.int64 and got.shape == (len(np.unique(E, axis=0)), 2)
+        np.testing.assert_array_equal(got, np.unique(E, axis=0))

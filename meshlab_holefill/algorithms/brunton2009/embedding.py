@@ -234,7 +234,7 @@ def tangential_relaxation(X, F, free):
         return X
     W = umbrella_operator(F, len(X))
     Wf = W[free]
-    Wff = Wf[:, free].tocoo()
+    Wff = _principal_entries(W, free)
     b1, b2 = tangent_frames(vertex_normals(X, F)[free])
     frames = (b1, b2)
     blocks_r, blocks_c, blocks_v = [], [], []
@@ -268,6 +268,21 @@ def tangential_relaxation(X, F, free):
             return Y
         alpha *= 0.5
     return X
+
+
+def _principal_entries(W, rows):
+    """The stored entries of W[rows][:, rows] as COO, renumbered (in W's storage order).
+
+    The same (row, column, value) triples as scipy's fancy indexing then ``tocoo`` (the order
+    of the triples does not matter to the matrix built from them), without its overhead.
+    """
+    n = W.shape[0]
+    pos = np.full(n, -1, np.int64)
+    pos[rows] = np.arange(len(rows))
+    r = pos[np.repeat(np.arange(n), np.diff(W.indptr))]
+    c = pos[W.indices]
+    keep = (r >= 0) & (c >= 0)
+    return sp.coo_matrix((W.data[keep], (r[keep], c[keep])), shape=(len(rows), len(rows)))
 
 
 def embed_patch(ctx, n_interior, F, energy="fairing", boundary=None, extra_faces=None, tangential=False):

@@ -830,3 +830,18 @@ def test_umbrella_operator_is_scipys_matrix_entry_for_entry():
         W = got.toarray()
         used = np.abs(W).sum(axis=1) > 0
         np.testing.assert_allclose(W[used].sum(axis=1), 0.0, atol=1e-12)  # U of a constant is zero
+
+
+def test_principal_entries_are_scipys_submatrix_triples():
+    from conftest import grid
+    from meshlab_holefill.algorithms.brunton2009.embedding import _principal_entries
+
+    rng = np.random.default_rng(0)
+    _, F = grid(9)
+    W = umbrella_operator(F, int(F.max()) + 1)
+    for _ in range(20):
+        rows = np.flatnonzero(rng.random(W.shape[0]) < 0.6)
+        expected, got = W[rows][:, rows].tocoo(), _principal_entries(W, rows)
+        assert got.shape == expected.shape
+        assert sorted(zip(got.row.tolist(), got.col.tolist(), got.data.tolist())) == \
+            sorted(zip(expected.row.tolist(), expected.col.tolist(), expected.data.tolist()))
