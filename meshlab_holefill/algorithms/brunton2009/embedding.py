@@ -187,9 +187,9 @@ def tangent_frames(N):
     """Two unit vectors spanning the plane orthogonal to each unit row of N, (s, 3) each."""
     N = np.asarray(N, np.float64)
     helper = np.where(np.abs(N[:, [0]]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
-    b1 = np.cross(N, helper)
+    b1 = cross_rows(N, helper)
     b1 /= np.maximum(np.linalg.norm(b1, axis=1), 1e-300)[:, None]
-    return b1, np.cross(N, b1)
+    return b1, cross_rows(N, b1)
 
 
 def tangential_relaxation(X, F, free):
@@ -232,10 +232,15 @@ def tangential_relaxation(X, F, free):
     s = len(free)
     if s == 0:
         return X
-    W = umbrella_operator(F, len(X))
+    is_free = np.zeros(len(X), bool)
+    is_free[free] = True
+    # The free vertices' rows of U and their normals only see the faces around them: built on
+    # those faces they are the same numbers (the same edges, degrees and sums, in the same order).
+    star = F[is_free[F].any(axis=1)]
+    W = umbrella_operator(star, len(X))
     Wf = W[free]
     Wff = _principal_entries(W, free)
-    b1, b2 = tangent_frames(vertex_normals(X, F)[free])
+    b1, b2 = tangent_frames(vertex_normals(X, star)[free])
     frames = (b1, b2)
     blocks_r, blocks_c, blocks_v = [], [], []
     for i in range(2):
@@ -255,9 +260,6 @@ def tangential_relaxation(X, F, free):
     if not np.all(np.isfinite(t)):
         return X
     step = t[:s, None] * b1 + t[s:, None] * b2
-    is_free = np.zeros(len(X), bool)
-    is_free[free] = True
-    star = F[is_free[F].any(axis=1)]
     before = np.cross(X[star[:, 1]] - X[star[:, 0]], X[star[:, 2]] - X[star[:, 0]])
     alpha = 1.0
     for _ in range(5):

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...geometry.flips import relax_edges
-from ...geometry.quality import corner_angles, triangle_quality, vertex_normals
+from ...geometry.quality import corner_angles, cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
 
 __all__ = ["bisect_obtuse", "collapse_poor", "tangential_smoothing"]
@@ -32,14 +32,11 @@ def _refuse_worse(V_old, V_new, F, moved):
     q_old = triangle_quality(V_old, F)
     worst_old = np.full(n, np.inf)
     np.minimum.at(worst_old, F.ravel(), np.repeat(q_old, 3))
-    n_old = np.cross(V_old[F[:, 1]] - V_old[F[:, 0]], V_old[F[:, 2]] - V_old[F[:, 0]])
+    n_old = _face_cross(V_old, F)
     V = V_new.copy()
     moved = moved.copy()
+    q = _quality_or_flipped(V, F, n_old)
     for _ in range(n):
-        q = triangle_quality(V, F)
-        n_new = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-        flipped = np.einsum("ij,ij->i", n_old, n_new) <= 0
-        q = np.where(flipped, -1.0, q)
         worst = np.full(n, np.inf)
         np.minimum.at(worst, F.ravel(), np.repeat(q, 3))
         back = moved & (worst < worst_old - 1e-12)
@@ -47,7 +44,22 @@ def _refuse_worse(V_old, V_new, F, moved):
             break
         V[back] = V_old[back]
         moved &= ~back
+        # Only the faces of the vertices put back change (row-wise arithmetic: the same values
+        # as recomputing every face).
+        touched = np.flatnonzero(back[F].any(axis=1))
+        q[touched] = _quality_or_flipped(V, F[touched], n_old[touched])
     return V
+
+
+def _face_cross(V, F):
+    """(v1 - v0) x (v2 - v0) per face."""
+    return cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+
+
+def _quality_or_flipped(V, F, n_old):
+    """Quality 2r/R of each face, -1 where its normal turned against ``n_old``."""
+    flipped = np.einsum("ij,ij->i", n_old, _face_cross(V, F)) <= 0
+    return np.where(flipped, -1.0, triangle_quality(V, F))
 
 
 def bisect_obtuse(V, F, movable, fixed=None, attr=None, min_angle=2.0 * np.pi / 3.0, max_quality=0.5):
