@@ -260,12 +260,12 @@ def tangential_relaxation(X, F, free):
     if not np.all(np.isfinite(t)):
         return X
     step = t[:s, None] * b1 + t[s:, None] * b2
-    before = np.cross(X[star[:, 1]] - X[star[:, 0]], X[star[:, 2]] - X[star[:, 0]])
+    before = cross_rows(X[star[:, 1]] - X[star[:, 0]], X[star[:, 2]] - X[star[:, 0]])
     alpha = 1.0
     for _ in range(5):
         Y = X.copy()
         Y[free] += alpha * step
-        after = np.cross(Y[star[:, 1]] - Y[star[:, 0]], Y[star[:, 2]] - Y[star[:, 0]])
+        after = cross_rows(Y[star[:, 1]] - Y[star[:, 0]], Y[star[:, 2]] - Y[star[:, 0]])
         if np.all(np.einsum("ij,ij->i", before, after) > 0.0):
             return Y
         alpha *= 0.5

@@ -75,7 +75,7 @@ def triple_normals(P):
     """n_i = (p_i - p_{i+1}) x (p_{i+2} - p_{i+1}) of Sec. 3.1, indices mod m, (m, 3)."""
     P = np.asarray(P, np.float64)
     P1, P2 = np.roll(P, -1, axis=0), np.roll(P, -2, axis=0)
-    return np.cross(P - P1, P2 - P1)
+    return cross_rows(P - P1, P2 - P1)
 
 
 def planarity_terms(P):
@@ -85,7 +85,7 @@ def planarity_terms(P):
     """
     N = triple_normals(P)
     N1 = np.roll(N, -1, axis=0)
-    return np.arctan2(np.linalg.norm(np.cross(N, N1), axis=1), np.einsum("ij,ij->i", N, N1))
+    return np.arctan2(np.linalg.norm(cross_rows(N, N1), axis=1), np.einsum("ij,ij->i", N, N1))
 
 
 def planarity_energy(P):

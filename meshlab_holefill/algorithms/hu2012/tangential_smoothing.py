@@ -165,7 +165,7 @@ def collapse_poor(V, F, movable, fixed=None, attr=None, max_quality=0.3):
             ring = np.flatnonzero((F == v).any(axis=1))
             nbrs = set(F[ring].ravel().tolist()) - {v}
             old_min = q[ring].min()
-            n_old = np.cross(V[F[ring, 1]] - V[F[ring, 0]], V[F[ring, 2]] - V[F[ring, 0]])
+            n_old = cross_rows(V[F[ring, 1]] - V[F[ring, 0]], V[F[ring, 2]] - V[F[ring, 0]])
             for u in sorted(nbrs):
                 both = ring[(F[ring] == u).any(axis=1)]
                 opposite = set(F[both].ravel().tolist()) - {u, v}
@@ -177,7 +177,7 @@ def collapse_poor(V, F, movable, fixed=None, attr=None, max_quality=0.3):
                 G = np.where(F[ring][stay] == v, u, F[ring][stay])
                 if any(tuple(sorted((u, x))) in forbidden for x in nbrs - {u} - opposite):
                     continue
-                n_new = np.cross(V[G[:, 1]] - V[G[:, 0]], V[G[:, 2]] - V[G[:, 0]])
+                n_new = cross_rows(V[G[:, 1]] - V[G[:, 0]], V[G[:, 2]] - V[G[:, 0]])
                 if np.any(np.einsum("ij,ij->i", n_new, n_old[stay]) <= 0):
                     continue
                 new_min = triangle_quality(V, G).min()
@@ -244,13 +244,13 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
             n = len(V)
         target = np.zeros_like(V)
         count = np.bincount(F.ravel(), minlength=n).astype(np.float64)
-        fn = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+        fn = cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
         fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
         for c in range(3):
             v, a, b = F[:, c], F[:, (c + 1) % 3], F[:, (c + 2) % 3]
             e = V[b] - V[a]
             # (v, a, b) counter-clockwise about fn: v lies to the left of a -> b, along fn x e.
-            apex = 0.5 * (V[a] + V[b]) + (np.sqrt(3.0) / 2.0) * np.cross(fn, e)
+            apex = 0.5 * (V[a] + V[b]) + (np.sqrt(3.0) / 2.0) * cross_rows(fn, e)
             for j in range(3):
                 target[:, j] += np.bincount(v, weights=apex[:, j], minlength=n)
         ok = movable & (count > 0)
