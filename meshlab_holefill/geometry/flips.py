@@ -123,7 +123,7 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
     """
     F = np.array(F, np.int64)
     n = len(V)
-    fixed = undirected_keys(() if fixed_edges is None else fixed_edges, n)
+    fixed = np.unique(undirected_keys(() if fixed_edges is None else fixed_edges, n))
     scorer = min_angle_scores if criterion == "min_angle" else criterion if callable(criterion) else None
     total = 0
     for _ in range(max_rounds):
@@ -144,11 +144,11 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         lo, hi = np.minimum(c, d), np.maximum(c, d)
         new_key = lo * n + hi
         cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        existing = np.unique(cur[:, 0] * n + cur[:, 1])
-        ok_s = passes & keeps_orientation & (c_ != d_) & ~np.isin(new_key[s], existing)
+        existing = np.sort(cur[:, 0] * n + cur[:, 1])  # duplicates do not matter to _in_sorted
+        ok_s = passes & keeps_orientation & (c_ != d_) & ~_in_sorted(new_key[s], existing)
         if len(fixed):
             old_key = np.minimum(a_, b_) * n + np.maximum(a_, b_)
-            ok_s &= ~np.isin(old_key, fixed) & ~np.isin(new_key[s], fixed)
+            ok_s &= ~_in_sorted(old_key, fixed) & ~_in_sorted(new_key[s], fixed)
         ok[s] = ok_s
         cand = np.flatnonzero(ok)
         if allowed is not None and len(cand):
@@ -162,6 +162,15 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         F[f2[chosen]] = np.stack([b[chosen], c[chosen], d[chosen]], axis=1)
         total += len(chosen)
     return F, total
+
+
+def _in_sorted(x, table):
+    """np.isin(x, table) for a sorted int ``table`` (a binary search; isin's setup dominates on the
+    few hundred keys of a patch). Repeated keys in ``table`` are fine: searchsorted finds the first."""
+    if len(table) == 0:
+        return np.zeros(len(x), bool)
+    pos = np.minimum(np.searchsorted(table, x), len(table) - 1)
+    return table[pos] == x
 
 
 def _failing_edges(V, F, a, b, c, d, f1, f2, criterion, scorer):

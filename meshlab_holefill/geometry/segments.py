@@ -2,12 +2,20 @@
 
 Used by the curve-unfolding filter for its clearance d_MD (Brunton et al. 2009, Sec. 3.1) and
 for testing planar polygons for simplicity; works in 2D and 3D.
+
+The pairwise distances of a loop and of its moved segments (:func:`segment_distance_matrix`,
+:func:`segment_distance_rows`, called thousands of times by the annealing) are numba kernels
+that make, pair by pair, the operations of the numpy formulas (:func:`segment_distances`, the
+bounding-sphere bound) in the same order, sums of squares added left to right as numpy's row
+sums add them, without FMA contraction: the same bits, without the (a, b, d) temporaries.
+tests/geometry/test_segments.py checks them against the numpy formulas.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
+from numba import njit
 
 __all__ = ["segment_distances", "nonadjacent_mask", "segment_distance_rows", "segment_distance_matrix",
            "min_segment_distance", "is_simple_polygon", "polygon_edges_touch"]
@@ -86,18 +94,85 @@ def segment_distance_rows(A0, A1, B0, B1, allowed, near):
     -------
     rows : (a, b) float64
     """
+    A0, A1, B0, B1 = (np.ascontiguousarray(X, np.float64) for X in (A0, A1, B0, B1))
+    return _distance_rows(A0, A1, B0, B1, np.ascontiguousarray(allowed, np.bool_), float(near), False)
+
+
+@njit(cache=True)
+def _square_sum(X, i, Y, j):
+    """|X[i] - Y[j]|^2, the squares added left to right as numpy's row sum adds them."""
+    t = X[i, 0] - Y[j, 0]
+    s = t * t
+    for k in range(1, X.shape[1]):
+        t = X[i, k] - Y[j, k]
+        s += t * t
+    return s
+
+
+@njit(cache=True)
+def _clamp01(x):
+    return min(max(x, 0.0), 1.0)
+
+
+@njit(cache=True)
+def _segment_distance(A0, A1, B0, B1, i, j):
+    """:func:`segment_distances` of segments A[i] and B[j], the same operations in the same order."""
+    d = A0.shape[1]
+    a = e = b = c = f = 0.0
+    for k in range(d):
+        d1, d2, r = A1[i, k] - A0[i, k], B1[j, k] - B0[j, k], A0[i, k] - B0[j, k]
+        if k == 0:
+            a, e, b, c, f = d1 * d1, d2 * d2, d1 * d2, d1 * r, d2 * r
+        else:
+            a += d1 * d1
+            e += d2 * d2
+            b += d1 * d2
+            c += d1 * r
+            f += d2 * r
+    denom = a * e - b * b
+    s = (b * f - c * e) / denom if denom > 1e-14 * a * e else 0.0
+    s = _clamp01(s)
+    t = (b * s + f) / (e if e > 0.0 else 1.0)
+    a_safe = a if a > 0.0 else 1.0
+    if t < 0.0 or e <= 0.0:
+        s = _clamp01(-c / a_safe)
+    elif t > 1.0:
+        s = _clamp01((b - c) / a_safe)
+    t = _clamp01(t)
+    total = 0.0
+    for k in range(d):
+        diff = (A0[i, k] - B0[j, k]) + (A1[i, k] - A0[i, k]) * s - (B1[j, k] - B0[j, k]) * t
+        total = diff * diff if k == 0 else total + diff * diff
+    return math.sqrt(total)
+
+
+@njit(cache=True)
+def _distance_rows(A0, A1, B0, B1, allowed, near, exact):
+    """Compiled :func:`segment_distance_rows`: the bound of every pair, the exact distance of near ones.
+
+    With ``exact`` every allowed pair gets its exact distance and the others +inf (``near`` unused).
+    """
+    na, nb = A0.shape[0], B0.shape[0]
     ca, cb = 0.5 * (A0 + A1), 0.5 * (B0 + B1)
-    ra = 0.5 * np.sqrt(((A1 - A0) ** 2).sum(axis=1))
-    rb = 0.5 * np.sqrt(((B1 - B0) ** 2).sum(axis=1))
-    rows = np.sqrt(((ca[:, None, :] - cb[None, :, :]) ** 2).sum(axis=2)) - ra[:, None] - rb[None, :]
-    rows[~allowed] = np.inf
-    i, j = np.nonzero(rows <= near)
-    rows[i, j] = segment_distances(A0[i], A1[i], B0[j], B1[j])
+    ra = np.empty(na)
+    rb = np.empty(nb)
+    for i in range(na):
+        ra[i] = 0.5 * math.sqrt(_square_sum(A1, i, A0, i))
+    for j in range(nb):
+        rb[j] = 0.5 * math.sqrt(_square_sum(B1, j, B0, j))
+    rows = np.empty((na, nb))
+    for i in range(na):
+        for j in range(nb):
+            if exact:
+                rows[i, j] = _segment_distance(A0, A1, B0, B1, i, j) if allowed[i, j] else np.inf
+                continue
+            bound = math.sqrt(_square_sum(ca, i, cb, j)) - ra[i] - rb[j] if allowed[i, j] else np.inf
+            rows[i, j] = _segment_distance(A0, A1, B0, B1, i, j) if bound <= near else bound
     return rows
 
 
 def segment_distance_matrix(P, near=None):
-    """Distances between all pairs of non-adjacent loop segments, in one numpy call.
+    """Distances between all pairs of non-adjacent loop segments, in one compiled call.
 
     Parameters
     ----------
@@ -116,9 +191,8 @@ def segment_distance_matrix(P, near=None):
     Q = np.roll(P, -1, axis=0)
     if near is not None:
         return segment_distance_rows(P, Q, P, Q, nonadjacent_mask(m), near)
-    D = segment_distances(P[:, None, :], Q[:, None, :], P[None, :, :], Q[None, :, :])
-    D[~nonadjacent_mask(m)] = np.inf
-    return D
+    Q = np.ascontiguousarray(Q)
+    return _distance_rows(P, Q, P, Q, nonadjacent_mask(m), np.inf, True)
 
 
 def min_segment_distance(P, near=None):

@@ -194,3 +194,13 @@ def test_relax_edges_respects_fixed_edges_of_a_convex_fan(seed, criterion):
     assert not edges & set(forbidden)
     _assert_oriented_manifold(F2)
     assert np.all(np.cross(P[F2[:, 1]] - P[F2[:, 0]], P[F2[:, 2]] - P[F2[:, 0]])[:, 2] > 0)
+
+
+def test_sorted_membership_equals_isin():
+    from meshlab_holefill.geometry.flips import _in_sorted
+
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        table = np.sort(rng.integers(0, 50, int(rng.integers(0, 30))))  # repeats allowed
+        x = rng.integers(-5, 55, int(rng.integers(0, 30)))
+        np.testing.assert_array_equal(_in_sorted(x, table), np.isin(x, table))

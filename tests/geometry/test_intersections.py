@@ -301,3 +301,18 @@ def test_two_crossing_spheres_meet_along_one_curve():
     assert len(against) > 50_000 and len(query) > 3000
     hits = faces_intersecting(V, F, query, against)
     assert 0 < len(hits) < len(query)
+
+
+def test_welding_ranks_equal_unique_inverse_and_vertex_marks_equal_unique():
+    from meshlab_holefill.geometry.intersections import _row_ranks, _sorted_unique, _used_vertices
+
+    rng = np.random.default_rng(0)
+    for t in range(200):
+        P = rng.integers(-2, 3, (int(rng.integers(1, 40)), 3)).astype(float) * 0.5  # many equal rows
+        np.testing.assert_array_equal(_row_ranks(P), np.unique(P, axis=0, return_inverse=True)[1].ravel())
+        F = rng.integers(0, 30, (20, 3))
+        faces = rng.integers(0, 20, int(rng.integers(1, 15)))
+        np.testing.assert_array_equal(_used_vertices(F, faces, 30), np.unique(F[faces]))
+        x = rng.integers(0, 30, int(rng.integers(0, 20)))
+        x = np.unique(x) if t % 2 else x
+        np.testing.assert_array_equal(_sorted_unique(x), np.unique(x))

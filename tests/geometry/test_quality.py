@@ -54,3 +54,29 @@ def test_vertex_normals_weigh_faces_by_area():
     assert np.allclose(N[0], both) and np.allclose(N[1], both)
     assert np.allclose(N[2], [0, 0, 1]) and np.allclose(N[3], [0, 1, 0])
     assert np.array_equal(N[4], [0, 0, 0])  # a vertex without faces gets a zero normal
+
+
+def test_corner_sums_adds_like_add_at_in_corner_order():
+    from meshlab_holefill.geometry.quality import corner_sums
+
+    rng = np.random.default_rng(0)
+    for _ in range(100):
+        n = int(rng.integers(1, 40))
+        F = rng.integers(0, n, (int(rng.integers(0, 60)), 3))
+        C = rng.normal(size=(len(F), 3)) * 10.0 ** rng.integers(-6, 6, (len(F), 1))
+        expected = np.zeros((n, 3))
+        for k in range(3):
+            np.add.at(expected, F[:, k], C)
+        np.testing.assert_array_equal(corner_sums(F, C, n), expected)
+
+
+def test_unique_edges_equals_the_row_wise_unique_of_the_sorted_edges():
+    from meshlab_holefill.geometry.quality import unique_edges
+
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        F = rng.integers(0, int(rng.integers(1, 60)), (int(rng.integers(0, 50)), 3))
+        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64), axis=1)
+        got = unique_edges(F)
+        assert got.dtype == np.int64 and got.shape == (len(np.unique(E, axis=0)), 2)
+        np.testing.assert_array_equal(got, np.unique(E, axis=0))

@@ -108,3 +108,61 @@ def test_polygon_edges_touch_is_any_pairwise_touch_of_non_adjacent_edges(points)
     assert polygon_edges_touch(Q) is expected
     assert polygon_edges_touch(Q[::-1]) is expected
     assert polygon_edges_touch(Q, chunk=3) is expected
+
+
+# ----------------------------------------------------------------- compiled distance kernels
+
+def _numpy_distance_rows(A0, A1, B0, B1, allowed, near):
+    """The numpy formulation the compiled segment_distance_rows reproduces bit for bit (oracle)."""
+    from meshlab_holefill.geometry.segments import segment_distances
+
+    ca, cb = 0.5 * (A0 + A1), 0.5 * (B0 + B1)
+    ra = 0.5 * np.sqrt(((A1 - A0) ** 2).sum(axis=1))
+    rb = 0.5 * np.sqrt(((B1 - B0) ** 2).sum(axis=1))
+    rows = np.sqrt(((ca[:, None, :] - cb[None, :, :]) ** 2).sum(axis=2)) - ra[:, None] - rb[None, :]
+    rows[~allowed] = np.inf
+    i, j = np.nonzero(rows <= near)
+    rows[i, j] = segment_distances(A0[i], A1[i], B0[j], B1[j])
+    return rows
+
+
+def _random_segments(rng, n, d):
+    """Segments of random length, some near-degenerate or points (the clamping branches)."""
+    A0 = rng.normal(size=(n, d)) * rng.choice([1e-3, 1.0, 1e3])
+    return A0, A0 + rng.normal(size=(n, d)) * rng.choice([1.0, 1e-9, 0.0], size=(n, 1))
+
+
+def test_segment_distance_rows_equals_the_numpy_formulas_bit_for_bit():
+    from meshlab_holefill.geometry.segments import segment_distance_rows
+
+    rng = np.random.default_rng(0)
+    for t in range(300):
+        d = 2 + t % 2
+        na, nb = rng.integers(1, 25, 2)
+        A0, A1 = _random_segments(rng, na, d)
+        B0, B1 = _random_segments(rng, nb, d)
+        if t % 3 == 0:  # parallel copies: the denom <= 1e-14 a e branch
+            k = min(na, nb)
+            B0[:k], B1[:k] = A0[:k] + 0.1, A1[:k] + 0.1
+        allowed = rng.random((na, nb)) < 0.8
+        near = float(rng.choice([0.5, 2.0, np.inf]))
+        expected = _numpy_distance_rows(A0, A1, B0, B1, allowed, near)
+        np.testing.assert_array_equal(segment_distance_rows(A0, A1, B0, B1, allowed, near), expected)
+
+
+def test_segment_distance_matrix_equals_the_numpy_formulas_bit_for_bit():
+    from meshlab_holefill.geometry.segments import nonadjacent_mask, segment_distance_matrix, segment_distances
+
+    rng = np.random.default_rng(1)
+    for t in range(200):
+        m, d = int(rng.integers(3, 30)), 2 + t % 2
+        P = rng.normal(size=(m, d)) * rng.choice([1e-3, 1.0, 1e3])
+        if t % 4 == 0:
+            P[1] = P[0]  # a point segment
+        Q = np.roll(P, -1, axis=0)
+        exact = segment_distances(P[:, None, :], Q[:, None, :], P[None, :, :], Q[None, :, :])
+        exact[~nonadjacent_mask(m)] = np.inf
+        np.testing.assert_array_equal(segment_distance_matrix(P), exact)
+        near = float(rng.choice([0.1, 1.0]))
+        np.testing.assert_array_equal(segment_distance_matrix(P, near),
+                                      _numpy_distance_rows(P, Q, P, Q, nonadjacent_mask(m), near))

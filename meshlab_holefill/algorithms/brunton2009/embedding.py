@@ -30,6 +30,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ...geometry.laplacian import uniform_laplacian
+from ...geometry.quality import corner_sums, cross_rows, unique_edges
 from ...errors import HoleFillError
 
 __all__ = ["umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy", "vertex_normals",
@@ -48,10 +49,39 @@ def umbrella_operator(F, n):
     -------
     W : (n, n) CSR float64  (rows of isolated vertices are zero)
     """
-    L = uniform_laplacian(np.asarray(F, np.int64), n)
-    degree = -L.diagonal()
+    F = np.asarray(F, np.int64)
+    E = unique_edges(F)
+    if len(E) == 0 or np.any(E[:, 0] == E[:, 1]):  # degenerate faces: the general sparse algebra
+        L = uniform_laplacian(F, n)
+        degree = -L.diagonal()
+        inverse = np.where(degree > 0, 1.0 / np.maximum(degree, 1.0), 0.0)
+        return (sp.diags(inverse) @ L).tocsr()
+    return _umbrella_from_edges(E, n)
+
+
+def _umbrella_from_edges(E, n):
+    """diags(1 / degree) @ (A - diags(degree)) built directly, entry for entry as scipy builds it.
+
+    Same values (1 / d and -d / d), same stored entries and the same order within each row
+    (scipy's sparse product leaves the columns of a row in decreasing order), so every later
+    sparse product and factorisation sees the identical matrix; scipy's construction (a COO
+    to CSR conversion, a sparse difference and a sparse product) took most of the operator's
+    time on a patch.
+    """
+    rows = np.concatenate([E[:, 0], E[:, 1]])
+    cols = np.concatenate([E[:, 1], E[:, 0]])
+    degree = np.bincount(rows, minlength=n).astype(np.float64)
     inverse = np.where(degree > 0, 1.0 / np.maximum(degree, 1.0), 0.0)
-    return (sp.diags(inverse) @ L).tocsr()
+    has = np.flatnonzero(degree > 0)
+    rows = np.concatenate([rows, has])
+    cols = np.concatenate([cols, has])
+    values = np.concatenate([inverse[rows[: 2 * len(E)]], inverse[has] * -degree[has]])
+    order = np.argsort(rows * n + (n - 1 - cols), kind="stable")
+    indptr = np.zeros(n + 1, np.int64)
+    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
+    W = sp.csr_matrix((values[order], cols[order].astype(np.int32), indptr.astype(np.int32)), shape=(n, n))
+    W.has_sorted_indices = False
+    return W
 
 
 def energy_rows(F, n, free, order, anchors=False):
@@ -147,10 +177,8 @@ def vertex_normals(X, F):
     """Area-weighted unit vertex normals, (n, 3) (zero rows for isolated vertices)."""
     X = np.asarray(X, np.float64)
     F = np.asarray(F, np.int64)
-    face_normals = np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]])
-    N = np.zeros_like(X)
-    for corner in range(3):
-        np.add.at(N, F[:, corner], face_normals)
+    face_normals = cross_rows(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]])
+    N = corner_sums(F, face_normals, len(X))
     length = np.linalg.norm(N, axis=1)
     return N / np.where(length > 0, length, 1.0)[:, None]
 
@@ -159,9 +187,9 @@ def tangent_frames(N):
     """Two unit vectors spanning the plane orthogonal to each unit row of N, (s, 3) each."""
     N = np.asarray(N, np.float64)
     helper = np.where(np.abs(N[:, [0]]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
-    b1 = np.cross(N, helper)
+    b1 = cross_rows(N, helper)
     b1 /= np.maximum(np.linalg.norm(b1, axis=1), 1e-300)[:, None]
-    return b1, np.cross(N, b1)
+    return b1, cross_rows(N, b1)
 
 
 def tangential_relaxation(X, F, free):
@@ -204,10 +232,15 @@ def tangential_relaxation(X, F, free):
     s = len(free)
     if s == 0:
         return X
-    W = umbrella_operator(F, len(X))
+    is_free = np.zeros(len(X), bool)
+    is_free[free] = True
+    # The free vertices' rows of U and their normals only see the faces around them: built on
+    # those faces they are the same numbers (the same edges, degrees and sums, in the same order).
+    star = F[is_free[F].any(axis=1)]
+    W = umbrella_operator(star, len(X))
     Wf = W[free]
-    Wff = Wf[:, free].tocoo()
-    b1, b2 = tangent_frames(vertex_normals(X, F)[free])
+    Wff = _principal_entries(W, free)
+    b1, b2 = tangent_frames(vertex_normals(X, star)[free])
     frames = (b1, b2)
     blocks_r, blocks_c, blocks_v = [], [], []
     for i in range(2):
@@ -227,17 +260,31 @@ def tangential_relaxation(X, F, free):
     if not np.all(np.isfinite(t)):
         return X
     step = t[:s, None] * b1 + t[s:, None] * b2
-    star = F[np.isin(F, free).any(axis=1)]
-    before = np.cross(X[star[:, 1]] - X[star[:, 0]], X[star[:, 2]] - X[star[:, 0]])
+    before = cross_rows(X[star[:, 1]] - X[star[:, 0]], X[star[:, 2]] - X[star[:, 0]])
     alpha = 1.0
     for _ in range(5):
         Y = X.copy()
         Y[free] += alpha * step
-        after = np.cross(Y[star[:, 1]] - Y[star[:, 0]], Y[star[:, 2]] - Y[star[:, 0]])
+        after = cross_rows(Y[star[:, 1]] - Y[star[:, 0]], Y[star[:, 2]] - Y[star[:, 0]])
         if np.all(np.einsum("ij,ij->i", before, after) > 0.0):
             return Y
         alpha *= 0.5
     return X
+
+
+def _principal_entries(W, rows):
+    """The stored entries of W[rows][:, rows] as COO, renumbered (in W's storage order).
+
+    The same (row, column, value) triples as scipy's fancy indexing then ``tocoo`` (the order
+    of the triples does not matter to the matrix built from them), without its overhead.
+    """
+    n = W.shape[0]
+    pos = np.full(n, -1, np.int64)
+    pos[rows] = np.arange(len(rows))
+    r = pos[np.repeat(np.arange(n), np.diff(W.indptr))]
+    c = pos[W.indices]
+    keep = (r >= 0) & (c >= 0)
+    return sp.coo_matrix((W.data[keep], (r[keep], c[keep])), shape=(len(rows), len(rows)))
 
 
 def embed_patch(ctx, n_interior, F, energy="fairing", boundary=None, extra_faces=None, tangential=False):

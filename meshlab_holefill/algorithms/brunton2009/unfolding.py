@@ -59,6 +59,7 @@ import math
 import numpy as np
 
 from ...geometry.pca import fit_plane, plane_frame
+from ...geometry.quality import cross_rows
 from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
 from ...errors import HoleFillError
 
@@ -74,7 +75,7 @@ def triple_normals(P):
     """n_i = (p_i - p_{i+1}) x (p_{i+2} - p_{i+1}) of Sec. 3.1, indices mod m, (m, 3)."""
     P = np.asarray(P, np.float64)
     P1, P2 = np.roll(P, -1, axis=0), np.roll(P, -2, axis=0)
-    return np.cross(P - P1, P2 - P1)
+    return cross_rows(P - P1, P2 - P1)
 
 
 def planarity_terms(P):
@@ -84,7 +85,7 @@ def planarity_terms(P):
     """
     N = triple_normals(P)
     N1 = np.roll(N, -1, axis=0)
-    return np.arctan2(np.linalg.norm(np.cross(N, N1), axis=1), np.einsum("ij,ij->i", N, N1))
+    return np.arctan2(np.linalg.norm(cross_rows(N, N1), axis=1), np.einsum("ij,ij->i", N, N1))
 
 
 def planarity_energy(P):
@@ -112,12 +113,17 @@ def colour_classes(m):
 
 def _cross_normals(A, B, C):
     """n = (a - b) x (c - b) row-wise, (b, 3)."""
-    return np.cross(A - B, C - B)
+    return cross_rows(A - B, C - B)
 
 
 def _angles(N1, N2):
-    """Angle between row vectors (0 where one is zero), (b,)."""
-    return np.arctan2(np.linalg.norm(np.cross(N1, N2), axis=1), (N1 * N2).sum(axis=1))
+    """Angle between row vectors (0 where one is zero), (b,).
+
+    cross_rows and the row sum are np.cross and np.linalg.norm's arithmetic without their
+    per-call overhead, which dominates on a colour class of a few dozen rows.
+    """
+    C = cross_rows(N1, N2)
+    return np.arctan2(np.sqrt((C * C).sum(axis=1)), (N1 * N2).sum(axis=1))
 
 
 def _cone_directions(prev, G, r):
@@ -297,12 +303,17 @@ def _keep_clearance(P, J, q, acc, mask, near, eps):
         trial = P.copy()
         trial[J[acc]] = q[acc]
         ends = np.roll(trial, -1, axis=0)
-        moved = np.unique(np.concatenate([jm[acc], J[acc]]))
+        # Boolean marks over the loop: sorted unique segment indices without np.unique / np.isin.
+        is_moved = np.zeros(m, bool)
+        is_moved[jm[acc]] = is_moved[J[acc]] = True
+        moved = np.flatnonzero(is_moved)
         rows = segment_distance_rows(trial[moved], ends[moved], trial, ends, mask[moved], near)
         bad = moved[rows.min(axis=1) <= eps]
         if len(bad) == 0:
             break
-        acc &= ~(np.isin(J, bad) | np.isin(jm, bad))
+        is_bad = np.zeros(m, bool)
+        is_bad[bad] = True
+        acc &= ~(is_bad[J] | is_bad[jm])
     else:
         acc[:] = False
     return acc, trial, moved, rows

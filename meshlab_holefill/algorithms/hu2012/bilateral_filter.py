@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...geometry.quality import triangle_quality, vertex_normals
+from ...geometry.quality import cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import one_ring_matrix
 
 __all__ = ["bilateral_filter"]
@@ -36,11 +36,11 @@ def _refuse_slivers(V_old, V_new, F, moved, min_quality):
     """
     q_old = triangle_quality(V_old, F)
     floor = np.minimum(q_old, min_quality)
-    n_old = np.cross(V_old[F[:, 1]] - V_old[F[:, 0]], V_old[F[:, 2]] - V_old[F[:, 0]])
+    n_old = cross_rows(V_old[F[:, 1]] - V_old[F[:, 0]], V_old[F[:, 2]] - V_old[F[:, 0]])
     V = V_new.copy()
     moved = moved.copy()
     for _ in range(len(V)):
-        n_new = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+        n_new = cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
         bad = (triangle_quality(V, F) < floor * (1 - 1e-12)) | (np.einsum("ij,ij->i", n_old, n_new) <= 0)
         bad &= moved[F].any(axis=1)
         if not bad.any():

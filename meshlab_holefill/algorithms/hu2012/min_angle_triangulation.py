@@ -151,74 +151,94 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
     -------
     F : (k - 2, 3) int64  faces in loop indices, oriented like the loop
     """
-    k = len(P)
-    if k < 3:
+    if len(P) < 3:
         raise HoleFillError("a hole needs at least 3 boundary vertices")
-    N = np.asarray(normals, np.float64)
-    P = np.asarray(P, np.float64)
-    sigma = normal_angle_threshold(N)
-    cos_sigma = np.cos(sigma)
-    forbidden = edge_pair_set(forbidden_edges)
-    Pl, Nl = P.tolist(), N.tolist()  # plain floats for the scalar per-ear tests
-    prv = [(i - 1) % k for i in range(k)]
-    nxt = [(i + 1) % k for i in range(k)]
-    active = np.ones(k, bool)
-    angle = np.full(k, np.inf)
-    cuttable = np.zeros(k, bool)      # non-degenerate, new edge not already in the mesh
-    normals_agree = np.zeros(k, bool)  # the normal test alpha <= sigma
-    verdict = {}                       # cached ear/sector test, dropped when the ear changes
-    area_tol = 1e-14 * float(np.ptp(P, axis=0).max()) ** 2
+    ears = _Ears(P, normals, forbidden_edges)
+    faces = []
+    for _ in range(len(P) - 3):
+        faces.append(ears.cut(ears.pick()))
+    faces.append(ears.last_triangle())
+    return np.asarray(faces, np.int64)
 
-    def evaluate(v):
-        p, n = prv[v], nxt[v]
-        angle[v], area2 = _vertex_angle(Pl[p], Pl[v], Pl[n], Nl[v])
-        cuttable[v] = area2 > area_tol and tuple(sorted((p, n))) not in forbidden
-        normals_agree[v] = N[p] @ N[n] >= cos_sigma
-        verdict.pop(v, None)
 
-    def proper_ear(v):
-        # Removing other vertices can only unblock an ear, so a cached False stays safe.
-        if v not in verdict:
+class _Ears:
+    """The shrinking loop of :func:`min_angle_triangulation` and the state of its ears (Sec. III.B).
+
+    Ear v is the triangle (prv[v], v, nxt[v]); ``angle`` (Eq. 2), ``cuttable`` (non-degenerate,
+    new edge not already in the mesh) and ``normals_agree`` (the normal test alpha <= sigma)
+    are kept per vertex and re-evaluated for the ears a cut changes. Coordinates are also kept
+    as plain floats: the scalar per-ear tests are cheaper on them than on numpy rows.
+    """
+
+    def __init__(self, P, normals, forbidden_edges):
+        k = len(P)
+        self.P = np.asarray(P, np.float64)
+        self.N = np.asarray(normals, np.float64)
+        self.cos_sigma = np.cos(normal_angle_threshold(self.N))
+        self.forbidden = edge_pair_set(forbidden_edges)
+        self.Pl, self.Nl = self.P.tolist(), self.N.tolist()
+        self.prv = [(i - 1) % k for i in range(k)]
+        self.nxt = [(i + 1) % k for i in range(k)]
+        self.active = np.ones(k, bool)
+        self.angle = np.full(k, np.inf)
+        self.cuttable = np.zeros(k, bool)
+        self.normals_agree = np.zeros(k, bool)
+        self.verdict = {}  # cached proper-ear test, dropped when the ear changes
+        self.area_tol = 1e-14 * float(np.ptp(self.P, axis=0).max()) ** 2
+        for v in range(k):
+            self.evaluate(v)
+
+    def evaluate(self, v):
+        """Angle (Eq. 2), cuttability and normal test of ear v with its current neighbours."""
+        p, n = self.prv[v], self.nxt[v]
+        self.angle[v], area2 = _vertex_angle(self.Pl[p], self.Pl[v], self.Pl[n], self.Nl[v])
+        self.cuttable[v] = area2 > self.area_tol and (min(p, n), max(p, n)) not in self.forbidden
+        self.normals_agree[v] = self.N[p] @ self.N[n] >= self.cos_sigma
+        self.verdict.pop(v, None)
+
+    def proper(self, v):
+        """Ear v keeps its new edge inside the hole at both ends and holds no other boundary vertex.
+
+        Removing other vertices can only unblock an ear, so a cached False stays safe.
+        """
+        if v not in self.verdict:
+            Pl, Nl, prv, nxt = self.Pl, self.Nl, self.prv, self.nxt
             p, n = prv[v], nxt[v]
             ok = (_in_sector(Pl[p], Nl[p], Pl[prv[p]], Pl[v], Pl[n])
                   and _in_sector(Pl[n], Nl[n], Pl[v], Pl[nxt[n]], Pl[p]))
             if ok:
-                others = np.flatnonzero(active)
+                others = np.flatnonzero(self.active)
                 others = others[(others != p) & (others != v) & (others != n)]
-                ok = not _ear_holds_a_vertex(P, p, v, n, others)
-            verdict[v] = ok
-        return verdict[v]
+                ok = not _ear_holds_a_vertex(self.P, p, v, n, others)
+            self.verdict[v] = ok
+        return self.verdict[v]
 
-    for v in range(k):
-        evaluate(v)
-    faces = []
-    remaining = k
-    while remaining > 3:
-        pick = None
-        for tier in (active & cuttable & normals_agree, active & cuttable):
+    def pick(self):
+        """Step 1-2: the smallest-angle proper ear passing the normal test, else any proper cuttable
+        ear, else the smallest-angle cuttable one."""
+        for tier in (self.active & self.cuttable & self.normals_agree, self.active & self.cuttable):
             candidates = np.flatnonzero(tier)
-            for v in candidates[np.argsort(angle[candidates], kind="stable")].tolist():
-                if proper_ear(v):
-                    pick = v
-                    break
-            if pick is not None:
-                break
-        if pick is None:
-            candidates = np.flatnonzero(active & cuttable)
-            if len(candidates) == 0:
-                raise HoleFillError("no valid ear left in the minimum-angle triangulation")
-            pick = int(candidates[np.argmin(angle[candidates])])
-        v = pick
-        p, n = prv[v], nxt[v]
-        faces.append((p, v, n))
-        nxt[p], prv[n] = n, p
-        active[v] = False
-        remaining -= 1
-        for u in {prv[p], p, n, nxt[n]}:
-            evaluate(u)
-    a = int(np.flatnonzero(active)[0])
-    b, c = nxt[a], nxt[nxt[a]]
-    if any(tuple(sorted(e)) in forbidden for e in ((a, b), (b, c), (c, a))):
-        raise HoleFillError("the last triangle would duplicate an existing edge")
-    faces.append((a, b, c))
-    return np.asarray(faces, np.int64)
+            for v in candidates[np.argsort(self.angle[candidates], kind="stable")].tolist():
+                if self.proper(v):
+                    return v
+        candidates = np.flatnonzero(self.active & self.cuttable)
+        if len(candidates) == 0:
+            raise HoleFillError("no valid ear left in the minimum-angle triangulation")
+        return int(candidates[np.argmin(self.angle[candidates])])
+
+    def cut(self, v):
+        """Add the ear triangle (v1, v, v2), remove v from the loop, re-evaluate the ears it changes."""
+        p, n = self.prv[v], self.nxt[v]
+        self.nxt[p], self.prv[n] = n, p
+        self.active[v] = False
+        for u in {self.prv[p], p, n, self.nxt[n]}:
+            self.evaluate(u)
+        return (p, v, n)
+
+    def last_triangle(self):
+        """Step 3: the three vertices left form the last triangle."""
+        a = int(np.flatnonzero(self.active)[0])
+        b, c = self.nxt[a], self.nxt[self.nxt[a]]
+        if any(tuple(sorted(e)) in self.forbidden for e in ((a, b), (b, c), (c, a))):
+            raise HoleFillError("the last triangle would duplicate an existing edge")
+        return (a, b, c)

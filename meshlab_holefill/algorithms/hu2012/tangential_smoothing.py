@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...geometry.flips import relax_edges
-from ...geometry.quality import corner_angles, triangle_quality, vertex_normals
+from ...geometry.quality import corner_angles, cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
 
 __all__ = ["bisect_obtuse", "collapse_poor", "tangential_smoothing"]
@@ -32,14 +32,11 @@ def _refuse_worse(V_old, V_new, F, moved):
     q_old = triangle_quality(V_old, F)
     worst_old = np.full(n, np.inf)
     np.minimum.at(worst_old, F.ravel(), np.repeat(q_old, 3))
-    n_old = np.cross(V_old[F[:, 1]] - V_old[F[:, 0]], V_old[F[:, 2]] - V_old[F[:, 0]])
+    n_old = _face_cross(V_old, F)
     V = V_new.copy()
     moved = moved.copy()
+    q = _quality_or_flipped(V, F, n_old)
     for _ in range(n):
-        q = triangle_quality(V, F)
-        n_new = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-        flipped = np.einsum("ij,ij->i", n_old, n_new) <= 0
-        q = np.where(flipped, -1.0, q)
         worst = np.full(n, np.inf)
         np.minimum.at(worst, F.ravel(), np.repeat(q, 3))
         back = moved & (worst < worst_old - 1e-12)
@@ -47,7 +44,22 @@ def _refuse_worse(V_old, V_new, F, moved):
             break
         V[back] = V_old[back]
         moved &= ~back
+        # Only the faces of the vertices put back change (row-wise arithmetic: the same values
+        # as recomputing every face).
+        touched = np.flatnonzero(back[F].any(axis=1))
+        q[touched] = _quality_or_flipped(V, F[touched], n_old[touched])
     return V
+
+
+def _face_cross(V, F):
+    """(v1 - v0) x (v2 - v0) per face."""
+    return cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+
+
+def _quality_or_flipped(V, F, n_old):
+    """Quality 2r/R of each face, -1 where its normal turned against ``n_old``."""
+    flipped = np.einsum("ij,ij->i", n_old, _face_cross(V, F)) <= 0
+    return np.where(flipped, -1.0, triangle_quality(V, F))
 
 
 def bisect_obtuse(V, F, movable, fixed=None, attr=None, min_angle=2.0 * np.pi / 3.0, max_quality=0.5):
@@ -153,7 +165,7 @@ def collapse_poor(V, F, movable, fixed=None, attr=None, max_quality=0.3):
             ring = np.flatnonzero((F == v).any(axis=1))
             nbrs = set(F[ring].ravel().tolist()) - {v}
             old_min = q[ring].min()
-            n_old = np.cross(V[F[ring, 1]] - V[F[ring, 0]], V[F[ring, 2]] - V[F[ring, 0]])
+            n_old = cross_rows(V[F[ring, 1]] - V[F[ring, 0]], V[F[ring, 2]] - V[F[ring, 0]])
             for u in sorted(nbrs):
                 both = ring[(F[ring] == u).any(axis=1)]
                 opposite = set(F[both].ravel().tolist()) - {u, v}
@@ -165,7 +177,7 @@ def collapse_poor(V, F, movable, fixed=None, attr=None, max_quality=0.3):
                 G = np.where(F[ring][stay] == v, u, F[ring][stay])
                 if any(tuple(sorted((u, x))) in forbidden for x in nbrs - {u} - opposite):
                     continue
-                n_new = np.cross(V[G[:, 1]] - V[G[:, 0]], V[G[:, 2]] - V[G[:, 0]])
+                n_new = cross_rows(V[G[:, 1]] - V[G[:, 0]], V[G[:, 2]] - V[G[:, 0]])
                 if np.any(np.einsum("ij,ij->i", n_new, n_old[stay]) <= 0):
                     continue
                 new_min = triangle_quality(V, G).min()
@@ -232,13 +244,13 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
             n = len(V)
         target = np.zeros_like(V)
         count = np.bincount(F.ravel(), minlength=n).astype(np.float64)
-        fn = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+        fn = cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
         fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
         for c in range(3):
             v, a, b = F[:, c], F[:, (c + 1) % 3], F[:, (c + 2) % 3]
             e = V[b] - V[a]
             # (v, a, b) counter-clockwise about fn: v lies to the left of a -> b, along fn x e.
-            apex = 0.5 * (V[a] + V[b]) + (np.sqrt(3.0) / 2.0) * np.cross(fn, e)
+            apex = 0.5 * (V[a] + V[b]) + (np.sqrt(3.0) / 2.0) * cross_rows(fn, e)
             for j in range(3):
                 target[:, j] += np.bincount(v, weights=apex[:, j], minlength=n)
         ok = movable & (count > 0)

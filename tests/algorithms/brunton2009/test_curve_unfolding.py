@@ -802,3 +802,46 @@ def test_a_long_strip_hole_of_the_bunny_fails_fast_instead_of_bulging():
     assert hole["boundary_edges"] == 697 and hole["status"] == "failed"
     assert "times the area of the missing surface" in hole["reason"] and "strip-shaped" in hole["reason"]
     assert np.array_equal(mesh_arrays(ms)[1], F[~strip])
+
+
+def _scipy_umbrella(F, n):
+    """U built by scipy's sparse algebra, diags(1 / degree) @ (A - diags(degree)): the oracle."""
+    import scipy.sparse as sp
+    from meshlab_holefill.geometry.laplacian import uniform_laplacian
+
+    L = uniform_laplacian(np.asarray(F, np.int64), n)
+    degree = -L.diagonal()
+    return (sp.diags(np.where(degree > 0, 1.0 / np.maximum(degree, 1.0), 0.0)) @ L).tocsr()
+
+
+def test_umbrella_operator_is_scipys_matrix_entry_for_entry():
+    """Same stored entries, in the same order within each row, so later products and LU factors are identical."""
+    from conftest import grid
+
+    rng = np.random.default_rng(0)
+    _, F = grid(7)
+    cases = [(F, int(F.max()) + 4)]  # isolated vertices at the end
+    cases += [(F[rng.choice(len(F), size=len(F) // 2, replace=False)], int(F.max()) + 1) for _ in range(5)]
+    cases += [(rng.integers(0, 25, (15, 3)), 25) for _ in range(20)]  # some faces degenerate
+    for F, n in cases:
+        got, expected = umbrella_operator(F, n), _scipy_umbrella(F, n)
+        for attr in ("indptr", "indices", "data"):
+            np.testing.assert_array_equal(getattr(got, attr), getattr(expected, attr))
+        W = got.toarray()
+        used = np.abs(W).sum(axis=1) > 0
+        np.testing.assert_allclose(W[used].sum(axis=1), 0.0, atol=1e-12)  # U of a constant is zero
+
+
+def test_principal_entries_are_scipys_submatrix_triples():
+    from conftest import grid
+    from meshlab_holefill.algorithms.brunton2009.embedding import _principal_entries
+
+    rng = np.random.default_rng(0)
+    _, F = grid(9)
+    W = umbrella_operator(F, int(F.max()) + 1)
+    for _ in range(20):
+        rows = np.flatnonzero(rng.random(W.shape[0]) < 0.6)
+        expected, got = W[rows][:, rows].tocoo(), _principal_entries(W, rows)
+        assert got.shape == expected.shape
+        assert sorted(zip(got.row.tolist(), got.col.tolist(), got.data.tolist())) == \
+            sorted(zip(expected.row.tolist(), expected.col.tolist(), expected.data.tolist()))

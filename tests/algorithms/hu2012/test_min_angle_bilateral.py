@@ -533,3 +533,46 @@ def test_reading_parameters_reach_the_filter_and_are_validated(bunny_scan):
         bunny_scan.meshing_close_holes_min_angle_bilateral(neighbourhood="sphere")
     with pytest.raises(ValueError, match="filter_guard"):
         bunny_scan.meshing_close_holes_min_angle_bilateral(filter_guard=1.5)
+
+
+def _refuse_worse_by_full_recompute(V_old, V_new, F, moved):
+    """Oracle of tangential_smoothing._refuse_worse: every face's quality recomputed each pass."""
+    from meshlab_holefill.geometry.quality import triangle_quality
+
+    n = len(V_old)
+    worst_old = np.full(n, np.inf)
+    np.minimum.at(worst_old, F.ravel(), np.repeat(triangle_quality(V_old, F), 3))
+    n_old = np.cross(V_old[F[:, 1]] - V_old[F[:, 0]], V_old[F[:, 2]] - V_old[F[:, 0]])
+    V, moved = V_new.copy(), moved.copy()
+    while True:
+        n_new = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+        q = np.where(np.einsum("ij,ij->i", n_old, n_new) <= 0, -1.0, triangle_quality(V, F))
+        worst = np.full(n, np.inf)
+        np.minimum.at(worst, F.ravel(), np.repeat(q, 3))
+        back = moved & (worst < worst_old - 1e-12)
+        if not back.any():
+            return V
+        V[back] = V_old[back]
+        moved &= ~back
+
+
+def test_refuse_worse_undoes_exactly_the_moves_a_full_recompute_undoes():
+    from conftest import grid
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import _refuse_worse
+    from meshlab_holefill.geometry.quality import triangle_quality
+
+    rng = np.random.default_rng(0)
+    for _ in range(100):
+        V, F = grid(int(rng.integers(4, 9)))
+        V = np.asarray(V, np.float64)
+        V_new = V + rng.normal(size=V.shape) * rng.choice([0.01, 0.1, 0.5])
+        moved = rng.random(len(V)) < 0.7
+        V_new[~moved] = V[~moved]
+        got = _refuse_worse(V, V_new, F, moved)
+        np.testing.assert_array_equal(got, _refuse_worse_by_full_recompute(V, V_new, F, moved))
+        worst = np.full(len(V), np.inf)
+        np.minimum.at(worst, F.ravel(), np.repeat(triangle_quality(got, F), 3))
+        worst_old = np.full(len(V), np.inf)
+        np.minimum.at(worst_old, F.ravel(), np.repeat(triangle_quality(V, F), 3))
+        kept = moved & np.any(got != V, axis=1)
+        assert np.all(worst[kept] >= worst_old[kept] - 1e-12)  # no kept move lowers its faces' minimum
