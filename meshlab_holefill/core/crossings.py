@@ -23,8 +23,9 @@ def face_boxes_near(V, F, boxes):
     face's box per hole costs O(m) per hole (0.2 s per hole at 3.6M faces); instead every
     vertex gets an outcode (Cohen-Sutherland: one bit per side of the union of the patch
     boxes it lies beyond), a face misses the union box exactly when its three vertices share
-    a bit, and only the few faces left get their boxes for the per-patch test. The outcodes
-    cost one byte per vertex and one gather of bytes per face (no (m, 3, 3) float temporary).
+    a bit, and only the faces left get their boxes tested against each patch box (the union
+    of holes far apart spans much of the mesh). Compiled (:func:`_faces_meeting_boxes`):
+    one byte per vertex, no (m, 3, 3) temporary.
 
     Parameters
     ----------
@@ -36,25 +37,30 @@ def face_boxes_near(V, F, boxes):
     Returns
     -------
     near : (c,) int64
-        Candidate face indices (overlapping the union box).
+        Candidate face indices (overlapping a box), in increasing order.
     lo, hi : (c, 3) float
         Their boxes, for the per-patch test.
     """
-    union_lo, union_hi = boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)
-    near = _faces_meeting_box(np.asarray(V, np.float64), np.asarray(F), np.asarray(union_lo, np.float64),
-                              np.asarray(union_hi, np.float64))
+    near = _faces_meeting_boxes(np.asarray(V, np.float64), np.asarray(F), np.asarray(boxes, np.float64))
     corners = V[F[near]]
     lo, hi = corners.min(axis=1), corners.max(axis=1)
     return near, lo, hi
 
 
 @njit(cache=True)
-def _faces_meeting_box(V, F, lo, hi):
-    """Faces not wholly beyond one side of the box [lo, hi] (Cohen-Sutherland outcodes), in increasing order.
+def _faces_meeting_boxes(V, F, boxes):
+    """Faces whose bounding box meets one of ``boxes`` (h, 2, 3), in increasing order.
 
-    Compiled: one byte of outcode per vertex, then one AND of three bytes per face, in two
-    loops (at 3.6M faces 0.03 s, against 0.2 s for the same test as numpy temporaries).
+    First the outcodes of the vertices against the union of the boxes (a face wholly beyond
+    one of its sides is dropped after three byte reads), then the survivors' boxes against
+    each box: ``face_hi >= box_lo`` and ``face_lo <= box_hi`` on every axis.
     """
+    lo = boxes[0, 0].copy()
+    hi = boxes[0, 1].copy()
+    for b in range(1, boxes.shape[0]):
+        for axis in range(3):
+            lo[axis] = min(lo[axis], boxes[b, 0, axis])
+            hi[axis] = max(hi[axis], boxes[b, 1, axis])
     code = np.zeros(V.shape[0], np.uint8)
     for v in range(V.shape[0]):
         c = 0
@@ -67,9 +73,19 @@ def _faces_meeting_box(V, F, lo, hi):
     keep = np.empty(F.shape[0], np.int64)
     count = 0
     for f in range(F.shape[0]):
-        if (code[F[f, 0]] & code[F[f, 1]] & code[F[f, 2]]) == 0:
-            keep[count] = f
-            count += 1
+        if (code[F[f, 0]] & code[F[f, 1]] & code[F[f, 2]]) != 0:
+            continue
+        for b in range(boxes.shape[0]):
+            meets = True
+            for axis in range(3):
+                a, p, q = V[F[f, 0], axis], V[F[f, 1], axis], V[F[f, 2], axis]
+                if max(a, max(p, q)) < boxes[b, 0, axis] or min(a, min(p, q)) > boxes[b, 1, axis]:
+                    meets = False
+                    break
+            if meets:
+                keep[count] = f
+                count += 1
+                break
     return keep[:count].copy()
 
 
