@@ -98,10 +98,10 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
     vert_owner[n:] = new_v_owner
     face_owner = vert_owner[new_faces].max(axis=1)
     face_attrs = {}
-    border = _border_faces_per_loop(arrays.F, loops)
+    border = _border_faces_per_loop(arrays.F, loops, n)
     for name, A in arrays.face_attrs.items():
-        if name == "selected":
-            face_attrs[name] = np.concatenate([A, np.zeros((len(new_faces), 1))])
+        if name == "selected":  # bool or float, as given
+            face_attrs[name] = np.concatenate([A, np.zeros((len(new_faces), 1), A.dtype)])
             continue
         means = np.array([A[b].mean(axis=0) if len(b) else A.mean(axis=0) for b in border]).reshape(len(loops), -1)
         face_attrs[name] = np.concatenate([A, means[face_owner]]) if len(new_faces) else A
@@ -171,22 +171,22 @@ def refine_mesh_arrays(arrays, refinement):
                       vertex_selected=arrays.vertex_selected)
 
 
-def _border_faces_per_loop(F, loops):
+def _border_faces_per_loop(F, loops, n):
     """For each loop, the faces holding one of its edges.
 
     Only faces with two vertices on some loop can hold a loop edge; those few are found with
-    one gather over F, so no mesh-wide edge sort is needed here (1.9 s at 3.6M faces).
+    one gather of bytes over F (``n`` vertices), so no mesh-wide edge sort is needed here
+    (1.9 s at 3.6M faces) and F keeps its integer type.
     """
-    F = np.asarray(F, np.int64)
-    on_loop = np.zeros(int(F.max()) + 1 if F.size else 0, bool)
+    F = np.asarray(F)
+    on_loop = np.zeros(n, np.uint8)
     for loop in loops:
-        on_loop[loop] = True
-    candidates = np.flatnonzero(on_loop[F].sum(axis=1) >= 2)
-    n = len(on_loop)
+        on_loop[loop] = 1
+    candidates = np.flatnonzero(on_loop[F[:, 0]] + on_loop[F[:, 1]] + on_loop[F[:, 2]] >= 2)
 
     def edge_keys(a):  # undirected keys of the edges (a[..., i], a[..., i + 1]), cyclically
         b = np.roll(a, -1, axis=-1)
         return np.minimum(a, b) * n + np.maximum(a, b)
 
-    face_keys = edge_keys(F[candidates])  # (c, 3)
+    face_keys = edge_keys(F[candidates].astype(np.int64))  # (c, 3)
     return [candidates[np.isin(face_keys, edge_keys(np.asarray(loop, np.int64))).any(axis=1)] for loop in loops]

@@ -13,45 +13,123 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit
 
 from ..errors import MeshTopologyError
 from ..geometry.quality import vertex_normals
 
 
-def _edge_table(F):
-    """Every undirected edge of F with its face count, and for one-face edges the half-edge and face.
+@njit(cache=True)
+def _group_halfedges(F, n, other, code):
+    """Counting sort of the 3m half-edges of F by their smaller vertex, each group sorted by the larger.
 
-    One sparse (n, n) table over the edges (min, max), built in scipy's C++ (a counting sort of
-    the 3m half-edges, duplicates summed). Each half-edge adds an entry that packs, from the low
-    bits up, 1 (the count, 16 bits), whether it runs min -> max (16 bits) and its face + 1, so
-    that after summation an edge with one half-edge still names its direction and face. Faster
-    than sorting the 3m edge keys (at 3.6M faces about 2x less CPU), with the edges in
+    Fills ``other`` (the larger vertex) and ``code`` (the face f when the half-edge runs
+    smaller -> larger, else -f - 1) group by group, and returns the group starts (n + 1,):
+    the half-edges on undirected edge (v, w), v < w, are a run of equal ``other`` == w in
+    group v, so the edges come out in increasing key order v * n + w.
+    """
+    start = np.zeros(n + 1, np.int64)
+    m = F.shape[0]
+    for f in range(m):
+        for c in range(3):
+            start[min(F[f, c], F[f, (c + 1) % 3]) + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:n].copy()
+    for f in range(m):
+        for c in range(3):
+            a, b = F[f, c], F[f, (c + 1) % 3]
+            lo = min(a, b)
+            p = fill[lo]
+            fill[lo] = p + 1
+            other[p] = max(a, b)
+            code[p] = f if a < b else -f - 1
+    for v in range(n):
+        s, e = start[v], start[v + 1]
+        if e - s > 32:  # a vertex of high valence: no quadratic insertion sort
+            order = np.argsort(other[s:e], kind="mergesort")
+            other[s:e] = other[s:e][order]
+            code[s:e] = code[s:e][order]
+            continue
+        for i in range(s + 1, e):  # insertion sort: the groups hold about six half-edges
+            w, k = other[i], code[i]
+            j = i - 1
+            while j >= s and other[j] > w:
+                other[j + 1] = other[j]
+                code[j + 1] = code[j]
+                j -= 1
+            other[j + 1] = w
+            code[j + 1] = k
+    return start
+
+
+@njit(cache=True)
+def _edge_runs(start, other, code, want_all):
+    """Walk the sorted groups of :func:`_group_halfedges`: one row per undirected edge kept.
+
+    Keeps every edge when ``want_all``, else the one-face edges and those with more than two
+    faces. Returns (e, 4) int64 rows: smaller vertex, larger vertex, face count, and the
+    code of the first half-edge (its face and direction, meaningful for one-face edges).
+    """
+    n = start.shape[0] - 1
+    rows = 0
+    for v in range(n):
+        i = start[v]
+        while i < start[v + 1]:
+            j = i + 1
+            while j < start[v + 1] and other[j] == other[i]:
+                j += 1
+            if want_all or j - i != 2:
+                rows += 1
+            i = j
+    out = np.empty((rows, 4), np.int64)
+    r = 0
+    for v in range(n):
+        i = start[v]
+        while i < start[v + 1]:
+            j = i + 1
+            while j < start[v + 1] and other[j] == other[i]:
+                j += 1
+            if want_all or j - i != 2:
+                out[r, 0] = v
+                out[r, 1] = other[i]
+                out[r, 2] = j - i
+                out[r, 3] = code[i]
+                r += 1
+            i = j
+    return out
+
+
+def _edge_table(F, want_all=False):
+    """Undirected edges of F with their face counts, and for one-face edges the half-edge and face.
+
+    A compiled counting sort of the 3m half-edges by their smaller vertex (:func:`_group_halfedges`),
+    then one walk over the groups (:func:`_edge_runs`): O(m) with two (3m,) index arrays of F's
+    own integer type, no whole-mesh sparse table or key sort (at 3.6M faces 0.1 s CPU and
+    130 MB, against 1 s and 370 MB for scipy's sparse edge table). Edges come out in
     increasing key order (min * n + max), as a sort of the keys gives them.
+
+    Parameters
+    ----------
+    F : (m, 3) int
+    want_all : bool
+        Every edge; otherwise only the one-face edges and those with more than two faces
+        (all that the boundary search and the manifold check need).
 
     Returns
     -------
-    rows, cols : (e,) int64
-        Each undirected edge once, rows <= cols, in increasing key order.
-    counts : (e,) int64
-        Half-edges (faces) on each edge.
-    forward : (e,) int64
-        How many of them run rows -> cols.
-    faces : (e,) int64
-        Sum of their faces + 1, minus 1: the face, where ``counts`` is 1.
+    (e, 4) int64
+        Rows (smaller vertex, larger vertex, face count, code): code is the face f of the
+        edge's first half-edge when it runs smaller -> larger, else -f - 1.
     """
     F = np.asarray(F)
+    if F.dtype not in (np.int32, np.int64) or (F.dtype == np.int32 and 3 * len(F) >= 2 ** 31):
+        F = F.astype(np.int64)
+    F = np.ascontiguousarray(F)
     n = int(F.max()) + 1
-    index = np.int32 if n < 2 ** 31 else np.int64  # scipy's own index type: no second copy of the indices
-    a, b = F.astype(index).ravel(), F[:, [1, 2, 0]].astype(index).ravel()
-    data = (np.repeat(np.arange(1, len(F) + 1, dtype=np.int64), 3) << 32) | ((a < b).astype(np.int64) << 16) | 1
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    del a, b  # as large as the table: free what it does not need before it is built
-    table = sp.csr_matrix((data, (lo, hi)), shape=(n, n))
-    del lo, hi, data
-    table.sum_duplicates()
-    rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(table.indptr))
-    packed = table.data
-    return (rows, table.indices.astype(np.int64), packed & 0xFFFF, (packed >> 16) & 0xFFFF, (packed >> 32) - 1)
+    other, code = np.empty(3 * len(F), F.dtype), np.empty(3 * len(F), F.dtype)
+    start = _group_halfedges(F, n, other, code)
+    return _edge_runs(start, other, code, want_all)
 
 
 def edge_face_counts(F):
@@ -65,20 +143,19 @@ def edge_face_counts(F):
     """
     if len(F) == 0:
         return np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
-    rows, cols, counts, _, _ = _edge_table(F)
-    return np.stack([rows, cols], axis=1), counts
+    table = _edge_table(F, want_all=True)
+    return table[:, :2].copy(), table[:, 2].copy()
 
 
 def nonmanifold_edges(F):
     """Undirected edges shared by more than two faces, (p, 2) int64."""
-    edges, counts = edge_face_counts(F)
-    return edges[counts > 2]
+    return edge_summary(F)[2]
 
 
 def boundary_halfedges(F):
     """Half-edges whose undirected edge belongs to exactly one face.
 
-    Vectorised: one sort of the 3m edge keys, no Python loop.
+    One compiled pass over the 3m half-edges (:func:`_edge_table`), no Python loop.
 
     Returns
     -------
@@ -123,7 +200,7 @@ class BoundaryLoop:
 
 
 def edge_summary(F):
-    """Boundary half-edges (with their faces) and non-manifold edges from a single sort.
+    """Boundary half-edges (with their faces) and non-manifold edges from one pass over the half-edges.
 
     Returns
     -------
@@ -137,13 +214,12 @@ def edge_summary(F):
     if len(F) == 0:
         z = np.zeros((0, 2), np.int64)
         return z, np.zeros(0, np.int64), z
-    rows, cols, counts, forward, faces = _edge_table(F)
-    single = counts == 1
-    r, c = rows[single], cols[single]
-    halfedges = np.where((forward[single] == 1)[:, None], np.stack([r, c], axis=1), np.stack([c, r], axis=1))
-    faces = faces[single]
-    bad = counts > 2
-    return halfedges, faces, np.stack([rows[bad], cols[bad]], axis=1)
+    table = _edge_table(F)
+    single = table[table[:, 2] == 1]
+    forward = single[:, 3] >= 0
+    halfedges = np.where(forward[:, None], single[:, :2], single[:, 1::-1])
+    faces = np.where(forward, single[:, 3], -single[:, 3] - 1)
+    return halfedges, faces, table[table[:, 2] > 2, :2].copy()
 
 
 def boundary_loops(F, halfedges=None):
@@ -236,12 +312,55 @@ def boundary_loops(F, halfedges=None):
     return loops
 
 
+@njit(cache=True)
+def _incidence_rows(F, n, indices):
+    """Counting sort of the faces by vertex: fills ``indices`` row by row, returns the row starts.
+
+    Faces come out in increasing order within each row; a face repeating a vertex is listed
+    once in that vertex's row. Returns (indptr, number of entries written).
+    """
+    indptr = np.zeros(n + 1, np.int64)
+    for f in range(F.shape[0]):
+        a, b, c = F[f, 0], F[f, 1], F[f, 2]
+        indptr[a + 1] += 1
+        if b != a:
+            indptr[b + 1] += 1
+        if c != a and c != b:
+            indptr[c + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:n].copy()
+    for f in range(F.shape[0]):
+        a, b, c = F[f, 0], F[f, 1], F[f, 2]
+        indices[fill[a]] = f
+        fill[a] += 1
+        if b != a:
+            indices[fill[b]] = f
+            fill[b] += 1
+        if c != a and c != b:
+            indices[fill[c]] = f
+            fill[c] += 1
+    return indptr, indptr[n]
+
+
 def vertex_face_incidence(F, n):
-    """Sparse (n, m) incidence: row v holds the faces that contain vertex v."""
-    F = np.asarray(F, dtype=np.int64)
+    """Sparse (n, m) incidence: row v holds the faces that contain vertex v (int8 ones, sorted rows).
+
+    Built by a compiled counting sort (:func:`_incidence_rows`) straight into the CSR arrays, in
+    int32 where the face count allows: at 3.6M faces 0.03 s CPU and 60 MB, where scipy's
+    conversion from coordinates took 0.14 s and 260 MB.
+    """
+    F = np.asarray(F)
+    if F.dtype not in (np.int32, np.int64):
+        F = F.astype(np.int64)
+    F = np.ascontiguousarray(F)
     m = len(F)
-    data = np.ones(3 * m, np.int8)
-    return sp.csr_matrix((data, (F.ravel(), np.repeat(np.arange(m), 3))), shape=(n, m))
+    index = np.int32 if max(n, m, 3 * m) < 2 ** 31 else np.int64  # scipy's own index type
+    indices = np.empty(3 * m, index)
+    indptr, used = _incidence_rows(F, n, indices)
+    matrix = sp.csr_matrix((np.ones(used, np.int8), indices[:used], indptr.astype(index)), shape=(n, m))
+    matrix.has_sorted_indices = True
+    return matrix
 
 
 @dataclass
@@ -327,9 +446,9 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     rings : int
         Number of face rings around the loop to include (>= 1).
     """
+    F = np.asarray(F)  # int32 or int64: only the local rows are gathered, never the whole array converted
     if incidence is None:
         incidence = vertex_face_incidence(F, len(V))
-    F = np.asarray(F, dtype=np.int64)
     loop_v = np.asarray(loop.vertices, np.int64)
     k = len(loop_v)
     visited = {int(v) for v in loop_v}
@@ -496,14 +615,39 @@ def is_outline(V, F, loop, incidence, face_areas_of=None):
     seen = np.zeros(len(F), bool)
     seen[frontier] = True
     area = float(areas_of(frontier).sum())
+    F = np.asarray(F)
     while area <= budget:
-        near = incidence[np.unique(F[frontier])].indices
-        frontier = np.unique(near[~seen[near]])
+        frontier = _next_face_ring(incidence.indptr, incidence.indices, F, frontier, seen)
         if len(frontier) == 0:  # the whole component, and no larger than the budget
             return True
-        seen[frontier] = True
         area += float(areas_of(frontier).sum())
     return False
+
+
+@njit(cache=True)
+def _next_face_ring(indptr, indices, F, frontier, seen):
+    """The faces sharing a vertex with a face of ``frontier`` and not yet ``seen``, sorted; marks them seen.
+
+    One ring of the face growth of :func:`is_outline`, compiled: the same faces as gathering
+    the incidence rows of the frontier's vertices and keeping the unseen ones, without the
+    per-ring sparse row selection and two sorts (a 10 ms loop per hole on face000.ply).
+    """
+    out = np.empty(16, np.int64)
+    count = 0
+    for f in frontier:
+        for c in range(3):
+            v = F[f, c]
+            for p in range(indptr[v], indptr[v + 1]):
+                g = indices[p]
+                if not seen[g]:
+                    seen[g] = True
+                    if count == len(out):
+                        grown = np.empty(2 * len(out), np.int64)
+                        grown[:count] = out[:count]
+                        out = grown
+                    out[count] = g
+                    count += 1
+    return np.sort(out[:count])
 
 
 def hole_measures(V, loop):

@@ -94,15 +94,17 @@ def _fill_one(fill, ctx, fill_kwargs, timelimit):
     return patch, time.perf_counter() - t0
 
 
-_JOB = None  # (fill, contexts, fill_kwargs, timelimit) of the pool being run, inherited by forked workers
+_JOB = None  # (fill, contexts, fill_kwargs, timelimit, check) of the pool being run, inherited by forked workers
 
 
 def _fill_in_worker(index):
-    fill, contexts, fill_kwargs, timelimit = _JOB
-    return index, _fill_one(fill, contexts[index], fill_kwargs, timelimit)
+    fill, contexts, fill_kwargs, timelimit, check = _JOB
+    patch, seconds = _fill_one(fill, contexts[index], fill_kwargs, timelimit)
+    checked = check(contexts[index], patch) if check is not None and not isinstance(patch, str) else None
+    return index, (patch, seconds, checked)
 
 
-def fill_contexts(fill, contexts, fill_kwargs, workers=1, timelimit=0.0, progress=None):
+def fill_contexts(fill, contexts, fill_kwargs, workers=1, timelimit=0.0, progress=None, check=None):
     """Fill every context, in worker processes when ``workers`` > 1.
 
     Parameters
@@ -117,26 +119,31 @@ def fill_contexts(fill, contexts, fill_kwargs, workers=1, timelimit=0.0, progres
     progress : callable, optional
         ``progress(position)`` after each fill, ``position`` into ``contexts``, in the order
         fills finish.
+    check : callable, optional
+        ``check(ctx, patch) -> small picklable value``, run on each validated patch by the
+        worker that filled it, when holes are filled in workers: per-hole work that would
+        otherwise wait for every fill in this process (the crossing check against the mesh).
 
     Returns
     -------
-    list of (Patch or str, float)
-        Per context, in order: the validated patch or the reason it failed, and the seconds
-        its fill took.
+    list of (Patch or str, float, object)
+        Per context, in order: the validated patch or the reason it failed, the seconds its
+        fill took, and ``check``'s value (None when it was not run: in this process, or
+        for a failed fill).
     """
     global _JOB
     workers = min(available_workers() if workers == 0 else workers, available_workers(), len(contexts))
     if workers <= 1:
         outcomes = []
         for position, ctx in enumerate(contexts):
-            outcomes.append(_fill_one(fill, ctx, fill_kwargs, timelimit))
+            outcomes.append(_fill_one(fill, ctx, fill_kwargs, timelimit) + (None,))
             if progress:
                 progress(position)
         return outcomes
     # Largest holes first: the pool ends when its longest fill does, so start that one early.
     order = sorted(range(len(contexts)), key=lambda j: -len(contexts[j].loop))
     outcomes = [None] * len(contexts)
-    _JOB = (fill, contexts, fill_kwargs, timelimit)
+    _JOB = (fill, contexts, fill_kwargs, timelimit, check)
     try:
         with concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
             futures = [pool.submit(_fill_in_worker, j) for j in order]
@@ -149,7 +156,7 @@ def fill_contexts(fill, contexts, fill_kwargs, workers=1, timelimit=0.0, progres
             except concurrent.futures.process.BrokenProcessPool as exc:  # a fill killed its worker (e.g. memory)
                 for index, outcome in enumerate(outcomes):
                     if outcome is None:
-                        outcomes[index] = (f"the worker process filling this hole died ({exc})", 0.0)
+                        outcomes[index] = (f"the worker process filling this hole died ({exc})", 0.0, None)
     finally:
         _JOB = None
     return outcomes

@@ -114,14 +114,17 @@ def merge_patches(V, F, loops, patches):
     Returns
     -------
     V2 : (n + sum p_i, 3) float64
-    F2 : (m + sum q_i, 3) int64
+    F2 : (m + sum q_i, 3)
+        F's integer type (int32 stays int32, as pymeshlab reads and writes it; other types give int64).
     """
-    Vs, Fs = [np.asarray(V, np.float64)], [np.asarray(F, np.int64)]
+    F = np.asarray(F)
+    index = F.dtype if F.dtype in (np.int32, np.int64) else np.dtype(np.int64)
+    Vs, Fs = [np.asarray(V, np.float64)], [F.astype(index, copy=False)]
     offset = len(V)
     for loop, patch in zip(loops, patches):
         loop = np.asarray(loop, np.int64)
         local_to_global = np.concatenate([loop, offset + np.arange(len(patch.vertices), dtype=np.int64)])
-        Fs.append(local_to_global[np.asarray(patch.faces, np.int64)])
+        Fs.append(local_to_global[np.asarray(patch.faces, np.int64)].astype(index, copy=False))
         Vs.append(np.asarray(patch.vertices, np.float64).reshape(-1, 3))
         offset += len(patch.vertices)
     return np.concatenate(Vs), np.concatenate(Fs)

@@ -73,7 +73,8 @@ class FilledMesh:
     source : MeshArrays
         The mesh the holes were filled in (after any border refinement).
     V : (n2, 3) float64
-    F : (m2, 3) int64
+    F : (m2, 3) int32 or int64
+        The integer type of the mesh given (after border refinement, int64).
     vertex_attrs, face_attrs : dict name -> array  (rows for V, F)
     wedge_texcoords : (3 m2, 2) float64 or None
     select_faces : (k,) int64 or None
@@ -90,6 +91,22 @@ class FilledMesh:
     wedge_texcoords: np.ndarray | None
     select_faces: np.ndarray | None
     changed: bool
+
+    def release_source(self):
+        """Let the source mesh's own arrays go: ``source`` then holds views of the leading rows here.
+
+        The filled arrays begin with the originals, bit-exact, so nothing is lost; a caller
+        that drops its own references to the source frees one whole copy of the mesh (at
+        3.6M faces about 160 MB) before the filled mesh is handed to pymeshlab.
+        """
+        s = self.source
+        n, m = len(s.V), len(s.F)
+        self.source = MeshArrays(
+            V=self.V[:n], F=self.F[:m], vertex_attrs={name: A[:n] for name, A in self.vertex_attrs.items()},
+            face_attrs={name: A[:m] for name, A in self.face_attrs.items()},
+            wedge_texcoords=None if self.wedge_texcoords is None else self.wedge_texcoords[:3 * m],
+            label=s.label, mesh_id=s.mesh_id, textures=s.textures, transform=s.transform,
+            vertex_selected=s.vertex_selected)
 
 
 def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepare=None, progress=None):
@@ -231,7 +248,9 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     """
     arrays, loops, report, incidence = base[0], list(base[1]), [dict(entry) for entry in base[2]], base[3]
     V, F = arrays.V, arrays.F
-    refinement = prepare(V, F, [loops[i] for i in todo], params) if prepare is not None and todo else None
+    refinement = None
+    if prepare is not None and todo:  # the algorithms' own steps see int64 faces, whatever the mesh holds
+        refinement = prepare(V, np.asarray(F, np.int64), [loops[i] for i in todo], params)
     if refinement is not None:
         arrays = refine_mesh_arrays(arrays, refinement)
         V, F = arrays.V, arrays.F
@@ -256,10 +275,14 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     def filled_one(position):  # fill_contexts counts positions in ``refill``; the caller wants hole ids
         progress(refill[position], len(refill))
 
+    check = (lambda ctx, patch: _mesh_crossings(V, F, ctx, patch)) if params["selfintersection"] else None
     outcomes = fill_contexts(fill, [contexts[i] for i in refill], fill_kwargs, workers=params["workers"],
-                             timelimit=params["timelimit"], progress=filled_one if progress else None)
-    for i, (outcome, seconds) in zip(refill, outcomes):
+                             timelimit=params["timelimit"], progress=filled_one if progress else None, check=check)
+    checked = {}  # hole -> (mesh faces crossed, seconds) where a worker checked its own patch
+    for i, (outcome, seconds, crossed) in zip(refill, outcomes):
         fills[i] = (keys[i], outcome, context_seconds[i] + seconds)
+        if crossed is not None:
+            checked[i] = crossed
     filled = []  # (hole id, context, patch, seconds) of patches that passed validation
     for i, ctx in contexts.items():
         _, outcome, seconds = fills[i]
@@ -267,17 +290,16 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
             report[i].update(status="failed", reason=outcome, seconds=seconds)
             continue
         filled.append((i, ctx, outcome, seconds))
-    if params["selfintersection"] and filled:
-        candidates = face_boxes_near(V, F, np.stack([patch_box(p.all_points(c.points)) for _, c, p, _ in filled]))
+    if params["selfintersection"]:
+        _check_here(V, F, filled, checked)
     done_loops, patches, closed_ids, crossing = [], [], [], []
     for i, ctx, patch, seconds in filled:
         entry = report[i]
         if params["selfintersection"]:
-            t0 = time.perf_counter()
-            hits = patch_intersections(patch.all_points(ctx.points), patch.faces, V, F, candidates, ctx.loop)
-            seconds += time.perf_counter() - t0
-            if len(hits):
-                entry.update(status="failed", reason=f"patch would intersect the mesh ({len(hits)} faces)",
+            hits, check_seconds = checked[i]
+            seconds += check_seconds
+            if hits:
+                entry.update(status="failed", reason=f"patch would intersect the mesh ({hits} faces)",
                              seconds=seconds)
                 crossing.append((i, ctx.loop))
                 continue
@@ -298,6 +320,35 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
                                                [closed_ids[j] for j in kept])
             V2, F2 = merge_patches(V, F, done_loops, patches)
     return arrays, V, F, V2, F2, done_loops, patches, refinement, report
+
+
+def _mesh_crossings(V, F, ctx, patch, candidates=None):
+    """(mesh faces the patch of ``ctx`` crosses, seconds): the self-intersection check of one patch.
+
+    ``candidates`` are :func:`.crossings.face_boxes_near` of a union of patch boxes holding
+    this patch's; without them (in a worker, for its own patch) they are found for this
+    patch's box alone. Either way the faces tested are those overlapping the patch's box,
+    so the answer is the same.
+    """
+    t0 = time.perf_counter()
+    points = patch.all_points(ctx.points)
+    if candidates is None:
+        candidates = face_boxes_near(V, F, patch_box(points)[None])
+    hits = patch_intersections(points, patch.faces, V, F, candidates, ctx.loop)
+    return len(hits), time.perf_counter() - t0
+
+
+def _check_here(V, F, filled, checked):
+    """Check, in this process, the patches no worker checked, adding them to ``checked``.
+
+    Their mesh faces are found in one pass over the mesh for the union of their boxes.
+    """
+    todo = [(i, ctx, patch) for i, ctx, patch, _ in filled if i not in checked]
+    if not todo:
+        return
+    candidates = face_boxes_near(V, F, np.stack([patch_box(p.all_points(c.points)) for _, c, p in todo]))
+    for i, ctx, patch in todo:
+        checked[i] = _mesh_crossings(V, F, ctx, patch, candidates)
 
 
 def _explain_outlines(V, F, crossing, report):

@@ -41,6 +41,8 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None)
     filled, result = fill_mesh_holes(arrays, fill, params, algorithm_params=algorithm_params, rings=rings,
                                      prepare=prepare, progress=current_callback())
     mesh_id = arrays.mesh_id
+    del arrays  # the filled arrays begin with the originals: one copy of the mesh is enough from here on
+    filled.release_source()
     if filled.changed:
         mesh_id, note = replace_current_mesh(ms, filled.source, filled.V, filled.F, filled.vertex_attrs,
                                        filled.face_attrs, filled.wedge_texcoords, select_faces=filled.select_faces)

@@ -45,7 +45,7 @@ def current_mesh_arrays(ms):
     if m.face_number() == 0 or m.is_point_cloud():
         raise ValueError(f"mesh '{m.label()}' is a point cloud (no faces): there are no holes to fill")
     V = np.ascontiguousarray(m.vertex_matrix(), dtype=np.float64)
-    F = np.ascontiguousarray(m.face_matrix(), dtype=np.int64)
+    F = np.ascontiguousarray(m.face_matrix())  # int32, as pymeshlab holds it: no int64 copy of the whole mesh
     if not np.all(np.isfinite(V)):
         bad = int(np.count_nonzero(~np.isfinite(V).all(axis=1)))
         raise ValueError(f"mesh '{m.label()}' has {bad} vertices with NaN or infinite coordinates")
@@ -60,7 +60,7 @@ def current_mesh_arrays(ms):
         arrays.face_attrs["color"] = m.face_color_matrix()
     if m.has_face_scalar():
         arrays.face_attrs["quality"] = m.face_scalar_array()[:, None]
-    arrays.face_attrs["selected"] = m.face_selection_array().astype(np.float64)[:, None]
+    arrays.face_attrs["selected"] = np.asarray(m.face_selection_array(), bool)[:, None]
     if m.has_wedge_tex_coord():
         arrays.wedge_texcoords = m.wedge_tex_coord_matrix()
     arrays.textures = dict(m.textures())
@@ -263,18 +263,26 @@ def _new_mesh(V, F, vertex_attrs, face_attrs, wedge):
     """A pymeshlab.Mesh with the per-vertex, per-face and wedge attributes the layer had."""
     kwargs = {"vertex_matrix": np.asarray(V, np.float64), "face_matrix": np.asarray(F, np.int32)}
     if "color" in vertex_attrs:
-        kwargs["v_color_matrix"] = np.clip(vertex_attrs["color"], 0.0, 1.0)
+        kwargs["v_color_matrix"] = _unit_range(vertex_attrs["color"])
     if "quality" in vertex_attrs:
         kwargs["v_scalar_array"] = vertex_attrs["quality"].ravel()
     if "texcoord" in vertex_attrs:
         kwargs["v_tex_coords_matrix"] = vertex_attrs["texcoord"]
     if "color" in face_attrs:
-        kwargs["f_color_matrix"] = np.clip(face_attrs["color"], 0.0, 1.0)
+        kwargs["f_color_matrix"] = _unit_range(face_attrs["color"])
     if "quality" in face_attrs:
         kwargs["f_scalar_array"] = face_attrs["quality"].ravel()
     if wedge is not None:
         kwargs["w_tex_coords_matrix"] = wedge
     return pymeshlab.Mesh(**kwargs)
+
+
+def _unit_range(colors):
+    """Colours clipped to [0, 1] as pymeshlab requires; the array itself (no copy) when they already are."""
+    colors = np.asarray(colors, np.float64)
+    if colors.size == 0 or (colors.min() >= 0.0 and colors.max() <= 1.0):
+        return colors
+    return np.clip(colors, 0.0, 1.0)
 
 
 def _add_layer(ms, arrays, mesh, face_attrs, select_faces=None):

@@ -17,12 +17,30 @@ def test_face_boxes_near_matches_brute_force(seed, n_boxes):
     near, lo, hi = face_boxes_near(V, F, boxes)
     corners = V[F]
     flo, fhi = corners.min(axis=1), corners.max(axis=1)
-    union_lo, union_hi = boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)
-    expected = np.flatnonzero(np.all(fhi >= union_lo, axis=1) & np.all(flo <= union_hi, axis=1))
-    np.testing.assert_array_equal(near, expected)
+    meets = np.zeros(len(F), bool)
+    for b in boxes:  # the candidates are exactly the faces overlapping one of the boxes
+        meets |= np.all(fhi >= b[0], axis=1) & np.all(flo <= b[1], axis=1)
+    np.testing.assert_array_equal(near, np.flatnonzero(meets))
     np.testing.assert_array_equal(lo, flo[near])
     np.testing.assert_array_equal(hi, fhi[near])
     # every face overlapping any single box is among the candidates
     for b in boxes:
         each = np.flatnonzero(np.all(fhi >= b[0], axis=1) & np.all(flo <= b[1], axis=1))
         assert np.isin(each, near).all()
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), int32=st.booleans())
+def test_faces_near_boxes_are_those_whose_own_box_meets_one_of_them(seed, int32):
+    rng = np.random.default_rng(seed)
+    V = rng.random((60, 3))
+    F = rng.integers(0, 60, (80, 3)).astype(np.int32 if int32 else np.int64)
+    lo = rng.random((3, 3)) * 0.7
+    boxes = np.stack([lo, lo + rng.random((3, 3)) * 0.3], axis=1)
+    near, face_lo, face_hi = face_boxes_near(V, F, boxes)
+    corners = V[F]
+    box_lo, box_hi = corners.min(axis=1), corners.max(axis=1)
+    meets = [any(np.all(box_hi[f] >= b[0]) and np.all(box_lo[f] <= b[1]) for b in boxes) for f in range(len(F))]
+    assert near.tolist() == np.flatnonzero(meets).tolist()
+    np.testing.assert_array_equal(face_lo, box_lo[near])
+    np.testing.assert_array_equal(face_hi, box_hi[near])

@@ -184,11 +184,17 @@ def test_any_flipped_border_face_leaves_only_open_chains_that_cover_the_hole(whi
 
 
 @settings(max_examples=60, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), n_vertices=st.integers(3, 12), n_faces=st.integers(1, 40))
-def test_edge_tables_match_counting_every_half_edge(seed, n_vertices, n_faces):
-    # Random triangle soups: repeated faces, both orientations, edges with 1 to many faces.
+@given(seed=st.integers(0, 2**32 - 1), n_vertices=st.integers(3, 12), n_faces=st.integers(1, 40),
+       degenerate=st.booleans(), int32=st.booleans(), high_valence=st.booleans())
+def test_edge_tables_match_counting_every_half_edge(seed, n_vertices, n_faces, degenerate, int32, high_valence):
+    # Random triangle soups: repeated faces, both orientations, edges with 1 to many faces; optionally faces
+    # repeating a vertex, pymeshlab's int32 indices, and a vertex on more than 32 half-edges (the compiled
+    # kernel sorts such a group differently).
     rng = np.random.default_rng(seed)
-    F = np.array([rng.choice(n_vertices, 3, replace=False) for _ in range(n_faces)], np.int64)
+    rows = [rng.choice(n_vertices, 3, replace=not degenerate) for _ in range(n_faces)]
+    if high_valence:
+        rows += [[0, 1 + j % (n_vertices - 1), 1 + (j + 1) % (n_vertices - 1)] for j in range(40)]
+    F = np.array(rows, np.int32 if int32 else np.int64)
     halfedges = collections.defaultdict(list)
     for f, face in enumerate(F):
         for corner in range(3):
@@ -205,3 +211,36 @@ def test_edge_tables_match_counting_every_half_edge(seed, n_vertices, n_faces):
     assert np.array_equal(he2, he) and np.array_equal(faces2, faces)
     assert bad.tolist() == [list(e) for e in edges if len(halfedges[e]) > 2]
     assert nonmanifold_edges(F).tolist() == bad.tolist()
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n_vertices=st.integers(3, 15), n_faces=st.integers(1, 50),
+       int32=st.booleans())
+def test_vertex_face_incidence_lists_each_face_once_per_vertex_in_order(seed, n_vertices, n_faces, int32):
+    rng = np.random.default_rng(seed)
+    F = rng.integers(0, n_vertices, (n_faces, 3)).astype(np.int32 if int32 else np.int64)  # repeats included
+    incidence = vertex_face_incidence(F, n_vertices + 2)  # two vertices without faces
+    assert incidence.shape == (n_vertices + 2, n_faces)
+    for v in range(n_vertices + 2):
+        row = incidence.indices[incidence.indptr[v]:incidence.indptr[v + 1]]
+        assert row.tolist() == [f for f in range(n_faces) if v in F[f].tolist()]
+    assert set(incidence.data.tolist()) <= {1}
+
+
+def test_outline_test_grows_the_same_rings_as_sparse_row_gathers():
+    from meshlab_holefill.core.holes import _next_face_ring
+
+    V, F = grid(12, 12)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.2)
+    incidence = vertex_face_incidence(F, len(V))
+    frontier = np.array([0, 5, 17])
+    seen = np.zeros(len(F), bool)
+    seen[frontier] = True
+    expected_seen = seen.copy()
+    for _ in range(4):
+        near = incidence[np.unique(F[frontier])].indices
+        expected = np.unique(near[~expected_seen[near]])
+        expected_seen[expected] = True
+        frontier = _next_face_ring(incidence.indptr, incidence.indices, F, frontier, seen)
+        assert frontier.tolist() == expected.tolist()
+        assert np.array_equal(seen, expected_seen)

@@ -409,3 +409,25 @@ def test_a_hole_over_the_time_limit_fails_and_the_others_are_filled(workers):
     slow = [h for h in res["holes"] if h["boundary_edges"] > 8 and h["status"] != "skipped"]
     assert slow and all(h["status"] == "failed" and "time limit of 0.5 s" in h["reason"] for h in slow)
     assert any(h["status"] == "closed" for h in res["holes"])
+
+
+def test_workers_check_their_own_patches_against_the_mesh_with_the_same_verdicts():
+    """With workers each patch is checked against the mesh by the worker that filled it: same mesh, same reasons."""
+    V, F, _ = _one_cell_hole()
+    V, F = np.concatenate([V, V + [2, 0, 0], V + [4, 0, 0]]), np.concatenate([F, F + len(V), F + 2 * len(V)])
+
+    def roof_folded_in_the_middle_grid(ctx):
+        return _roof(ctx.points, folded=bool(1.5 < ctx.points[:, 0].mean() < 3.5))
+
+    outcomes = []
+    for workers in (1, 2):
+        ms = meshset_from_arrays(V, F)
+        res = close_holes(ms, roof_folded_in_the_middle_grid, dict(COMMON, workers=workers))
+        outcomes.append((mesh_arrays(ms), [(h["status"], h.get("reason"), h.get("new_faces"))
+                                           for h in res["holes"] if h["boundary_edges"] == 4]))
+    (one, holes_one), (two, holes_two) = outcomes
+    assert holes_one == holes_two
+    assert sorted(status for status, _, _ in holes_one) == ["closed", "closed", "failed"]
+    assert any(reason and "intersect the mesh" in reason for _, reason, _ in holes_one)
+    np.testing.assert_array_equal(one[0], two[0])
+    np.testing.assert_array_equal(one[1], two[1])
