@@ -19,9 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._de_kernels import reflect_moved, select, trial_vectors
+from ._de_kernels import mutate_crossover, reflect_moved, select
 
 __all__ = ["reflect_into_bounds", "de_rand_1_bin"]
+
+# The uniform draws of several generations are taken in one block of at most this many numbers.
+BLOCK_DOUBLES = 1 << 20
 
 
 def reflect_into_bounds(X, lower, upper):
@@ -117,13 +120,41 @@ def _initial_population(objective, lower, upper, pop, dims, rng, init):
                        np.ascontiguousarray(upper))
 
 
-def _trial_population(state, rng, F, CR):
-    """Algorithm 1, steps 4-6: distinct r1, r2, r3, the component rn_i, mutation (Eq. 2) and crossover (Eq. 3)."""
-    B, Nmax = state.active.shape
-    r1, r2, r3 = _distinct_triples(rng, state.pop, (B, Nmax))
-    rn = np.floor(rng.random((B, Nmax)) * state.dims[:, None]).astype(np.int64)
-    # Compiled: U = where(u <= CR or j == rn, X[r1] + F (X[r2] - X[r3]), X)
-    return trial_vectors(state.X, r1, r2, r3, rng.random((B, Nmax, state.X.shape[2])), rn, float(F), float(CR))
+class _Uniforms:
+    """The uniform numbers of each generation: 3 B N for r1, r2, r3, B N for rn_i, B N n for Eq. 3.
+
+    ``Generator.random`` fills its output in order, so a block of g generations drawn at once
+    holds exactly the numbers g successive per-generation draws would give; the blocks never
+    run past ``generations``, and with an early stop (``per_block=False``) every generation draws
+    its own, so the generator is left where generation-by-generation draws would leave it.
+    """
+
+    def __init__(self, rng, shape, generations, per_block=True):
+        B, N, n = shape
+        self.rng, self.shape, self.left, self.per_block = rng, shape, generations, per_block
+        self.ends = (3 * B * N, 4 * B * N, 4 * B * N + B * N * n)
+        self.block, self.row = np.zeros((0, self.ends[2])), 0
+
+    def next(self):
+        """(u_index (3, B, N), u_rn (B, N), u_take (B, N, n)) of the next generation."""
+        if self.row == len(self.block):
+            g = max(1, min(self.left, BLOCK_DOUBLES // max(self.ends[2], 1))) if self.per_block else 1
+            self.block, self.row, self.left = self.rng.random((g, self.ends[2])), 0, self.left - g
+        row = self.block[self.row]
+        self.row += 1
+        B, N, n = self.shape
+        a, b, _ = self.ends
+        return row[:a].reshape(3, B, N), row[a:b].reshape(B, N), row[b:].reshape(B, N, n)
+
+
+def _trial_population(state, draws, F, CR):
+    """Algorithm 1, steps 4-6: distinct r1, r2, r3, the component rn_i, mutation (Eq. 2) and crossover (Eq. 3).
+
+    Compiled (:func:`._de_kernels.mutate_crossover`): the indices of :func:`_distinct_triples`,
+    rn_i = floor(u dims) and U = where(u <= CR or j == rn, X[r1] + F (X[r2] - X[r3]), X).
+    """
+    u_index, u_rn, u_take = draws.next()
+    return mutate_crossover(state.X, u_index, u_rn, u_take, state.pop, state.dims, float(F), float(CR))
 
 
 def _reflect_and_renew(objective, state):
@@ -144,9 +175,9 @@ def _reflect_and_renew(objective, state):
     state.fX[problem_of[take_new], order[take_new]] = f_new[take_new]
 
 
-def _generation(objective, state, rng, F, CR, bounds):
+def _generation(objective, state, draws, F, CR, bounds):
     """One generation of Algorithm 1 (steps 3-9) for every individual at once."""
-    U = _trial_population(state, rng, F, CR)
+    U = _trial_population(state, draws, F, CR)
     if bounds == "trial":
         U = reflect_moved(U, state.lower, state.upper)[0]
     fU = np.ascontiguousarray(objective(U), np.float64)
@@ -207,9 +238,10 @@ def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0
     lower, upper, pop, dims = _problem_sizes(lower, upper, pop_size, dims, bounds)
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     state = _initial_population(objective, lower, upper, pop, dims, rng, init)
+    draws = _Uniforms(rng, state.X.shape, generations, per_block=tol <= 0)
     g = 0
     for g in range(1, generations + 1):
-        _generation(objective, state, rng, F, CR, bounds)
+        _generation(objective, state, draws, F, CR, bounds)
         if tol > 0 and _population_spread_within(state, tol):
             break
     B = len(pop)
