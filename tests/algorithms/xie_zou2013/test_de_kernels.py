@@ -123,3 +123,37 @@ def test_patch_lowest_frequency_matches_dense_spectrum():
         assert abs(got - want) <= 1e-10 * want
         if free.sum() <= smoothing.DENSE_SPECTRUM_MAX:
             assert got == want
+
+
+def test_independent_link_edges_equal_sparse_expression():
+    import importlib
+
+    import pymeshlab
+    import scipy.sparse as sp
+
+    from meshlab_holefill.geometry.quality import unique_edges
+
+    O = importlib.import_module("meshlab_holefill.algorithms.xie_zou2013.optimisation")
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix().astype(np.int64)
+    F = F[V[F].mean(axis=1)[:, 2] > -0.3]  # an open cap: border edges fail the link condition
+    n = len(V)
+    E, A = O.adjacency(F, n)
+    assert np.array_equal(E, unique_edges(F))
+    R = (A + sp.identity(n, dtype=np.int8, format="csr")).tocsr()
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        c = rng.choice(len(E), size=int(rng.integers(1, len(E))), replace=False)
+        a, b = E[c, 0], E[c, 1]
+        # the sparse-matrix expression the kernel replaces
+        M = (R[a] + R[b]).tocoo()
+        rank = np.arange(len(a))
+        claim = np.full(n, len(a))
+        np.minimum.at(claim, M.col, rank[M.row])
+        lost = np.zeros(len(a), bool)
+        np.logical_or.at(lost, M.row, claim[M.col] != rank[M.row])
+        common = np.asarray(A[a].multiply(A[b]).sum(axis=1)).ravel()
+        want = ~lost & (common == 2)
+        got = O._independent_edges(A, a, b, n)
+        assert np.array_equal(got, want) and want.any()
