@@ -7,7 +7,8 @@ small/medium/large cycling, compact and irregular shapes alternating); the bunny
 natural holes (bunny10k_textured.obj) and the face range scan (rangemaps/face000.ply) are
 filled as they are; the CAD-like cases of ``evaluation.creased`` (creased_box, bevelled_box,
 cylinder_rims, union: holes a crease runs through; interpenetrating: holes next to where
-overlapping parts cross) have their own holes. CGAL's Liepa fill (``cgal_liepa``) and MeshFix
+overlapping parts cross) have their own holes; bunny_212k (the bunny Loop-subdivided once, about
+212k faces) has three holes of 150-375 boundary edges with ground truth ("real-size"). CGAL's Liepa fill (``cgal_liepa``) and MeshFix
 (``pymeshfix``) run as anchors when installed. The report (tables, charts, one picture per hole) goes to ``OUT/suite``.
 
 ``--scaling`` adds the scaling run: the same holes (same centres, same boundary sizes) in the
@@ -45,7 +46,10 @@ CLOSED = ["bunny.obj", "bone.ply", "cow.obj", "airplane.obj", "sphere", "torus"]
 NATURAL = ["bunny10k_textured.obj", "face000.ply"]
 # CAD-like meshes with holes a crease runs through, and interpenetrating parts (evaluation.creased)
 CREASED = list(CREASED_CASES)
-CASES = CLOSED + NATURAL + CREASED
+# A scan-sized mesh with holes of 200-375 boundary edges (ground truth kept): the bunny Loop-subdivided once
+REAL_SIZE = ["bunny_212k"]
+CASES = CLOSED + NATURAL + CREASED + REAL_SIZE
+REAL_SIZE_HOLES = ("irregular", "large", "irregular")  # targets 250, 150, 250 boundary edges
 # Ours with defaults; two measured variants (Xu et al.'s Table 1 membrane comparison, Hu's optional
 # fairing); MeshLab's Close Holes with its defaults and with every hole allowed.
 # CGAL's Liepa fill and MeshFix as open anchors (skipped with a note when not installed).
@@ -66,6 +70,8 @@ def load_case(name):
     analytic = area = None
     if name in CREASED_CASES:
         return creased_case(name)
+    if name == "bunny_212k":
+        return real_size_case()
     if name in ("sphere", "torus"):
         ms = pymeshlab.MeshSet()
         if name == "sphere":
@@ -78,6 +84,22 @@ def load_case(name):
     else:
         V, F = load_mesh(os.path.join(SAMPLES, "rangemaps", name) if name == "face000.ply" else os.path.join(SAMPLES, name))
     return MeshCase(name, V, F, analytic=analytic, surface_area=area)
+
+
+def real_size_case(seed=0):
+    """The bunny Loop-subdivided once (about 212k faces) with three holes of 150-375 boundary edges.
+
+    The holes are cut once (``cut_holes``, irregular and compact shapes) and handed to the
+    comparison as given holes, so every filler fills the same large holes of a scan-sized mesh.
+    """
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(os.path.join(SAMPLES, "bunny.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=1, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    _, holes = cut_holes(V, F, sizes=REAL_SIZE_HOLES, seed=seed)
+    removed = np.zeros(len(F), bool)
+    removed[np.concatenate([h.face_indices for h in holes])] = True
+    return MeshCase("bunny_212k", V, F, removed=removed, given_class="real-size")
 
 
 # ----------------------------------------------------------------------------- scaling run

@@ -116,6 +116,9 @@ def main():
                 f.write(f"{name}\t\t\t\n")
             for p in params:
                 default = {k: v for k, v in p.items() if k not in ("name", "type")}
+                if p["type"] in ("RichSaveFile", "RichOpenFile") and os.path.isabs(default.get("value", "")):
+                    # MeshLab's file defaults are names in the directory it runs in: keep the name only
+                    default["value"] = os.path.basename(default["value"])
                 f.write(f"{name}\t{p['name']}\t{p['type']}\t{json.dumps(default, sort_keys=True)}\n")
     with open(os.path.join(DATA, "meshlab_2020_09_names.tsv"), "w", encoding="utf-8") as f:
         f.write(f"# MeshLab {version} filter name -> pymeshlab python name (scripts/meshlab_2020_09_tables.py)\n")

@@ -112,6 +112,45 @@ def test_a_file_that_kills_its_worker_or_hangs_fails_alone(meshes, tmp_path):
     assert again.counts == {"ok": 2, "failed": 0, "skipped": 4, "not run": 0}
 
 
+def _grow_memory(in_file):
+    """An ``on_start`` hook: in one file, allocates 50 MiB every 50 ms until something stops it."""
+    def hook(path):
+        if os.path.basename(path) == in_file:
+            hog = []
+            for _ in range(200):
+                hog.append(np.ones(50 * 2**20 // 8))
+                time.sleep(0.05)
+    return hook
+
+
+def test_a_file_over_the_worker_memory_limit_fails_alone_with_the_reason(meshes, tmp_path):
+    report = batch(meshes, out=tmp_path / "out", filter=FILTER, n_workers=2, memory_limit="600MiB", timeout=60,
+                   progress=False, on_start=_grow_memory("mesh1.ply"), **PARAMS)
+    assert report.counts == {"ok": 5, "failed": 1, "skipped": 0, "not run": 0}
+    (failed,) = report.failed
+    assert failed["name"] == "mesh1.ply" and failed["starts"] == 2
+    assert "going over the worker memory limit" in failed["error"] and "stage on_start" in failed["error"]
+
+
+def test_a_plain_script_without_a_main_guard_runs_the_batch(meshes, tmp_path):
+    # the cluster's workers are spawned processes; they must not run the caller's script again
+    script = tmp_path / "repair_all.py"
+    script.write_text(
+        "import sys\n"
+        "from meshlab_holefill.batching import batch\n"
+        f"report = batch(sys.argv[1], out=sys.argv[2], filter={FILTER!r}, n_workers=1, progress=False, "
+        f"**{PARAMS!r})\n"
+        "print('counts', report.counts['ok'], report.counts['failed'], '__file__' in globals())\n")
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    for name in ("mesh0.obj", "mesh1.ply"):
+        (inputs / name).write_bytes((meshes / name).read_bytes())
+    run = subprocess.run([sys.executable, str(script), str(inputs), str(tmp_path / "out")], capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "counts 2 0 True" in run.stdout  # and the script's own __file__ is back afterwards
+
+
 def test_a_filter_script_on_every_file(meshes, tmp_path):
     script = os.path.join(ROOT, "filters", "close_holes_min_angle_bilateral.mlx")
     inputs = [str(meshes / "mesh0.obj"), str(meshes / "*1.ply")]
@@ -180,6 +219,30 @@ def test_cli_runs_the_batch_on_a_scheduler_by_address(meshes, tmp_path):
     assert failed["name"] == "broken.ply" and failed["stage"] == "load" and failed["error"]
     assert data["settings"]["scheduler"] == address
     assert all(os.path.getsize(r["output"]) > 0 for r in data["files"] if r["status"] == "ok")
+
+
+def test_a_cluster_without_workers_fails_the_files_instead_of_waiting(meshes, tmp_path, monkeypatch):
+    from meshlab_holefill.batching import _run
+
+    monkeypatch.setattr(_run, "NO_WORKER_SECONDS", 6.0)
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    dask = os.path.join(os.path.dirname(sys.executable), "dask")
+    with open(tmp_path / "cluster.log", "w") as log:
+        scheduler = _start([dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
+                            "--no-dashboard"], log)
+        try:
+            from distributed import Client
+
+            Client(address, timeout="30s").close()  # the scheduler is up
+            t0 = time.monotonic()
+            report = batch(meshes, out=tmp_path / "out", filter=FILTER, scheduler=address, progress=False, **PARAMS)
+            waited = time.monotonic() - t0
+        finally:
+            _stop(scheduler)
+    assert report.counts == {"ok": 0, "failed": 6, "skipped": 0, "not run": 0}
+    assert all(r["error"] == "not run: the cluster had no worker for 6 s" for r in report.failed)
+    assert 6.0 <= waited < 60.0
+    assert json.loads((tmp_path / "out" / "mesh0.obj.json").read_text())["status"] == "failed"
 
 
 def test_bad_input_is_refused_before_any_work(meshes, tmp_path):

@@ -13,9 +13,14 @@ import contextlib
 import logging
 import os
 import sys
+import time
 import uuid
 
 from ._task import MAX_STARTS, base_record, read_result, run_file, write_result
+
+# A batch whose cluster has had no worker this long gives up on the files not yet done (workers
+# that cannot start, a scheduler nobody serves) instead of waiting for ever.
+NO_WORKER_SECONDS = 120.0
 
 LOCAL_CLUSTER_CONFIG = {
     "distributed.scheduler.allowed-failures": MAX_STARTS - 1,
@@ -58,11 +63,40 @@ def open_client(client=None, scheduler=None, n_workers=None, memory_limit="auto"
         return
     import dask
 
-    with dask.config.set(LOCAL_CLUSTER_CONFIG):
-        cluster = LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1, processes=True,
-                               memory_limit=memory_limit, dashboard_address=":0", silence_logs=logging.ERROR)
-    with cluster, Client(cluster) as local:
-        yield local
+    with main_script_not_rerun():
+        with dask.config.set(LOCAL_CLUSTER_CONFIG):
+            cluster = LocalCluster(n_workers=n_workers or default_workers(), threads_per_worker=1, processes=True,
+                                   memory_limit=memory_limit, dashboard_address=":0", silence_logs=logging.ERROR)
+        with cluster, Client(cluster) as local:
+            yield local
+
+
+@contextlib.contextmanager
+def main_script_not_rerun():
+    """While the embedded cluster runs, keep the caller's script from running again in its workers.
+
+    The cluster's nannies start worker processes with multiprocessing's ``spawn`` method, which
+    imports the calling process's main script (as ``__mp_main__``) in every new worker: a
+    script that calls :func:`meshlab_holefill.batch` without an ``if __name__ == "__main__":``
+    guard would start a cluster from each worker, and the first one fails with "Nanny failed to
+    start". With the main module's ``__file__`` and ``__spec__`` hidden, as in an interactive
+    session, workers import only what the tasks need; functions defined in the script (an
+    ``on_start`` hook) still reach them, pickled by value. Restarted workers (after a crash or
+    the memory limit) are spawned by the same nannies, so the names stay hidden until the
+    cluster is closed.
+    """
+    main = sys.modules.get("__main__")
+    hidden = {name: main.__dict__[name] for name in ("__file__", "__spec__")
+              if main is not None and main.__dict__.get(name) is not None}
+    if not hidden:
+        yield
+        return
+    main.__dict__.pop("__file__", None)
+    main.__spec__ = None
+    try:
+        yield
+    finally:
+        main.__dict__.update(hidden)
 
 
 def run_jobs(client, jobs, on_record, progress=False):
@@ -99,7 +133,7 @@ def run_jobs(client, jobs, on_record, progress=False):
     bar = tqdm(total=len(jobs), unit="file", disable=not progress, file=sys.stderr, dynamic_ncols=True)
     done = as_completed(futures)
     try:
-        for future in done:
+        for future in _arrivals(done, client):
             pending.discard(future)
             job = job_of[future.key]
             record = _outcome(future, job, retry_allowed=future.key not in resubmitted)
@@ -121,11 +155,45 @@ def run_jobs(client, jobs, on_record, progress=False):
             bar.update(1)
             if record["status"] == "failed":
                 bar.set_postfix_str(f"failed: {record['name']}")
+    except NoWorkers as stalled:
+        client.cancel(list(pending))
+        for future in pending:
+            job = job_of[future.key]
+            record = base_record(job)
+            record.update(status="failed", error=str(stalled), starts=0)
+            write_result(job["result"], record)
+            on_record(record)
     except KeyboardInterrupt:
         client.cancel(list(pending))
         raise
     finally:
         bar.close()
+
+
+class NoWorkers(RuntimeError):
+    """The cluster has had no worker for :data:`NO_WORKER_SECONDS`."""
+
+
+def _arrivals(done, client, poll=0.05):
+    """The futures of ``done`` as they finish; raises NoWorkers when the cluster stays without workers.
+
+    ``as_completed`` alone waits for ever when no worker is left to run the queued tasks.
+    """
+    idle_since = last_check = time.monotonic()
+    while not done.is_empty():
+        ready = done.next_batch(block=False)
+        now = time.monotonic()
+        if ready:
+            idle_since = now
+            yield from ready
+            continue
+        if now - last_check >= 5.0:
+            last_check = now
+            if client.scheduler_info(n_workers=-1).get("workers"):
+                idle_since = now
+            elif now - idle_since >= NO_WORKER_SECONDS:
+                raise NoWorkers(f"not run: the cluster had no worker for {NO_WORKER_SECONDS:g} s")
+        time.sleep(poll)
 
 
 _WAIT, _RESUBMIT, _FAILED = object(), object(), object()

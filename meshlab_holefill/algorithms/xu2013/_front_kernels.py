@@ -1,8 +1,13 @@
-"""Compiled kernels of the advancing front's obstacle tests (numba).
+"""Compiled kernels of the advancing front's per-step tests (numba).
 
-:func:`min_point_triangle_distance` does, per triangle, the IEEE operations of
-:func:`._front_predicates.point_triangle_distance` in the same order (no fastmath), so its
-minimum is bit for bit the numpy function's (tests/algorithms/xu2013/test_front_kernels.py).
+The checks of one step (:meth:`.advancing_front._AdvancingFront._valid`), the merge-target
+search of Step 4, the release of refused nodes and the obstacle tests, over array mirrors of
+the front's state (:class:`._front_state.FrontState`). Each does the IEEE operations of the
+Python predicates it replaces (:mod:`._front_predicates`, kept as their reference) in the same
+order, without fastmath, so the front takes the same decisions in the same order
+(tests/algorithms/xu2013/test_front_compiled.py and test_front_kernels.py compare them).
+:func:`min_point_triangle_distance` gives bit for bit the minimum of
+:func:`._front_predicates.point_triangle_distance`.
 """
 from __future__ import annotations
 
@@ -61,3 +66,355 @@ def min_point_triangle_distance(x, V, F, cand, radius):
             best = min(best, d)
         best_all = min(best_all, best)
     return min(best_all, radius)
+
+
+# ---------------------------------------------------------------------------------------------
+# The per-step tests of the front over array mirrors of its state (see _front_state.FrontState):
+# positions P (n, 3), per node its vertex, next node and front label, and the list of alive
+# nodes. Each kernel does the IEEE operations of the Python code it replaces in the same
+# order; squares are ``x ** two`` with the exponent 2.0 passed at run time, so that they go
+# through libm's pow like Python's ``x ** 2`` (pow(x, 2) is not always x * x bit for bit).
+
+
+# pow costs ~10 multiplications; a distance whose product form exceeds the bound by this
+# factor (far beyond the few ulps by which the two forms can differ) is beyond it either way.
+_CLEARLY_BEYOND = 1.0 + 1e-12
+
+
+@njit(cache=True)
+def _beyond(X, Y, r2, two):
+    """Is |X - Y|^2 > r2, with the squares as Python's ``(X[i] - Y[i]) ** 2``?"""
+    a, b, c = X[0] - Y[0], X[1] - Y[1], X[2] - Y[2]
+    if a * a + b * b + c * c > r2 * _CLEARLY_BEYOND:
+        return True
+    return not (a ** two + b ** two + c ** two <= r2)
+
+
+@njit(cache=True)
+def _cell(x, c):
+    return math.floor(x / c)
+
+
+@njit(cache=True)
+def _in_query_cells(X, pos, radius, cell):
+    """Is X in a grid cell of the box pos +- radius (the cells _FrontState._near visits)?"""
+    for i in range(3):
+        key = _cell(X[i], cell)
+        if key < _cell(pos[i] - radius, cell) or key > _cell(pos[i] + radius, cell):
+            return False
+    return True
+
+
+@njit(cache=True)
+def merge_target(pos, radius, v, p, q, label, P, node_vertex, node_front, alive, n_alive, cell, two):
+    """The vertex a new vertex at ``pos`` merges with (Sec. 3.2, Step 4), or -1.
+
+    The nearest (by squared distance, then by id) vertex within ``radius`` that has a node on
+    front ``label``, other than v, p and q, found as by a query of a uniform grid of cell
+    ``cell`` (the cells of the box pos +- radius, then the exact squared distance).
+    """
+    r2 = radius * radius
+    best_d, best_u = np.inf, -1
+    for t in range(n_alive):
+        n = alive[t]
+        if node_front[n] != label:
+            continue
+        u = node_vertex[n]
+        if u == v or u == p or u == q:
+            continue
+        X = P[u]
+        if _beyond(X, pos, r2, two):
+            continue
+        d = (X[0] - pos[0]) ** two + (X[1] - pos[1]) ** two + (X[2] - pos[2]) ** two
+        if (d < best_d or (d == best_d and u < best_u)) and _in_query_cells(X, pos, radius, cell):
+            best_d, best_u = d, u
+    return best_u
+
+
+@njit(cache=True)
+def _orient(px, py, qx, qy, rx, ry):
+    return (qx - px) * (ry - py) - (qy - py) * (rx - px)
+
+
+@njit(cache=True)
+def segments_cross_2d(a0x, a0y, a1x, a1y, b0x, b0y, b1x, b1y):
+    """:func:`._front_predicates.segments_cross` on scalar coordinates."""
+    scale = max(max(max(abs(a1x - a0x), abs(a1y - a0y)), abs(b1x - b0x)), abs(b1y - b0y))
+    eps = 1e-9 * scale * scale
+    o1 = _orient(a0x, a0y, a1x, a1y, b0x, b0y)
+    o2 = _orient(a0x, a0y, a1x, a1y, b1x, b1y)
+    if (o1 > eps and o2 > eps) or (o1 < -eps and o2 < -eps):
+        return False
+    o3 = _orient(b0x, b0y, b1x, b1y, a0x, a0y)
+    o4 = _orient(b0x, b0y, b1x, b1y, a1x, a1y)
+    if (o3 > eps and o4 > eps) or (o3 < -eps and o4 < -eps):
+        return False
+    if abs(o1) <= eps and abs(o2) <= eps:
+        if abs(a1x - a0x) + abs(b1x - b0x) >= abs(a1y - a0y) + abs(b1y - b0y):
+            a0, a1, b0, b1, c0, c1, d0, d1 = a0x, a1x, b0x, b1x, a0y, a1y, b0y, b1y
+        else:
+            a0, a1, b0, b1, c0, c1, d0, d1 = a0y, a1y, b0y, b1y, a0x, a1x, b0x, b1x
+        lo_a, hi_a = min(a0, a1), max(a0, a1)
+        lo_b, hi_b = min(b0, b1), max(b0, b1)
+        tol = 1e-9 * scale
+        return (hi_a >= lo_b and hi_b >= lo_a and max(c0, c1) + tol >= min(d0, d1)
+                and max(d0, d1) + tol >= min(c0, c1))
+    return True
+
+
+@njit(cache=True)
+def _norm3(a0, a1, a2):
+    return math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+
+
+@njit(cache=True)
+def front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_next, alive, n_alive, cell, two):
+    """Does a new edge cross a front edge near V, in the plane of normal m?
+
+    The test of :meth:`._AdvancingFront._no_crossing`: the new edges ``edge_ids`` (e, 2)
+    with end points ``seg`` (e, 2, 3) against the front edges (x, next x) whose x lies within
+    the longest new edge's reach from V plus ``longest_edge``, projected on m's plane,
+    skipping pairs that share a vertex.
+    """
+    reach = -np.inf
+    for s in range(seg.shape[0]):
+        d0 = _norm3(seg[s, 0, 0] - V[0], seg[s, 0, 1] - V[1], seg[s, 0, 2] - V[2])
+        d1 = _norm3(seg[s, 1, 0] - V[0], seg[s, 1, 1] - V[1], seg[s, 1, 2] - V[2])
+        reach = max(reach, max(d0, d1))
+    reach = reach + longest_edge
+    if abs(m[0]) < 0.9:
+        r0, r1, r2 = 1.0, 0.0, 0.0
+    else:
+        r0, r1, r2 = 0.0, 1.0, 0.0
+    c0, c1, c2 = m[1] * r2 - m[2] * r1, m[2] * r0 - m[0] * r2, m[0] * r1 - m[1] * r0
+    nc = _norm3(c0, c1, c2)
+    if nc > 0.0:
+        c0, c1, c2 = c0 / nc, c1 / nc, c2 / nc
+    e1 = (c0, c1, c2)
+    e2 = (m[1] * e1[2] - m[2] * e1[1], m[2] * e1[0] - m[0] * e1[2], m[0] * e1[1] - m[1] * e1[0])
+    ne = seg.shape[0]
+    flat = np.empty((ne, 4))
+    for s in range(ne):
+        for j in range(2):
+            flat[s, 2 * j] = seg[s, j, 0] * e1[0] + seg[s, j, 1] * e1[1] + seg[s, j, 2] * e1[2]
+            flat[s, 2 * j + 1] = seg[s, j, 0] * e2[0] + seg[s, j, 1] * e2[1] + seg[s, j, 2] * e2[2]
+    lo_x, hi_x = min(flat[0, 0], flat[0, 2]), max(flat[0, 0], flat[0, 2])
+    lo_y, hi_y = min(flat[0, 1], flat[0, 3]), max(flat[0, 1], flat[0, 3])
+    for s in range(1, ne):
+        lo_x, hi_x = min(lo_x, min(flat[s, 0], flat[s, 2])), max(hi_x, max(flat[s, 0], flat[s, 2]))
+        lo_y, hi_y = min(lo_y, min(flat[s, 1], flat[s, 3])), max(hi_y, max(flat[s, 1], flat[s, 3]))
+    r2_reach = reach * reach
+    for t in range(n_alive):
+        n = alive[t]
+        x = node_vertex[n]
+        X = P[x]
+        if _beyond(X, V, r2_reach, two) or not _in_query_cells(X, V, reach, cell):
+            continue
+        y = node_vertex[node_next[n]]
+        Y = P[y]
+        fx0 = X[0] * e1[0] + X[1] * e1[1] + X[2] * e1[2]
+        fx1 = X[0] * e2[0] + X[1] * e2[1] + X[2] * e2[2]
+        fy0 = Y[0] * e1[0] + Y[1] * e1[1] + Y[2] * e1[2]
+        fy1 = Y[0] * e2[0] + Y[1] * e2[1] + Y[2] * e2[2]
+        if max(fx0, fy0) < lo_x or min(fx0, fy0) > hi_x or max(fx1, fy1) < lo_y or min(fx1, fy1) > hi_y:
+            continue
+        for s in range(ne):
+            a, b = edge_ids[s, 0], edge_ids[s, 1]
+            if a == x or a == y or b == x or b == y:
+                continue
+            if segments_cross_2d(flat[s, 0], flat[s, 1], flat[s, 2], flat[s, 3], fx0, fx1, fy0, fy1):
+                return True
+    return False
+
+
+@njit(cache=True)
+def near_any(nodes, points, r2, P, node_vertex, node_alive, two):
+    """Per node of ``nodes``: 1 when its vertex is within sqrt(r2) of one of ``points``, 0 when
+    not, -1 when the node is dead (:meth:`._AdvancingFront._release_blocked_near`)."""
+    out = np.empty(nodes.shape[0], np.int64)
+    for i in range(nodes.shape[0]):
+        b = nodes[i]
+        if not node_alive[b]:
+            out[i] = -1
+            continue
+        X = P[node_vertex[b]]
+        out[i] = 0
+        for j in range(points.shape[0]):
+            if not _beyond(X, points[j], r2, two):
+                out[i] = 1
+                break
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Obstacle faces indexed by grid cell (_front_obstacles.FrontObstacles): ``keys`` the sorted
+# linear keys of the non-empty cells of a box of cells from ``base`` with ``dims``, the faces
+# of cell keys[i] in faces[starts[i]:starts[i + 1]].
+
+
+@njit(cache=True)
+def obstacle_candidates(lo, hi, cell, base, dims, keys, starts, faces, face_lo, face_hi, stamp, out):
+    """Faces whose bounding box overlaps [lo, hi] (padded by 1e-9 cell), written to ``out``; their count.
+
+    The faces of the grid cells the box covers, each once (``stamp`` (m,) marks those seen:
+    its entries must be below stamp[-1], which is advanced), then filtered by bounding box,
+    as :meth:`.FrontObstacles.candidates` does.
+    """
+    stamp[-1] += 1
+    mark = stamp[-1]
+    pad = 1e-9 * cell
+    count = 0
+    x0, y0, z0 = _cell(lo[0], cell) - base[0], _cell(lo[1], cell) - base[1], _cell(lo[2], cell) - base[2]
+    x1, y1, z1 = _cell(hi[0], cell) - base[0], _cell(hi[1], cell) - base[1], _cell(hi[2], cell) - base[2]
+    for ix in range(max(x0, 0), min(x1, dims[0] - 1) + 1):
+        for iy in range(max(y0, 0), min(y1, dims[1] - 1) + 1):
+            for iz in range(max(z0, 0), min(z1, dims[2] - 1) + 1):
+                key = (ix * dims[1] + iy) * dims[2] + iz
+                at = np.searchsorted(keys, key)
+                if at == keys.shape[0] or keys[at] != key:
+                    continue
+                for j in range(starts[at], starts[at + 1]):
+                    f = faces[j]
+                    if stamp[f] == mark:
+                        continue
+                    stamp[f] = mark
+                    if (face_hi[f, 0] >= lo[0] - pad and face_hi[f, 1] >= lo[1] - pad and face_hi[f, 2] >= lo[2] - pad
+                            and face_lo[f, 0] <= hi[0] + pad and face_lo[f, 1] <= hi[1] + pad
+                            and face_lo[f, 2] <= hi[2] + pad):
+                        out[count] = f
+                        count += 1
+    return count
+
+
+@njit(cache=True)
+def _cross_into(a0, a1, a2, b0, b1, b2):
+    return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+
+
+@njit(cache=True)
+def segment_hits_triangle(P0, P1, A, B, C, tol):
+    """One row of :func:`._front_predicates.segments_hit_triangles` (the same operations)."""
+    n0, n1, n2 = _cross_into(B[0] - A[0], B[1] - A[1], B[2] - A[2], C[0] - A[0], C[1] - A[1], C[2] - A[2])
+    scale = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    s0 = (P0[0] - A[0]) * n0 + (P0[1] - A[1]) * n1 + (P0[2] - A[2]) * n2
+    s1 = (P1[0] - A[0]) * n0 + (P1[1] - A[1]) * n1 + (P1[2] - A[2]) * n2
+    eps = tol * scale
+    if (s0 > eps and s1 > eps) or (s0 < -eps and s1 < -eps):
+        return False
+    if abs(s0) <= eps and abs(s1) <= eps:
+        return False
+    d0, d1, d2 = P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2]
+    e = np.empty(3)
+    for j in range(3):
+        U = A if j == 0 else (B if j == 1 else C)
+        W = B if j == 0 else (C if j == 1 else A)
+        c0, c1, c2 = _cross_into(U[0] - P0[0], U[1] - P0[1], U[2] - P0[2], W[0] - P0[0], W[1] - P0[1], W[2] - P0[2])
+        e[j] = c0 * d0 + c1 * d1 + c2 * d2
+    lim = tol * math.sqrt(scale) * math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    return ((e[0] >= -lim and e[1] >= -lim and e[2] >= -lim)
+            or (e[0] <= lim and e[1] <= lim and e[2] <= lim))
+
+
+@njit(cache=True)
+def triangles_cross_faces(new_faces, corners, V, F, cand, n_cand, k, tol):
+    """Does one of the new triangles intersect one of the faces F[cand[:n_cand]]?
+
+    :meth:`.FrontObstacles.crossed`: pairs sharing two boundary vertices (ids below k) are
+    skipped, pairs sharing one test the opposite edge of each against the other triangle,
+    others every edge of each against the other.
+    """
+    for i in range(new_faces.shape[0]):
+        T = corners[i]
+        for c in range(n_cand):
+            o = F[cand[c]]
+            n_shared, s = 0, -1
+            for j in range(3):
+                x = new_faces[i, j]
+                if 0 <= x < k and (x == o[0] or x == o[1] or x == o[2]):
+                    n_shared += 1
+                    s = x
+            if n_shared >= 2:
+                continue
+            A, B, C = V[o[0]], V[o[1]], V[o[2]]
+            if n_shared == 1:
+                ta = np.empty((2, 3))
+                ob = np.empty((2, 3))
+                na = nb = 0
+                for j in range(3):
+                    if new_faces[i, j] != s:
+                        ta[na] = T[j]
+                        na += 1
+                    if o[j] != s:
+                        ob[nb] = V[o[j]]
+                        nb += 1
+                if segment_hits_triangle(ta[0], ta[1], A, B, C, tol):
+                    return True
+                if segment_hits_triangle(ob[0], ob[1], T[0], T[1], T[2], tol):
+                    return True
+            else:
+                for j in range(3):
+                    if segment_hits_triangle(T[j], T[(j + 1) % 3], A, B, C, tol):
+                        return True
+                    if segment_hits_triangle(V[o[j]], V[o[(j + 1) % 3]], T[0], T[1], T[2], tol):
+                        return True
+    return False
+
+
+@njit(cache=True)
+def _direction_angle(r0, r1, r2, d0, d1, d2, m):
+    """:func:`._front_predicates.direction_angle` on scalars."""
+    c0, c1, c2 = _cross_into(r0, r1, r2, d0, d1, d2)
+    t = math.atan2(m[0] * c0 + m[1] * c1 + m[2] * c2,
+                   (r0 * d0 + r1 * d1 + r2 * d2) - (r0 * m[0] + r1 * m[1] + r2 * m[2]) * (d0 * m[0] + d1 * m[1] + d2 * m[2]))
+    return t + 2.0 * math.pi if t < 0.0 else t
+
+
+@njit(cache=True)
+def _at(x, new_pos, P):
+    """Position of vertex x: a temporary id -1, -2 of the step is row -x - 1 of new_pos."""
+    return new_pos[-x - 1] if x < 0 else P[x]
+
+
+@njit(cache=True)
+def step_geometry_valid(faces, new_pos, behind, m, tiny, fold_min_cos, edge_ids, edge_nodes, angle_margin, V,
+                        longest_edge, P, node_vertex, node_next, node_plane, node_theta, alive, n_alive, cell, two):
+    """The geometric checks of one step (:meth:`._AdvancingFront._valid`, before the obstacles).
+
+    Each new triangle of ``faces`` (f, 3) (vertex ids, temporary ids for ``new_pos``) faces
+    the way of m by more than ``tiny`` and does not fold onto the triangle behind a front edge
+    it consumes (``behind[f, j]`` the normal behind its edge j, NaN where none) by more than
+    arccos(fold_min_cos); each new edge ``edge_ids[i]`` leaves its existing ends (nodes
+    ``edge_nodes[i]``, -1 for a new vertex) strictly inside their front angles,
+    ``angle_margin`` from either side; no new edge crosses a nearby front edge
+    (:func:`front_edges_crossed`).
+    """
+    for f in range(faces.shape[0]):
+        A, B, C = _at(faces[f, 0], new_pos, P), _at(faces[f, 1], new_pos, P), _at(faces[f, 2], new_pos, P)
+        n0, n1, n2 = _cross_into(B[0] - A[0], B[1] - A[1], B[2] - A[2], C[0] - A[0], C[1] - A[1], C[2] - A[2])
+        if n0 * m[0] + n1 * m[1] + n2 * m[2] <= tiny:
+            return False
+        for j in range(3):
+            b = behind[f, j]
+            if not math.isnan(b[0]) and b[0] * n0 + b[1] * n1 + b[2] * n2 < fold_min_cos * _norm3(n0, n1, n2):
+                return False
+    ne = edge_ids.shape[0]
+    for i in range(ne):
+        for j in range(2):
+            nx = edge_nodes[i, j]
+            if nx < 0:
+                continue
+            X = P[node_vertex[nx]]
+            R = P[node_vertex[node_next[nx]]]
+            Y = _at(edge_ids[i, 1 - j], new_pos, P)
+            phi = _direction_angle(R[0] - X[0], R[1] - X[1], R[2] - X[2], Y[0] - X[0], Y[1] - X[1], Y[2] - X[2],
+                                   node_plane[nx])
+            if not (angle_margin < phi < node_theta[nx] - angle_margin):
+                return False
+    if ne == 0:
+        return True
+    seg = np.empty((ne, 2, 3))
+    for i in range(ne):
+        seg[i, 0] = _at(edge_ids[i, 0], new_pos, P)
+        seg[i, 1] = _at(edge_ids[i, 1], new_pos, P)
+    return not front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_next, alive, n_alive,
+                                   cell, two)

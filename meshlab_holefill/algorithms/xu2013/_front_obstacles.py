@@ -7,12 +7,9 @@ faces' bounding boxes, with the grid cell of the front's own vertex grid.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ._front_kernels import min_point_triangle_distance
-from ._front_predicates import segments_hit_triangles
+from ._front_kernels import min_point_triangle_distance, obstacle_candidates, triangles_cross_faces
 
 __all__ = ["FrontObstacles"]
 
@@ -33,48 +30,44 @@ class FrontObstacles:
     """
 
     def __init__(self, V, F, cell, k):
-        self.V = np.asarray(V, np.float64)
-        self.F = np.asarray(F, np.int64).reshape(-1, 3)
+        self.V = np.ascontiguousarray(V, np.float64)
+        self.F = np.ascontiguousarray(np.asarray(F, np.int64).reshape(-1, 3))
         self.cell, self.k = cell, k
         self.tests = 0  # exact crossing tests run (those with candidate faces)
         corners = self.V[self.F]
         self.lo, self.hi = corners.min(axis=1), corners.max(axis=1)
-        lo = np.floor(self.lo / cell).astype(np.int64)
-        hi = np.floor(self.hi / cell).astype(np.int64)
-        grid = {}
-        for f, (a, b) in enumerate(zip(lo.tolist(), hi.tolist())):
-            for ix in range(a[0], b[0] + 1):
-                for iy in range(a[1], b[1] + 1):
-                    for iz in range(a[2], b[2] + 1):
-                        grid.setdefault((ix, iy, iz), []).append(f)
-        self.grid = grid
+        self._index_cells(np.floor(self.lo / cell).astype(np.int64), np.floor(self.hi / cell).astype(np.int64))
+        self._stamp = np.zeros(len(self.F) + 1, np.int64)  # candidates' marks, the last entry the current one
+        self._out = np.empty(len(self.F), np.int64)
 
-    def _key(self, pos):
-        c = self.cell
-        return (math.floor(pos[0] / c), math.floor(pos[1] / c), math.floor(pos[2] / c))
+    def _index_cells(self, lo, hi):
+        """Each face listed in every grid cell its bounding box meets, as sorted cell keys with face ranges."""
+        self._base = lo.min(axis=0)
+        self._dims = hi.max(axis=0) - self._base + 1
+        span = hi - lo + 1
+        counts = span.prod(axis=1)
+        face = np.repeat(np.arange(len(lo)), counts)
+        r = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+        ny, nz = span[face, 1], span[face, 2]
+        ix = lo[face, 0] + r // (ny * nz) - self._base[0]
+        iy = lo[face, 1] + (r // nz) % ny - self._base[1]
+        iz = lo[face, 2] + r % nz - self._base[2]
+        key = (ix * self._dims[1] + iy) * self._dims[2] + iz
+        order = np.argsort(key, kind="stable")
+        key, self._cell_faces = key[order], np.ascontiguousarray(face[order])
+        self._keys, first = np.unique(key, return_index=True)
+        self._starts = np.append(first, len(key)).astype(np.int64)
 
     def border_faces(self):
         """Faces with two or more boundary vertices (the triangles behind the boundary edges)."""
         return self.F[(self.F < self.k).sum(axis=1) >= 2]
 
     def candidates(self, lo, hi):
-        """Faces whose bounding box overlaps the box [lo, hi]: (c,) int64."""
-        x0, y0, z0 = self._key(lo)
-        x1, y1, z1 = self._key(hi)
-        cand = set()
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                for iz in range(z0, z1 + 1):
-                    cell = self.grid.get((ix, iy, iz))
-                    if cell:
-                        cand.update(cell)
-        if not cand:
-            return np.zeros(0, np.int64)
-        cand = np.fromiter(cand, np.int64, len(cand))
-        pad = 1e-9 * self.cell
-        keep = np.all(self.hi[cand] >= np.asarray(lo) - pad, axis=1) & \
-            np.all(self.lo[cand] <= np.asarray(hi) + pad, axis=1)
-        return cand[keep]
+        """Faces whose bounding box overlaps the box [lo, hi]: (c,) int64 (a view, valid until the next call)."""
+        count = obstacle_candidates(np.asarray(lo, np.float64), np.asarray(hi, np.float64), self.cell, self._base,
+                                    self._dims, self._keys, self._starts, self._cell_faces, self.lo, self.hi,
+                                    self._stamp, self._out)
+        return self._out[:count]
 
     def distance(self, pos, radius):
         """Distance from pos to the nearest face, if below radius (else radius)."""
@@ -94,36 +87,10 @@ class FrontObstacles:
         corners : list of 3 (3,) tuples per face
             Their corner positions.
         """
-        pts = [p for T in corners for p in T]
-        lo = [min(p[i] for p in pts) for i in range(3)]
-        hi = [max(p[i] for p in pts) for i in range(3)]
-        cand = self.candidates(lo, hi)
+        T = np.asarray(corners, np.float64).reshape(-1, 3, 3)
+        cand = self.candidates(T.min(axis=(0, 1)), T.max(axis=(0, 1)))
         if len(cand) == 0:
             return False
         self.tests += 1
-        k = self.k
-        OF = self.F[cand]
-        # Pairs (new triangle, obstacle) and the vertices they share (boundary vertices only).
-        segs_a, segs_b, tris = [], [], []
-        for f, T in zip(faces, corners):
-            for o in OF.tolist():
-                shared = [x for x in f if 0 <= x < k and x in o]
-                O = [tuple(self.V[x]) for x in o]
-                if len(shared) >= 2:
-                    continue  # across a boundary edge: the front-angle checks keep them apart
-                if len(shared) == 1:
-                    s = shared[0]
-                    ta = [T[j] for j in range(3) if f[j] != s]
-                    ob = [O[j] for j in range(3) if o[j] != s]
-                    segs_a += [ta[0], ob[0]]
-                    segs_b += [ta[1], ob[1]]
-                    tris += [O, T]
-                else:
-                    for j in range(3):
-                        segs_a += [T[j], O[j]]
-                        segs_b += [T[(j + 1) % 3], O[(j + 1) % 3]]
-                        tris += [O, T]
-        if not tris:
-            return False
-        return bool(segments_hit_triangles(np.asarray(segs_a), np.asarray(segs_b), np.asarray(tris),
-                                           1e-9 * self.cell).any())
+        return bool(triangles_cross_faces(np.asarray(faces, np.int64).reshape(-1, 3), T, self.V, self.F, cand,
+                                          len(cand), self.k, 1e-9 * self.cell))

@@ -1,7 +1,9 @@
 """Geometric predicates of the advancing front (:mod:`meshlab_holefill.algorithms.xu2013.advancing_front`).
 
 Small 3-vectors are plain tuples (the front works one step at a time, where numpy's call
-overhead dominates); batches of candidate pairs use row-wise numpy.
+overhead dominates); batches of candidate pairs use row-wise numpy. The per-step tests run
+compiled (:mod:`._front_kernels`, the same operations); the functions here are their
+reference.
 """
 from __future__ import annotations
 

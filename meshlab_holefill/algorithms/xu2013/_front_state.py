@@ -5,12 +5,11 @@ angle, the angle rules, the merges, the checks); :class:`FrontState` keeps the b
 step changes (Step 5): the vertex positions, normals and sizing values, the faces and edges
 made, the directed front edges with the normal of the triangle behind each, and the fronts as
 cyclic linked lists of nodes (a vertex is on two fronts after a split), with a heap of their
-angles and a uniform grid over the front vertices for neighbourhood queries.
+angles, and array mirrors of positions and nodes for the compiled step tests.
 """
 from __future__ import annotations
 
 import heapq
-import math
 
 import numpy as np
 
@@ -42,9 +41,8 @@ class FrontState:
             self.front_edges[(i, j)] = None
         for a, b in np.asarray(forbidden_edges, np.int64).reshape(-1, 2).tolist():
             self.edges.add((min(a, b), max(a, b)))
-        # Uniform grid over the front vertices for neighbourhood queries.
+        # Cell of the uniform grids of neighbourhood queries (the kernels' query boxes, the obstacles).
         self.cell = max(2.0 * float(np.mean(lengths)), 1e-300)
-        self.grid = {}
         # Nodes of the cyclic front lists.
         self.node_vertex = list(range(k))
         self.node_prev = [(i - 1) % k for i in range(k)]
@@ -55,8 +53,7 @@ class FrontState:
         self.node_theta = [0.0] * k
         self.node_plane = [None] * k
         self.vertex_nodes = {i: {i} for i in range(k)}
-        for i in range(k):
-            self._grid_add(i)
+        self._init_arrays(points)
         self.front_size = {0: k}
         self.next_label = 1
         self.heap = []
@@ -64,33 +61,60 @@ class FrontState:
         self.stats = {"steps": 0, "rule1": 0, "rule2": 0, "rule3": 0, "merges": 0, "splits": 0,
                       "rejected": 0, "obstacle_tests": 0}
 
+    # ----------------------------------------------------------------- array mirrors
+    def _init_arrays(self, points):
+        """Array copies of the positions and nodes for the compiled step tests (:mod:`._front_kernels`).
+
+        ``Pa`` (vertices, 3), per node ``na_vertex``, ``na_next``, ``na_front``, ``na_alive``,
+        ``na_theta``, ``na_plane``, and ``alive`` the alive nodes (in no particular order; ``n_alive`` of them, node i at
+        ``alive_at[i]``). Capacities double as the front grows.
+        """
+        k = self.k
+        cap = max(4 * k, 64)
+        self.Pa = np.empty((cap, 3))
+        self.Pa[:k] = points
+        self.na_vertex = np.empty(cap, np.int64)
+        self.na_vertex[:k] = np.arange(k)
+        self.na_next = np.empty(cap, np.int64)
+        self.na_next[:k] = (np.arange(k) + 1) % k
+        self.na_front = np.zeros(cap, np.int64)
+        self.na_alive = np.zeros(cap, np.bool_)
+        self.na_alive[:k] = True
+        self.na_theta = np.zeros(cap)
+        self.na_plane = np.zeros((cap, 3))
+        self.alive = np.empty(cap, np.int64)
+        self.alive[:k] = np.arange(k)
+        self.alive_at = np.empty(cap, np.int64)
+        self.alive_at[:k] = np.arange(k)
+        self.n_alive = k
+
+    @staticmethod
+    def _grown(a, n):
+        if n < len(a):
+            return a
+        b = np.empty((2 * len(a),) + a.shape[1:], a.dtype)
+        b[:len(a)] = a
+        return b
+
+    def _add_vertex(self, pos, normal, size):
+        i = len(self.P)
+        self.P.append(pos)
+        self.N.append(normal)
+        self.S.append(size)
+        self.Pa = self._grown(self.Pa, i)
+        self.Pa[i] = pos
+        return i
+
+    def _link(self, a, b):
+        self.node_next[a] = b
+        self.node_prev[b] = a
+        self.na_next[a] = b
+
+    def _set_front(self, i, label):
+        self.node_front[i] = label
+        self.na_front[i] = label
+
     # ----------------------------------------------------------------- bookkeeping
-    def _key(self, pos):
-        c = self.cell
-        return (math.floor(pos[0] / c), math.floor(pos[1] / c), math.floor(pos[2] / c))
-
-    def _grid_add(self, vertex):
-        self.grid.setdefault(self._key(self.P[vertex]), set()).add(vertex)
-
-    def _near(self, pos, radius):
-        """Front vertices within ``radius`` of pos (superset from the grid, then exact)."""
-        x0, y0, z0 = self._key((pos[0] - radius, pos[1] - radius, pos[2] - radius))
-        x1, y1, z1 = self._key((pos[0] + radius, pos[1] + radius, pos[2] + radius))
-        r2 = radius * radius
-        out = []
-        P, grid = self.P, self.grid
-        for ix in range(x0, x1 + 1):
-            for iy in range(y0, y1 + 1):
-                for iz in range(z0, z1 + 1):
-                    cell = grid.get((ix, iy, iz))
-                    if cell:
-                        for u in cell:
-                            x = P[u]
-                            d = (x[0] - pos[0]) ** 2 + (x[1] - pos[1]) ** 2 + (x[2] - pos[2]) ** 2
-                            if d <= r2:
-                                out.append((d, u))
-        return out
-
     def _new_node(self, vertex, label):
         i = len(self.node_vertex)
         self.node_vertex.append(vertex)
@@ -101,20 +125,33 @@ class FrontState:
         self.node_version.append(0)
         self.node_theta.append(0.0)
         self.node_plane.append(None)
-        nodes = self.vertex_nodes.setdefault(vertex, set())
-        if not nodes:
-            self._grid_add(vertex)
-        nodes.add(i)
+        self.na_vertex = self._grown(self.na_vertex, i)
+        self.na_next = self._grown(self.na_next, i)
+        self.na_front = self._grown(self.na_front, i)
+        self.na_alive = self._grown(self.na_alive, i)
+        self.alive_at = self._grown(self.alive_at, i)
+        self.na_theta = self._grown(self.na_theta, i)
+        self.na_plane = self._grown(self.na_plane, i)
+        self.na_vertex[i], self.na_next[i], self.na_front[i], self.na_alive[i] = vertex, -1, label, True
+        self.alive = self._grown(self.alive, self.n_alive)
+        self.alive[self.n_alive] = i
+        self.alive_at[i] = self.n_alive
+        self.n_alive += 1
+        self.vertex_nodes.setdefault(vertex, set()).add(i)
         return i
 
     def _kill_node(self, i):
         self.node_alive[i] = False
+        if self.na_alive[i]:
+            self.na_alive[i] = False
+            # Swap-remove from the alive list.
+            at, last = self.alive_at[i], self.alive[self.n_alive - 1]
+            self.alive[at] = last
+            self.alive_at[last] = at
+            self.n_alive -= 1
         self.node_version[i] += 1
         v = self.node_vertex[i]
-        nodes = self.vertex_nodes[v]
-        nodes.discard(i)
-        if not nodes:
-            self.grid[self._key(self.P[v])].discard(v)
+        self.vertex_nodes[v].discard(i)
 
     def _update_node(self, i):
         v = self.node_vertex[i]
@@ -123,6 +160,8 @@ class FrontState:
         theta, m = front_angle(self.P[v], self.P[p], self.P[q], self.N[v])
         self.node_theta[i] = theta
         self.node_plane[i] = m
+        self.na_theta[i] = theta
+        self.na_plane[i] = m
         self.node_version[i] += 1
         heapq.heappush(self.heap, (theta, i, self.node_version[i]))
 
@@ -157,10 +196,7 @@ class FrontState:
             size = (self.S[v] + self.S[p] + self.S[q]) / 3.0
             normal = unit(tuple(self.N[v][i] + self.N[p][i] + self.N[q][i] for i in range(3)))
             for temp in sorted(new_pos, reverse=True):
-                ids[temp] = len(self.P)
-                self.P.append(new_pos[temp])
-                self.N.append(normal)
-                self.S.append(size)
+                ids[temp] = self._add_vertex(new_pos[temp], normal, size)
         faces = [tuple(ids.get(x, x) for x in f) for f in faces]
         sequence = [ids.get(x, x) for x in sequence]
         directed = []
@@ -184,8 +220,7 @@ class FrontState:
         self._kill_node(node)
         chain = [prev] + [self._new_node(x, label) for x in sequence] + [nxt]
         for a, b in zip(chain[:-1], chain[1:]):
-            self.node_next[a] = b
-            self.node_prev[b] = a
+            self._link(a, b)
         dirty = set(chain)
         self.front_size[label] += len(sequence) - 1
         if self.front_size[label] <= 2:
@@ -212,8 +247,8 @@ class FrontState:
         self.stats["splits"] += 1
         label = self.node_front[w]
         wn, un = self.node_next[w], self.node_next[u]
-        self.node_next[w], self.node_prev[un] = un, w
-        self.node_next[u], self.node_prev[wn] = wn, u
+        self._link(w, un)
+        self._link(u, wn)
         # Walk both cycles in lockstep: the shorter one is found in O(its length).
         a, b, la, lb = self.node_next[w], self.node_next[u], 1, 1
         while a != w and b != u:
@@ -233,7 +268,7 @@ class FrontState:
             new_label = self.next_label
             self.next_label += 1
             for x in cycle:
-                self.node_front[x] = new_label
+                self._set_front(x, new_label)
             self.front_size[new_label] = short_len
         self.front_size[label] = long_len
         if long_len <= 2:

@@ -47,6 +47,9 @@ fan. The run stops with :class:`HoleFillError` when no step is possible, when th
 past 1.3 times the boundary's vertex count plus 20 (the front has left the hole: it runs over
 the surrounding surface or out of a hole wrapped around a tube), or past a bound on the
 triangle count: it always ends.
+
+The checks and the merge-target search run as numba kernels (:mod:`._front_kernels`) over
+array mirrors of the front; the bookkeeping (heap, linked lists, edge sets) stays in Python.
 """
 from __future__ import annotations
 
@@ -56,9 +59,10 @@ import math
 import numpy as np
 
 from ...errors import HoleFillError
+from ._front_kernels import merge_target, near_any, step_geometry_valid
 from ._front_obstacles import FrontObstacles
 from ._front_state import FrontState
-from ._front_predicates import cross, direction_angle, dot, norm, scaled, segments_cross, sub, unit
+from ._front_predicates import cross, dot, norm, scaled, sub, unit
 
 __all__ = ["advancing_front_triangulation"]
 
@@ -82,6 +86,9 @@ FRONT_GROWTH_LIMIT = 1.3
 # A new vertex must keep this fraction of its target edge length away from the surrounding
 # mesh: closer, the front is running over the existing surface instead of across the hole.
 HOVER_FACTOR = 0.35
+# The exponent of the compiled kernels' squares, passed at run time (see _front_kernels).
+TWO = 2.0
+_NO_NORMAL = (math.nan, math.nan, math.nan)  # no known triangle behind a front edge
 
 
 class _AdvancingFront(FrontState):
@@ -149,16 +156,15 @@ class _AdvancingFront(FrontState):
                 self.max_edge = max(self.max_edge, norm(sub(P[x], P[y])))
         reach = 3.0 * self.max_edge + (1.0 + self.merge_factor) * self.S_max + self.longest_edge
         r2 = reach * reach
-        points = [P[x] for x in verts]
         still = []
-        for b in self.blocked:
-            if not self.node_alive[b]:
-                continue
-            X = P[self.node_vertex[b]]
-            if any((X[0] - Y[0]) ** 2 + (X[1] - Y[1]) ** 2 + (X[2] - Y[2]) ** 2 <= r2 for Y in points):
-                heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
-            else:
-                still.append(b)
+        if self.blocked:
+            near = near_any(np.array(self.blocked, np.int64), self.Pa[sorted(verts)], r2, self.Pa, self.na_vertex,
+                            self.na_alive, TWO)
+            for b, hit in zip(self.blocked, near.tolist()):
+                if hit > 0:
+                    heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
+                elif hit == 0:
+                    still.append(b)
         self.stats["kept_blocked"] = self.stats.get("kept_blocked", 0) + len(still)
         self.blocked = still
 
@@ -249,14 +255,8 @@ class _AdvancingFront(FrontState):
             for u in (p, q):
                 if sum((pos[i] - self.P[u][i]) ** 2 for i in range(3)) < radius * radius:
                     return None
-            near = sorted(self._near(pos, radius))
-            target = -1
-            for _, u in near:
-                if u == v or u == p or u == q:
-                    continue
-                if self._same_front_node(u, self.node_front[node]) >= 0:
-                    target = u
-                    break
+            target = merge_target(np.array(pos), radius, v, p, q, self.node_front[node], self.Pa, self.na_vertex,
+                                  self.na_front, self.alive, self.n_alive, self.cell, TWO)
             if target < 0:
                 target = -j
                 new_pos[target] = pos
@@ -302,31 +302,26 @@ class _AdvancingFront(FrontState):
             new_edges.append((a, b))
         v = self.node_vertex[node]
         scale = self.S[v]
-        tiny = 1e-10 * scale * scale
-        for a, b, c in faces:
-            A, B, C = self._pos(a, new_pos), self._pos(b, new_pos), self._pos(c, new_pos)
-            nrm = cross(sub(B, A), sub(C, A))
-            if dot(nrm, m) <= tiny:
-                return False
-            # No fold onto the triangle behind a consumed front edge.
-            for e in ((a, b), (b, c), (c, a)):
-                behind = self.front_edges.get(e)
-                if behind is not None and dot(behind, nrm) < FOLD_MIN_COS * norm(nrm):
-                    return False
-        # New edges leave existing front vertices strictly inside their front angle.
+        # The node of each existing end of a new edge, on this front (a new edge must leave
+        # from inside its front angle there).
+        edge_nodes = []
         for a, b in new_edges:
-            for x, y in ((a, b), (b, a)):
-                if x < 0:
-                    continue
-                nx = self._same_front_node(x, label)
-                if nx < 0:
-                    return False
-                X = self.P[x]
-                ref = sub(self.P[self.node_vertex[self.node_next[nx]]], X)
-                phi = direction_angle(ref, sub(self._pos(y, new_pos), X), self.node_plane[nx])
-                if not (ANGLE_MARGIN < phi < self.node_theta[nx] - ANGLE_MARGIN):
-                    return False
-        if new_edges and not self._no_crossing(node, new_edges, new_pos, m):
+            ends = [-1, -1]
+            for j, x in enumerate((a, b)):
+                if x >= 0:
+                    ends[j] = self._same_front_node(x, label)
+                    if ends[j] < 0:
+                        return False
+            edge_nodes.append(ends)
+        positions = np.empty((2, 3))
+        for temp, pos in new_pos.items():
+            positions[-temp - 1] = pos
+        behind = [[self.front_edges.get(e) or _NO_NORMAL for e in ((a, b), (b, c), (c, a))] for a, b, c in faces]
+        if not step_geometry_valid(
+                np.array(faces, np.int64), positions, np.array(behind), self.na_plane[node], 1e-10 * scale * scale,
+                FOLD_MIN_COS, np.array(new_edges, np.int64).reshape(-1, 2), np.array(edge_nodes, np.int64).reshape(-1, 2),
+                ANGLE_MARGIN, self.Pa[v], self.longest_edge, self.Pa, self.na_vertex, self.na_next, self.na_plane,
+                self.na_theta, self.alive, self.n_alive, self.cell, TWO):
             return False
         if self.obstacles is None:
             return True
@@ -349,43 +344,6 @@ class _AdvancingFront(FrontState):
                 if (b, a) in self.front_edges and a < k and b < k:
                     c = cross(sub(OV[f[1]], OV[f[0]]), sub(OV[f[2]], OV[f[0]]))
                     self.front_edges[(b, a)] = unit(tuple(map(float, c)))
-
-    def _no_crossing(self, node, new_edges, new_pos, m):
-        """No new edge crosses a nearby front edge, in the plane of the front angle."""
-        V = self.P[self.node_vertex[node]]
-        segs = [(self._pos(a, new_pos), self._pos(b, new_pos)) for a, b in new_edges]
-        reach = max(max(norm(sub(s0, V)), norm(sub(s1, V))) for s0, s1 in segs) + self.longest_edge
-        e1 = unit(cross(m, (1.0, 0.0, 0.0) if abs(m[0]) < 0.9 else (0.0, 1.0, 0.0)))
-        e2 = cross(m, e1)
-
-        def flat(x):
-            return (dot(x, e1), dot(x, e2))
-
-        flat_new = [(flat(s0), flat(s1)) for s0, s1 in segs]
-        lo_x = min(min(s0[0], s1[0]) for s0, s1 in flat_new)
-        hi_x = max(max(s0[0], s1[0]) for s0, s1 in flat_new)
-        lo_y = min(min(s0[1], s1[1]) for s0, s1 in flat_new)
-        hi_y = max(max(s0[1], s1[1]) for s0, s1 in flat_new)
-        seen = set()
-        flat_cache = {}
-        for _, x in self._near(V, reach):
-            for nx in self.vertex_nodes[x]:
-                y = self.node_vertex[self.node_next[nx]]
-                if (x, y) in seen:
-                    continue
-                seen.add((x, y))
-                fx = flat_cache.get(x) or flat_cache.setdefault(x, flat(self.P[x]))
-                fy = flat_cache.get(y) or flat_cache.setdefault(y, flat(self.P[y]))
-                if max(fx[0], fy[0]) < lo_x or min(fx[0], fy[0]) > hi_x or \
-                        max(fx[1], fy[1]) < lo_y or min(fx[1], fy[1]) > hi_y:
-                    continue
-                for (a, b), (f0, f1) in zip(new_edges, flat_new):
-                    if a == x or a == y or b == x or b == y:
-                        continue
-                    if segments_cross(f0, f1, fx, fy):
-                        return False
-        return True
-
 
 
 def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75, max_faces=None,
@@ -455,3 +413,21 @@ def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75,
     if front.obstacles is not None:
         stats["obstacle_tests"] = front.obstacles.tests
     return new_vertices, faces, stats
+
+
+def warm_up():
+    """Load (or compile) the front's numba kernels now, by running the front on a small hole.
+
+    The kernels are compiled lazily, on first use, and cached on disk; loading them takes a
+    few tenths of a second per process. A caller about to fork worker processes can call this
+    first, so that the workers inherit the loaded kernels instead of each loading them again
+    inside its first hole's time.
+    """
+    t = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t), 0.1 * np.cos(3 * t)], axis=1)
+    outer = 1.5 * ring
+    V = np.concatenate([ring, outer])
+    k = len(ring)
+    F = [(i, (i + 1) % k, k + i) for i in range(k)] + [((i + 1) % k, k + (i + 1) % k, k + i) for i in range(k)]
+    advancing_front_triangulation(ring, obstacles=(V, np.array(F)))
+    near_any(np.zeros(1, np.int64), ring[[0]], 1.0, ring, np.zeros(1, np.int64), np.ones(1, np.bool_), TWO)

@@ -89,91 +89,117 @@ def split_long_boundary_edges(V, F, loops, factor=1.5):
     -------
     BorderRefinement
     """
-    V = np.asarray(V, np.float64)
-    F0 = np.asarray(F, np.int64)
-    n, m = len(V), len(F0)
-    F_rows = {}          # modified or new face rows
-    parents = {}         # new face row -> original face
-    # Loop edge (a, b) in patch orientation -> face row holding half-edge (b, a).
-    holder = {}
-    for loop in loops:
-        lv = np.asarray(loop.vertices, np.int64)
-        for i, f in enumerate(np.asarray(loop.border_faces, np.int64).tolist()):
-            holder[(int(lv[i]), int(lv[(i + 1) % len(lv)]))] = f
-    new_pos, new_edge, new_t = [], [], []
-    # Subdivision points of every original loop edge: (a, b) -> list of (t, vertex).
-    points_on = {}
+    state = _SplitState(np.asarray(V, np.float64), np.asarray(F, np.int64), loops)
     counts = np.zeros(len(loops), np.int64)
-
-    def face(row):
-        return F_rows[row] if row in F_rows else tuple(F0[row].tolist())
-
     for li, loop in enumerate(loops):
-        lv = np.asarray(loop.vertices, np.int64)
-        k = len(lv)
-        if k < 3 or not loop.closed:
+        if len(loop.vertices) >= 3 and loop.closed:
+            counts[li] = _split_loop(state, np.asarray(loop.vertices, np.int64), factor)
+    F2, face_parents = state.faces()
+    return BorderRefinement(V=state.vertices(), F=F2, loops=_refined_loops(state, loops),
+                            edge_vertices=np.asarray(state.new_edge, np.int64).reshape(-1, 2),
+                            edge_weights=np.asarray(state.new_t, np.float64), face_parents=face_parents,
+                            split_counts=counts)
+
+
+class _SplitState:
+    """The splits made so far: new vertices, changed and new face rows, and which face holds each loop edge."""
+
+    def __init__(self, V, F0, loops):
+        self.V, self.F0 = V, F0
+        self.n, self.m = len(V), len(F0)
+        self.F_rows = {}     # modified or new face rows
+        self.parents = {}    # new face row -> original face
+        self.new_pos, self.new_edge, self.new_t = [], [], []
+        self.points_on = {}  # subdivision points of every split original loop edge: (a, b) -> [(t, vertex)]
+        # Loop edge (a, b) in patch orientation -> face row holding half-edge (b, a).
+        self.holder = {}
+        for loop in loops:
+            lv = np.asarray(loop.vertices, np.int64)
+            for i, f in enumerate(np.asarray(loop.border_faces, np.int64).tolist()):
+                self.holder[(int(lv[i]), int(lv[(i + 1) % len(lv)]))] = f
+
+    def face(self, row):
+        return self.F_rows[row] if row in self.F_rows else tuple(self.F0[row].tolist())
+
+    def split(self, a0, b0, a, b, t):
+        """Split sub-edge (a, b) of original loop edge (a0, b0) at parameter t, with its border triangle."""
+        mid = self.n + len(self.new_pos)
+        self.new_pos.append((1.0 - t) * self.V[a0] + t * self.V[b0])
+        self.new_edge.append((a0, b0))
+        self.new_t.append(t)
+        self.points_on[(a0, b0)].append((t, mid))
+        row = self.holder.pop((a, b))
+        f = self.face(row)
+        j = next(j for j in range(3) if f[j] == b and f[(j + 1) % 3] == a)
+        c = f[(j + 2) % 3]
+        child_row = self.m + len(self.parents)
+        self.F_rows[row] = (b, mid, c)
+        self.F_rows[child_row] = (mid, a, c)
+        self.parents[child_row] = self.parents.get(row, row)
+        self.holder[(a, mid)] = child_row
+        self.holder[(mid, b)] = row
+        if self.holder.get((c, a)) == row:
+            self.holder[(c, a)] = child_row
+        return mid
+
+    def vertices(self):
+        return np.concatenate([self.V, np.asarray(self.new_pos, np.float64).reshape(-1, 3)])
+
+    def faces(self):
+        """(m + s, 3) faces and their (m + s,) original parent faces."""
+        s = len(self.new_pos)
+        F2 = np.concatenate([self.F0, np.zeros((s, 3), np.int64)])
+        if self.F_rows:
+            rows = np.fromiter(self.F_rows.keys(), np.int64, len(self.F_rows))
+            F2[rows] = np.asarray(list(self.F_rows.values()), np.int64)
+        face_parents = np.arange(self.m + s, dtype=np.int64)
+        if self.parents:
+            face_parents[np.fromiter(self.parents.keys(), np.int64)] = np.fromiter(self.parents.values(), np.int64)
+        return F2, face_parents
+
+
+def _split_loop(state, lv, factor):
+    """Steps 1-3 on one loop: split its edges longer than factor * L_ave until none is; returns the splits."""
+    k = len(lv)
+    P = state.V[lv]
+    lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    limit = factor * float(lengths.mean())
+    splits = 0
+    for i in range(k):
+        a0, b0 = int(lv[i]), int(lv[(i + 1) % k])
+        if lengths[i] <= limit:
             continue
-        P = V[lv]
-        lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
-        limit = factor * float(lengths.mean())
-        for i in range(k):
-            a0, b0 = int(lv[i]), int(lv[(i + 1) % k])
-            if lengths[i] <= limit:
+        state.points_on[(a0, b0)] = []
+        # Work items: (a, b, t_a, t_b, length) of sub-edges of the original edge (a0, b0).
+        work = [(a0, b0, 0.0, 1.0, float(lengths[i]))]
+        while work:
+            a, b, ta, tb, length = work.pop()
+            if length <= limit:
                 continue
-            points_on[(a0, b0)] = []
-            # Work items: (a, b, t_a, t_b, length) of sub-edges of the original edge (a0, b0).
-            work = [(a0, b0, 0.0, 1.0, float(lengths[i]))]
-            while work:
-                a, b, ta, tb, length = work.pop()
-                if length <= limit:
-                    continue
-                t = 0.5 * (ta + tb)
-                mid = n + len(new_pos)
-                new_pos.append((1.0 - t) * V[a0] + t * V[b0])
-                new_edge.append((a0, b0))
-                new_t.append(t)
-                points_on[(a0, b0)].append((t, mid))
-                row = holder.pop((a, b))
-                f = face(row)
-                j = next(j for j in range(3) if f[j] == b and f[(j + 1) % 3] == a)
-                c = f[(j + 2) % 3]
-                child_row = m + len(parents)
-                F_rows[row] = (b, mid, c)
-                F_rows[child_row] = (mid, a, c)
-                parents[child_row] = parents.get(row, row)
-                holder[(a, mid)] = child_row
-                holder[(mid, b)] = row
-                if holder.get((c, a)) == row:
-                    holder[(c, a)] = child_row
-                counts[li] += 1
-                work.append((a, mid, ta, t, 0.5 * length))
-                work.append((mid, b, t, tb, 0.5 * length))
-    s = len(new_pos)
-    F2 = np.concatenate([F0, np.zeros((s, 3), np.int64)])
-    if F_rows:
-        rows = np.fromiter(F_rows.keys(), np.int64, len(F_rows))
-        F2[rows] = np.asarray(list(F_rows.values()), np.int64)
-    face_parents = np.arange(m + s, dtype=np.int64)
-    if parents:
-        face_parents[np.fromiter(parents.keys(), np.int64)] = np.fromiter(parents.values(), np.int64)
-    V2 = np.concatenate([V, np.asarray(new_pos, np.float64).reshape(-1, 3)])
+            t = 0.5 * (ta + tb)
+            mid = state.split(a0, b0, a, b, t)
+            splits += 1
+            work.append((a, mid, ta, t, 0.5 * length))
+            work.append((mid, b, t, tb, 0.5 * length))
+    return splits
+
+
+def _refined_loops(state, loops):
+    """The loops with the new vertices inserted between the ends of the edges they split."""
     new_loops = []
     for loop in loops:
         lv = [int(x) for x in np.asarray(loop.vertices, np.int64)]
         k = len(lv)
-        if not points_on or k < 3 or not loop.closed:
+        if not state.points_on or k < 3 or not loop.closed:
             new_loops.append(loop)
             continue
         verts = []
         for i in range(k):
             a, b = lv[i], lv[(i + 1) % k]
             verts.append(a)
-            verts += [x for _, x in sorted(points_on.get((a, b), []))]
-        border = [holder[(verts[i], verts[(i + 1) % len(verts)])] for i in range(len(verts))]
+            verts += [x for _, x in sorted(state.points_on.get((a, b), []))]
+        border = [state.holder[(verts[i], verts[(i + 1) % len(verts)])] for i in range(len(verts))]
         new_loops.append(BoundaryLoop(vertices=np.asarray(verts, np.int64),
                                       border_faces=np.asarray(border, np.int64),
                                       pinched=loop.pinched, closed=loop.closed))
-    return BorderRefinement(V=V2, F=F2, loops=new_loops,
-                            edge_vertices=np.asarray(new_edge, np.int64).reshape(-1, 2),
-                            edge_weights=np.asarray(new_t, np.float64), face_parents=face_parents,
-                            split_counts=counts)
+    return new_loops

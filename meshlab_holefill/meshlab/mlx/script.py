@@ -113,72 +113,96 @@ class FilterScript:
 
 
 def _validate(root, source, base_dir):
+    """Every ``<filter>`` of the script resolved and its values checked, or MlxScriptError listing every problem."""
     steps, problems, index = [], [], 0
     for element in root.children:
         if element.tag not in ("filter", "xmlfilter"):
             problems.append(ScriptProblem(source, element.line, None, None,
                                           f"unexpected element <{element.tag}> (expected <filter>)"))
             continue
-        name = element.name
         index += 1
-        if not name:
-            problems.append(ScriptProblem(source, element.line, None, None, "<filter> without a name attribute"))
-            continue
-        understood = mlx_names.resolve_filter(name)
-        removed = mlx_versions.filter_2020(name) if understood is None else None
-        if removed is not None:
-            problems.append(ScriptProblem(source, element.line, name, None,
-                                          f"a MeshLab 2020.09 filter that current MeshLab does not have: {removed.note}"))
-            continue
-        if understood is None:
-            hint = mlx_names.suggest_filters(name)
-            problems.append(ScriptProblem(
-                source, element.line, name, None,
-                "unknown filter: neither one of meshlab_holefill's "
-                f"({', '.join(s.display_name for s in registry.FILTERS.values())}) nor a pymeshlab built-in"
-                + (f"; did you mean {' or '.join(map(repr, hint))}?" if hint else "")))
-            continue
-        spec = registry.FILTERS.get(understood.python_name) if understood.ours else None
-        kinds = None if understood.ours else mlx_names.builtin_param_kinds(understood.python_name)
-        params, seen = [], {}
-        for child in element.children:
-            param_name = child.name
-            if child.tag not in ("Param", "xmlparam"):
-                problems.append(ScriptProblem(source, child.line, name, None,
-                                              f"unexpected element <{child.tag}> (expected <Param>)"))
-                continue
-            if not param_name:
-                problems.append(ScriptProblem(source, child.line, name, None, "<Param> without a name attribute"))
-                continue
-            mlx_type = child.attrs.get("type") if child.tag == "Param" else None
-            if child.tag == "Param" and not mlx_type:
-                problems.append(ScriptProblem(source, child.line, name, param_name, "<Param> without a type attribute"))
-                continue
-            try:
-                if understood.ours:
-                    python_name, value = our_param_value(spec, child, param_name, mlx_type, base_dir)
-                elif _dropped_2020_param(understood, kinds, child):
-                    continue
-                else:
-                    python_name, value = builtin_param_value(kinds, child, _param_name_2020(understood, param_name),
-                                                             mlx_type, base_dir)
-            except ParamValueError as exc:
-                problems.append(ScriptProblem(source, child.line, name, param_name, str(exc)))
-                continue
-            if python_name in seen:
-                problems.append(ScriptProblem(source, child.line, name, param_name,
-                                              f"given twice (first on line {seen[python_name]})"))
-                continue
-            seen[python_name] = child.line
-            params.append(ScriptParam(param_name, mlx_type, child.line, python_name, value))
-        problems.extend(_add_implied_params(understood, params, seen, source, element.line, name))
-        steps.append(ScriptStep(index, element.line, name, understood.python_name, understood.ours,
-                                understood.how, params))
+        step = _read_step(element, index, source, base_dir, problems)
+        if step is not None:
+            steps.append(step)
     if problems:
         lines = "\n  ".join(map(str, problems))
         raise MlxScriptError(f"{len(problems)} problem(s) in filter script {source}; nothing was run:\n  {lines}",
                              problems)
     return FilterScript(steps, source)
+
+
+def _resolve_filter(element, source, problems):
+    """The filter a ``<filter name=...>`` names (mlx_names.resolve_filter), or None with the problem recorded."""
+    name = element.name
+    if not name:
+        problems.append(ScriptProblem(source, element.line, None, None, "<filter> without a name attribute"))
+        return None
+    understood = mlx_names.resolve_filter(name)
+    removed = mlx_versions.filter_2020(name) if understood is None else None
+    if removed is not None:
+        problems.append(ScriptProblem(source, element.line, name, None,
+                                      f"a MeshLab 2020.09 filter that current MeshLab does not have: {removed.note}"))
+        return None
+    if understood is None:
+        hint = mlx_names.suggest_filters(name)
+        problems.append(ScriptProblem(
+            source, element.line, name, None,
+            "unknown filter: neither one of meshlab_holefill's "
+            f"({', '.join(s.display_name for s in registry.FILTERS.values())}) nor a pymeshlab built-in"
+            + (f"; did you mean {' or '.join(map(repr, hint))}?" if hint else "")))
+    return understood
+
+
+def _read_step(element, index, source, base_dir, problems):
+    """One ``<filter>`` element as a ScriptStep, or None; every problem found is appended to ``problems``."""
+    understood = _resolve_filter(element, source, problems)
+    if understood is None:
+        return None
+    name = element.name
+    spec = registry.FILTERS.get(understood.python_name) if understood.ours else None
+    kinds = None if understood.ours else mlx_names.builtin_param_kinds(understood.python_name)
+    params, seen = [], {}
+    for child in element.children:
+        param = _read_param(child, understood, spec, kinds, name, source, base_dir, problems)
+        if param is None:
+            continue
+        if param.name in seen:
+            problems.append(ScriptProblem(source, child.line, name, param.mlx_name,
+                                          f"given twice (first on line {seen[param.name]})"))
+            continue
+        seen[param.name] = child.line
+        params.append(param)
+    problems.extend(_add_implied_params(understood, params, seen, source, element.line, name))
+    return ScriptStep(index, element.line, name, understood.python_name, understood.ours, understood.how, params)
+
+
+def _read_param(child, understood, spec, kinds, name, source, base_dir, problems):
+    """One ``<Param>`` element as a ScriptParam with its Python name and value, or None (a problem, or a
+    MeshLab 2020.09 parameter that current MeshLab dropped)."""
+    param_name = child.name
+    if child.tag not in ("Param", "xmlparam"):
+        problems.append(ScriptProblem(source, child.line, name, None,
+                                      f"unexpected element <{child.tag}> (expected <Param>)"))
+        return None
+    if not param_name:
+        problems.append(ScriptProblem(source, child.line, name, None, "<Param> without a name attribute"))
+        return None
+    mlx_type = child.attrs.get("type") if child.tag == "Param" else None
+    if child.tag == "Param" and not mlx_type:
+        problems.append(ScriptProblem(source, child.line, name, param_name, "<Param> without a type attribute"))
+        return None
+    try:
+        if understood.ours:
+            python_name, value = our_param_value(spec, child, param_name, mlx_type, base_dir)
+        elif _dropped_2020_param(understood, kinds, child):
+            return None
+        else:
+            python_name, value = builtin_param_value(kinds, child, _param_name_2020(understood, param_name),
+                                                     mlx_type, base_dir)
+    except ParamValueError as exc:
+        problems.append(ScriptProblem(source, child.line, name, param_name, str(exc)))
+        return None
+    return ScriptParam(param_name, mlx_type, child.line, python_name, value)
 
 
 def _param_name_2020(understood, param_name):

@@ -434,7 +434,7 @@ def test_hole_in_a_sphere_bulges_toward_the_sphere():
     V, F, _ = sphere_hole()
     ctx = context_of(V, F)
     lssvm = xu.fill(ctx)
-    zero = xu.fill(ctx, laplacian_prediction="zero")
+    zero = xu.fill(ctx, laplacian_prediction="zero", poisson_boundary="dirichlet")  # the membrane
     flat = np.abs(ctx.points[:, 2]).mean()  # the boundary's plane
     r_lssvm = np.abs(np.linalg.norm(lssvm.vertices, axis=1) - 1)
     r_zero = np.abs(np.linalg.norm(zero.vertices, axis=1) - 1)
@@ -546,8 +546,9 @@ def face_hole_227():
 def test_sliver_repair_lifts_the_border_row_the_poisson_solve_squeezes(face_hole_227, monkeypatch):
     # The 3D front leaves this hole, so the filter's patch is the developed boundary's front
     # (fill() takes ~3 s to find that out; this builds that patch directly). The Poisson solve
-    # squeezes the triangles along a stretch of the border; smoothing and swaps alone leave 0.216,
-    # while the corner bound is 0.596. The local repair lifts them above 0.3.
+    # with the square Dirichlet system squeezes the triangles along a stretch of the border;
+    # smoothing and swaps alone leave 0.216, while the corner bound is 0.596. The local repair
+    # lifts them above 0.3. The boundary rows (the default) do not squeeze that row.
     from meshlab_holefill.algorithms.xu2013.poisson_patch import harmonic_lift, planar_boundaries
 
     ctx, bound = face_hole_227
@@ -556,14 +557,16 @@ def test_sliver_repair_lifts_the_border_row_the_poisson_solve_squeezes(face_hole
     new_vertices, F0, _ = advancing_front_triangulation(D, ctx.forbidden_edges, 0.75, reference_normal=UP)
     X0 = harmonic_lift(np.concatenate([D, new_vertices]), F0, ctx.points)
     regressors = xu.fit_laplacian_regressors(*xu.training_set(ctx, 2), 10.0, 0.5)
-    X, F, info = xu.reposition(ctx, X0, F0, regressors, 1, True)
+    X, F, info = xu.reposition(ctx, X0, F0, regressors, 1, True, "dirichlet")
     q = triangle_quality(X, F)
     assert info["sliver_repairs"] >= 1 and info["poisson_damping"] == 1.0
     assert q.min() >= 0.3 and q.mean() >= 0.85
     assert len(xu.context_hits(X, F, ctx)) == 0
     monkeypatch.setattr(xu, "SLIVER_QUALITY", 0.0)  # without the repair
-    X1, F1, _ = xu.reposition(ctx, X0, F0, regressors, 1, True)
+    X1, F1, _ = xu.reposition(ctx, X0, F0, regressors, 1, True, "dirichlet")
     assert triangle_quality(X1, F1).min() < 0.3
+    X2, F2, info2 = xu.reposition(ctx, X0, F0, regressors, 1, True)
+    assert triangle_quality(X2, F2).min() >= 0.3 and info2["sliver_repairs"] == 0
 
 
 def test_filter_on_a_sphere_hole(tmp_path):
@@ -611,7 +614,8 @@ def test_lssvm_beats_the_membrane_on_a_torus_hole():
     def torus_error(X):
         return np.abs(np.hypot(np.hypot(X[:, 0], X[:, 1]) - 1.0, X[:, 2]) - 0.4).mean()
 
-    assert torus_error(xu.fill(ctx).vertices) < 0.5 * torus_error(xu.fill(ctx, laplacian_prediction="zero").vertices)
+    membrane = xu.fill(ctx, laplacian_prediction="zero", poisson_boundary="dirichlet")
+    assert torus_error(xu.fill(ctx).vertices) < 0.5 * torus_error(membrane.vertices)
 
 
 def test_parameters_are_exposed_and_validated(bunny_scan):
