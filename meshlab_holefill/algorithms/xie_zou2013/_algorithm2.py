@@ -87,6 +87,32 @@ class OptimisationOptions:
     quality_floor: float = 0.0
 
 
+@dataclass(frozen=True)
+class _Hole:
+    """What every attempt on one hole shares: the hole, the results of step 2 and the step-7 options."""
+
+    ctx: object  # HoleContext
+    base: sections.BasePoints
+    normals: np.ndarray  # (n, 3) surface normals at the base points
+    seg: dict  # sections.segment_boundary
+    edge_len: float  # EdgeLen
+    mesh_normals: np.ndarray  # (k, 3) normals of the border faces
+    smoothing: SmoothingOptions
+    optimisation: OptimisationOptions
+
+
+@dataclass
+class _PatchCounts:
+    """The patch of step 7 (loop vertices first, ``ids`` the prediction point of each V[k:]) and its counts."""
+
+    V: np.ndarray
+    F: np.ndarray
+    ids: np.ndarray
+    swaps: int = 0
+    collapses: int = 0
+    repairs: int = 0  # fold repairs after the swaps (those before the smoothing are counted apart)
+
+
 @dataclass
 class _CleanLayout:
     """A patch of one attempt with no fold-over left that does not cross the surrounding rings."""
@@ -130,6 +156,7 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
     attempts = attempt_order(base, normals, seg, np.radians(prediction.critical_intersection))
     predictions, reasons, best = {}, [], None
     mesh_normals = folds.border_normals(ctx)
+    hole = _Hole(ctx, base, normals, seg, edge_len, mesh_normals, smoothing, optimisation)
     prediction_seconds = 0.0
     for segmented, layout in attempts:
         t2 = time.perf_counter()
@@ -141,8 +168,7 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
         result = predictions[segmented]
         prediction_seconds += time.perf_counter() - t2
         name = f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}"
-        clean, reason = _layout_patch(ctx, base, normals, seg, layout, result, edge_len, mesh_normals, smoothing,
-                                      optimisation, name)
+        clean, reason = _layout_patch(hole, layout, result, name)
         if clean is None:
             reasons.append(reason)
             continue
@@ -232,25 +258,28 @@ def attempt_order(base, normals, seg, I_c):
     return attempts
 
 
-def _layout_patch(ctx, base, normals, seg, layout, result, edge_len, mesh_normals, smoothing, optimisation, name):
+def _layout_patch(hole, layout, result, name):
     """Steps 6-7 for one attempt, leaving out prediction points on folds for up to OUTLIER_ROUNDS rounds.
+
+    ``hole`` is the :class:`_Hole`, ``result`` the prediction of steps 3-5, ``name`` the attempt's label.
 
     Returns
     -------
     clean : _CleanLayout or None
     reason : str or None  why the attempt failed
     """
+    ctx = hole.ctx
     excluded = np.zeros(len(result[0]), bool)
     for _ in range(OUTLIER_ROUNDS):
         try:
             t3 = time.perf_counter()
             tri_stats = {}
-            V, F, ids = triangulation.triangulate_layout(ctx, base, normals, seg, layout, result, edge_len, excluded,
-                                                         tri_stats)
+            V, F, ids = triangulation.triangulate_layout(ctx, hole.base, hole.normals, hole.seg, layout, result,
+                                                         hole.edge_len, excluded, tri_stats)
             t4 = time.perf_counter()
             attempt_record = {}
-            V, F, stats, bad_ids = smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, smoothing,
-                                                       optimisation, attempt_record)
+            V, F, stats, bad_ids = smooth_and_optimise(V, F, ids, ctx, hole.edge_len, hole.mesh_normals,
+                                                       hole.smoothing, hole.optimisation, attempt_record)
             t5 = time.perf_counter()
         except HoleFillError as exc:
             return None, f"{name}: {exc}"
@@ -301,11 +330,11 @@ def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, smoothing, optim
     ids = ids[keep[k:] - k]
     F, swaps = optimisation_steps.swap_edges_min_angle(V, F, ctx.forbidden_edges)
     V, F, more = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-    V, F, ids, swaps, collapses, more = _relax(V, F, ids, ctx, edge_len, mesh_normals, optimisation.relax, swaps,
-                                               collapses, more, stats)
-    V, F, ids, swaps, collapses = _quality_pass(V, F, ids, ctx, mesh_normals, optimisation.quality_floor, swaps,
-                                                collapses, stats)
-    stats.update(collapses=int(collapses), swaps=int(swaps), fold_repairs=int(repairs + more))
+    patch = _PatchCounts(V, F, ids, swaps, collapses, more)
+    _relax(patch, ctx, edge_len, mesh_normals, optimisation.relax, stats)
+    _quality_pass(patch, ctx, mesh_normals, optimisation.quality_floor, stats)
+    V, F, ids = patch.V, patch.F, patch.ids
+    stats.update(collapses=int(patch.collapses), swaps=int(patch.swaps), fold_repairs=int(repairs + patch.repairs))
     bad = folds.local_folds(V, F, mesh_normals)
     # A fold of an ear (three consecutive loop vertices) is the boundary's own shape (a 3-edge
     # hole in a crumpled scan has no other patch); it is kept and counted, the filter's
@@ -342,13 +371,14 @@ def _smooth(V, F, ids, ctx, mesh_normals, smoothing, stats, record):
     return V, F, ids, repairs
 
 
-def _relax(V, F, ids, ctx, edge_len, mesh_normals, relax, swaps, collapses, more, stats):
+def _relax(patch, ctx, edge_len, mesh_normals, relax, stats):
     """Beyond the paper (``relax``): sliver collapses, obtuse-edge splits, tangential relaxation, apex moves.
 
-    Undone (all but the fold repairs' count) when it folds what the repairs cannot unfold.
-    Returns ``V, F, ids, swaps, collapses, more``.
+    Updates ``patch`` (a :class:`_PatchCounts`) in place; undone (all but the fold repairs'
+    count) when it folds what the repairs cannot unfold.
     """
     k = ctx.size
+    V, F, ids, swaps, collapses = patch.V, patch.F, patch.ids, patch.swaps, patch.collapses
     splits = 0
     snapshot = (V, F, ids, swaps, collapses)
     for _ in range(RELAX_ROUNDS if relax > 0 else 0):
@@ -385,20 +415,21 @@ def _relax(V, F, ids, ctx, edge_len, mesh_normals, relax, swaps, collapses, more
         stats["quality_moves"] = int(moved)
     if relax > 0 and folds.local_folds(V, F, mesh_normals).any():
         V, F, again = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-        more += again
+        patch.repairs += again
         if (folds.local_folds(V, F, mesh_normals) & ~folds.boundary_ears(F, k)).any():
             V, F, ids, swaps, collapses = snapshot  # the relaxation folded what it could not repair: undo it
             stats["relax_undone"] = True
-    return V, F, ids, swaps, collapses, more
+    patch.V, patch.F, patch.ids, patch.swaps, patch.collapses = V, F, ids, swaps, collapses
 
 
-def _quality_pass(V, F, ids, ctx, mesh_normals, quality_floor, swaps, collapses, stats):
+def _quality_pass(patch, ctx, mesh_normals, quality_floor, stats):
     """Beyond the paper (``quality_floor``): the guarded pass of :mod:`.quality_pass` on an unfolded patch.
 
     Guarded swaps / moves / collapses of the triangles below the floor; undone if it makes the
-    patch cross the surrounding rings. Returns ``V, F, ids, swaps, collapses``.
+    patch cross the surrounding rings. Updates ``patch`` (a :class:`_PatchCounts`) in place.
     """
     k = ctx.size
+    V, F, ids = patch.V, patch.F, patch.ids
 
     def fold_count(V_, F_):
         return int((folds.local_folds(V_, F_, mesh_normals) & ~folds.boundary_ears(F_, k)).sum())
@@ -409,15 +440,15 @@ def _quality_pass(V, F, ids, ctx, mesh_normals, quality_floor, swaps, collapses,
         if any(qstats.values()):
             crossing = folds.intersects_surroundings(ctx, Vq, Fq)
             if not crossing or folds.intersects_surroundings(ctx, V, F):
-                V, F, ids = Vq, Fq, np.where(keep[k:] >= 0, ids[np.maximum(keep[k:] - k, 0)], -1)
-                swaps += qstats["swaps"]
-                collapses += qstats["collapses"]
+                patch.V, patch.F = Vq, Fq
+                patch.ids = np.where(keep[k:] >= 0, ids[np.maximum(keep[k:] - k, 0)], -1)
+                patch.swaps += qstats["swaps"]
+                patch.collapses += qstats["collapses"]
                 stats["quality_moves"] = stats.get("quality_moves", 0) + qstats["moves"]
                 stats["quality_splits"] = qstats["splits"]
                 stats["crossing"] = bool(crossing)
             else:
                 stats["quality_pass_undone"] = True
-    return V, F, ids, swaps, collapses
 
 
 def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["reflect_moved", "trial_vectors", "select", "turning_terms"]
+__all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms"]
 
 
 @njit(cache=True)
@@ -90,3 +90,42 @@ def turning_terms(Y, seg_x, seg_y_add):
                 cr[a, i, k] = x0 * y1 - y0 * x1
                 dt[a, i, k] = x0 * x1 + y0 * y1
     return cr, dt
+
+
+@njit(cache=True)
+def mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR):
+    """Algorithm 1, steps 4-6 from uniform draws: distinct r1, r2, r3, rn_i, then Eq. 2 and 3.
+
+    r1 = floor(u0 N), r2 = floor(u1 (N - 1)) shifted past r1, r3 = floor(u2 (N - 2)) shifted past
+    both (uniform, mutually different), rn_i = floor(u dims): the arithmetic of
+    de_rand_1_bin._distinct_triples and of the trial_vectors kernel, fused.
+
+    Parameters
+    ----------
+    X : (B, N, n) float64
+    u_index : (3, B, N) float64, u_rn : (B, N) float64, u_take : (B, N, n) float64  uniforms in [0, 1)
+    pop, dims : (B,) int64
+    """
+    B, N, n = X.shape
+    U = np.empty_like(X)
+    for b in range(B):
+        Nb = np.float64(pop[b])
+        db = np.float64(dims[b])
+        for i in range(N):
+            r1 = np.int64(np.floor(u_index[0, b, i] * Nb))
+            r2 = np.int64(np.floor(u_index[1, b, i] * (Nb - 1.0)))
+            if r2 >= r1:
+                r2 += 1
+            lo, hi = min(r1, r2), max(r1, r2)
+            r3 = np.int64(np.floor(u_index[2, b, i] * (Nb - 2.0)))
+            if r3 >= lo:
+                r3 += 1
+            if r3 >= hi:
+                r3 += 1
+            r = np.int64(np.floor(u_rn[b, i] * db))
+            for j in range(n):
+                if u_take[b, i, j] <= CR or j == r:
+                    U[b, i, j] = X[b, r1, j] + F * (X[b, r2, j] - X[b, r3, j])
+                else:
+                    U[b, i, j] = X[b, i, j]
+    return U

@@ -15,11 +15,16 @@ lower == upper (they stay fixed).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from ._de_kernels import reflect_moved, select, trial_vectors
+from ._de_kernels import mutate_crossover, reflect_moved, select
 
 __all__ = ["reflect_into_bounds", "de_rand_1_bin"]
+
+# The uniform draws of several generations are taken in one block of at most this many numbers.
+BLOCK_DOUBLES = 1 << 20
 
 
 def reflect_into_bounds(X, lower, upper):
@@ -69,6 +74,124 @@ def _distinct_triples(rng, pop_size, shape):
     return r1, r2, r3
 
 
+@dataclass
+class _Population:
+    """The state of one batched DE run: the individuals, their objective values and the problem sizes."""
+
+    X: np.ndarray  # (B, N, n) individuals
+    fX: np.ndarray  # (B, N) objective values, inf on padding rows
+    active: np.ndarray  # (B, N) bool: row i < pop_size[b]
+    pop: np.ndarray  # (B,) population sizes
+    dims: np.ndarray  # (B,) used components
+    lower: np.ndarray  # (B, n) contiguous bounds
+    upper: np.ndarray
+
+
+def _problem_sizes(lower, upper, pop_size, dims, bounds):
+    """Validated bounds (B, n), population sizes (B,) and used components (B,) of a batch."""
+    if bounds not in ("paper", "trial"):
+        raise ValueError(f"unknown bounds handling {bounds!r}")
+    lower = np.atleast_2d(np.asarray(lower, np.float64))
+    upper = np.atleast_2d(np.asarray(upper, np.float64))
+    B, n = lower.shape
+    if np.any(upper < lower):
+        raise ValueError("upper bound below lower bound")
+    if pop_size is None:
+        pop_size = 10 * n
+    pop = np.broadcast_to(np.asarray(pop_size, np.int64), (B,)).copy()
+    if np.any(pop < 3):
+        raise ValueError("DE/rand/1 needs a population of at least 3")
+    dims = np.full(B, n, np.int64) if dims is None else np.asarray(dims, np.int64)
+    return lower, upper, pop, dims
+
+
+def _initial_population(objective, lower, upper, pop, dims, rng, init):
+    """Algorithm 1, line 1: uniform in the box, or ``init`` reflected into it (Eq. 5); evaluated."""
+    B, n = lower.shape
+    Nmax = int(pop.max())
+    active = np.arange(Nmax)[None, :] < pop[:, None]  # (B, N)
+    if init is None:
+        X = lower[:, None, :] + rng.random((B, Nmax, n)) * (upper - lower)[:, None, :]
+    else:
+        X = reflect_into_bounds(np.asarray(init, np.float64).reshape(B, Nmax, n), lower, upper)
+    fX = np.asarray(objective(X), np.float64)
+    fX = np.ascontiguousarray(np.where(active, fX, np.inf))
+    return _Population(np.ascontiguousarray(X), fX, active, pop, dims, np.ascontiguousarray(lower),
+                       np.ascontiguousarray(upper))
+
+
+class _Uniforms:
+    """The uniform numbers of each generation: 3 B N for r1, r2, r3, B N for rn_i, B N n for Eq. 3.
+
+    ``Generator.random`` fills its output in order, so a block of g generations drawn at once
+    holds exactly the numbers g successive per-generation draws would give; the blocks never
+    run past ``generations``, and with an early stop (``per_block=False``) every generation draws
+    its own, so the generator is left where generation-by-generation draws would leave it.
+    """
+
+    def __init__(self, rng, shape, generations, per_block=True):
+        B, N, n = shape
+        self.rng, self.shape, self.left, self.per_block = rng, shape, generations, per_block
+        self.ends = (3 * B * N, 4 * B * N, 4 * B * N + B * N * n)
+        self.block, self.row = np.zeros((0, self.ends[2])), 0
+
+    def next(self):
+        """(u_index (3, B, N), u_rn (B, N), u_take (B, N, n)) of the next generation."""
+        if self.row == len(self.block):
+            g = max(1, min(self.left, BLOCK_DOUBLES // max(self.ends[2], 1))) if self.per_block else 1
+            self.block, self.row, self.left = self.rng.random((g, self.ends[2])), 0, self.left - g
+        row = self.block[self.row]
+        self.row += 1
+        B, N, n = self.shape
+        a, b, _ = self.ends
+        return row[:a].reshape(3, B, N), row[a:b].reshape(B, N), row[b:].reshape(B, N, n)
+
+
+def _trial_population(state, draws, F, CR):
+    """Algorithm 1, steps 4-6: distinct r1, r2, r3, the component rn_i, mutation (Eq. 2) and crossover (Eq. 3).
+
+    Compiled (:func:`._de_kernels.mutate_crossover`): the indices of :func:`_distinct_triples`,
+    rn_i = floor(u dims) and U = where(u <= CR or j == rn, X[r1] + F (X[r2] - X[r3]), X).
+    """
+    u_index, u_rn, u_take = draws.next()
+    return mutate_crossover(state.X, u_index, u_rn, u_take, state.pop, state.dims, float(F), float(CR))
+
+
+def _reflect_and_renew(objective, state):
+    """Algorithm 1, steps 8-9: reflect the new generation into the bounds (Eq. 5) and renew f of the moved ones."""
+    Xr, moved = reflect_moved(state.X, state.lower, state.upper)
+    moved &= state.active
+    if not moved.any():
+        return
+    state.X = Xr
+    B = len(moved)
+    # Only the reflected individuals are evaluated again, gathered per problem.
+    count = moved.sum(axis=1)
+    K = int(count.max())
+    order = np.argsort(~moved, axis=1, kind="stable")[:, :K]
+    f_new = np.asarray(objective(Xr[np.arange(B)[:, None], order]), np.float64)
+    take_new = np.arange(K)[None, :] < count[:, None]
+    problem_of = np.repeat(np.arange(B)[:, None], K, axis=1)
+    state.fX[problem_of[take_new], order[take_new]] = f_new[take_new]
+
+
+def _generation(objective, state, draws, F, CR, bounds):
+    """One generation of Algorithm 1 (steps 3-9) for every individual at once."""
+    U = _trial_population(state, draws, F, CR)
+    if bounds == "trial":
+        U = reflect_moved(U, state.lower, state.upper)[0]
+    fU = np.ascontiguousarray(objective(U), np.float64)
+    select(state.X, state.fX, U, fU, state.active)  # Eq. 4, in place
+    if bounds == "paper":
+        _reflect_and_renew(objective, state)
+
+
+def _population_spread_within(state, tol):
+    """True when every problem's max f - min f is <= tol (the optional early stop)."""
+    f_act = np.where(state.active, state.fX, np.nan)
+    return bool(np.all(np.nanmax(f_act, axis=1) - np.nanmin(f_act, axis=1) <= tol))
+
+
 def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0.05, generations=100,
                   seed=0, init=None, tol=0.0, bounds="paper"):
     """Minimise a batch of box-constrained problems by DE/rand/1/bin (Algorithm 1).
@@ -111,63 +234,20 @@ def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0
     best_f : (B,) float64 (or float)
     generations_run : int
     """
-    if bounds not in ("paper", "trial"):
-        raise ValueError(f"unknown bounds handling {bounds!r}")
     single = np.ndim(lower) == 1
-    lower = np.atleast_2d(np.asarray(lower, np.float64))
-    upper = np.atleast_2d(np.asarray(upper, np.float64))
-    B, n = lower.shape
-    if np.any(upper < lower):
-        raise ValueError("upper bound below lower bound")
-    if pop_size is None:
-        pop_size = 10 * n
-    pop = np.broadcast_to(np.asarray(pop_size, np.int64), (B,)).copy()
-    if np.any(pop < 3):
-        raise ValueError("DE/rand/1 needs a population of at least 3")
-    dims = np.full(B, n, np.int64) if dims is None else np.asarray(dims, np.int64)
+    lower, upper, pop, dims = _problem_sizes(lower, upper, pop_size, dims, bounds)
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    Nmax = int(pop.max())
-    active = np.arange(Nmax)[None, :] < pop[:, None]  # (B, N)
-
-    if init is None:
-        X = lower[:, None, :] + rng.random((B, Nmax, n)) * (upper - lower)[:, None, :]
-    else:
-        X = reflect_into_bounds(np.asarray(init, np.float64).reshape(B, Nmax, n), lower, upper)
-    fX = np.asarray(objective(X), np.float64)
-    fX = np.ascontiguousarray(np.where(active, fX, np.inf))
-    rows = np.arange(B)[:, None]
-    lower_c, upper_c = np.ascontiguousarray(lower), np.ascontiguousarray(upper)
-    X = np.ascontiguousarray(X)
+    state = _initial_population(objective, lower, upper, pop, dims, rng, init)
+    draws = _Uniforms(rng, state.X.shape, generations, per_block=tol <= 0)
     g = 0
     for g in range(1, generations + 1):
-        r1, r2, r3 = _distinct_triples(rng, pop, (B, Nmax))
-        rn = np.floor(rng.random((B, Nmax)) * dims[:, None]).astype(np.int64)
-        # Eq. 2 and 3 (compiled): U = where(u <= CR or j == rn, X[r1] + F (X[r2] - X[r3]), X)
-        U = trial_vectors(X, r1, r2, r3, rng.random((B, Nmax, n)), rn, float(F), float(CR))
-        if bounds == "trial":
-            U = reflect_moved(U, lower_c, upper_c)[0]
-        fU = np.ascontiguousarray(objective(U), np.float64)
-        select(X, fX, U, fU, active)  # Eq. 4, in place
-        if bounds == "paper":
-            Xr, moved = reflect_moved(X, lower_c, upper_c)  # Eq. 5 on the new generation
-            moved &= active
-        if bounds == "paper" and moved.any():
-            X = Xr
-            # Step 9: renew f of the reflected individuals only (gathered per problem).
-            count = moved.sum(axis=1)
-            K = int(count.max())
-            order = np.argsort(~moved, axis=1, kind="stable")[:, :K]
-            f_new = np.asarray(objective(X[rows, order]), np.float64)
-            take_new = np.arange(K)[None, :] < count[:, None]
-            problem_of = np.repeat(np.arange(B)[:, None], K, axis=1)
-            fX[problem_of[take_new], order[take_new]] = f_new[take_new]
-        if tol > 0:
-            f_act = np.where(active, fX, np.nan)
-            if np.all(np.nanmax(f_act, axis=1) - np.nanmin(f_act, axis=1) <= tol):
-                break
-    best_idx = np.argmin(np.where(active, fX, np.inf), axis=1)
-    best = X[np.arange(B), best_idx]
-    best_f = fX[np.arange(B), best_idx]
+        _generation(objective, state, draws, F, CR, bounds)
+        if tol > 0 and _population_spread_within(state, tol):
+            break
+    B = len(pop)
+    best_idx = np.argmin(np.where(state.active, state.fX, np.inf), axis=1)
+    best = state.X[np.arange(B), best_idx]
+    best_f = state.fX[np.arange(B), best_idx]
     if single:
         return best[0], float(best_f[0]), g
     return best, best_f, g

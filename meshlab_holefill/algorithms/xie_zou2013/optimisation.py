@@ -14,8 +14,10 @@ import scipy.sparse as sp
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
 from ...geometry.topology import edge_pair_set, interior_edges
+from ._optimisation_kernels import independent_link_edges
 
-__all__ = ["split_obtuse_edges", "remove_valence_three", "compact_vertices", "adjacency", "decimate_short_edges",
+__all__ = ["split_obtuse_edges", "remove_valence_three", "compact_vertices", "sorted_edges", "adjacency",
+           "decimate_short_edges",
            "swap_edges_min_angle", "improve_worst_vertices"]
 
 # A collapse may turn no surrounding face by more than this (cosine of 60 degrees); a swap
@@ -141,9 +143,20 @@ def compact_vertices(V, F, alive):
     return V[keep], index[F], keep
 
 
+def sorted_edges(F, n):
+    """:func:`...geometry.quality.unique_edges` of a face list on n vertices, by integer keys.
+
+    The rows (a, b), a < b, in lexicographic order are the sorted unique keys a n + b, which
+    one integer sort finds faster than the row-wise unique; the result is the same array.
+    """
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64), axis=1)
+    keys = np.unique(E[:, 0] * np.int64(n) + E[:, 1])
+    return np.stack([keys // n, keys % n], axis=1)
+
+
 def adjacency(F, n):
     """Unique edges (e, 2) and the symmetric (n, n) int8 CSR vertex adjacency of a face list."""
-    E = unique_edges(F)
+    E = sorted_edges(np.asarray(F), n) if len(F) else unique_edges(F)
     A = sp.coo_matrix((np.ones(2 * len(E), np.int8), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
                       shape=(n, n)).tocsr()
     return E, A
@@ -174,6 +187,74 @@ def _sliver_priority(V, F, E, lengths, n_fixed, sliver_angle, eligible=None):
         k = np.minimum(apex[hit], near) * n + np.maximum(apex[hit], near)
         out[np.isin(keys, k)] = 0.0
     return out
+
+
+def _short_edges(V, F, E, n_fixed, threshold, sliver_angle, sliver_eligible):
+    """Edges to collapse, shortest first: shorter than ``threshold`` (or sliver edges) and not loop-loop."""
+    lengths = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+    if sliver_angle is not None:
+        lengths = _sliver_priority(V, F, E, lengths, n_fixed, sliver_angle, sliver_eligible)
+    cand = np.flatnonzero((lengths < threshold) & ~((E[:, 0] < n_fixed) & (E[:, 1] < n_fixed)))
+    return cand[np.argsort(lengths[cand], kind="stable")]
+
+
+def _independent_edges(A, a, b, n):
+    """Mask of the edges (a, b), in priority order, whose closed neighbourhoods no earlier edge claims.
+
+    Also the link condition: the ends share exactly two neighbours (the edge's opposite vertices).
+    Compiled (:func:`._optimisation_kernels.independent_link_edges`) on the CSR arrays of A.
+    """
+    A = A.tocsr()
+    return independent_link_edges(A.indptr.astype(np.int64), A.indices.astype(np.int64),
+                                  np.asarray(a, np.int64), np.asarray(b, np.int64), n)
+
+
+def _collapse_targets(V, a, b, n_fixed):
+    """Survivor, victim and new position of each collapse: onto the loop end if any, else the midpoint."""
+    a_fixed, b_fixed = a < n_fixed, b < n_fixed
+    survivor = np.where(b_fixed, b, a)
+    victim = np.where(b_fixed, a, b)
+    newpos = np.where((a_fixed | b_fixed)[:, None], V[survivor], 0.5 * (V[a] + V[b]))
+    return survivor, victim, newpos, a_fixed | b_fixed
+
+
+def _turns_faces(V, F, a, b, newpos, n):
+    """Collapses that would turn a surrounding face (not one on the edge) by more than 60 degrees."""
+    VF = sp.csr_matrix((np.ones(3 * len(F), np.int8), (F.ravel(), np.repeat(np.arange(len(F)), 3))),
+                       shape=(n, len(F)))
+    around = (VF[a] + VF[b]).tocoo()
+    on_edge = around.data > 1
+    rows, faces = around.row[~on_edge], around.col[~on_edge]
+    corners = V[F[faces]]
+    moved = (F[faces] == a[rows, None]) | (F[faces] == b[rows, None])
+    new_corners = np.where(moved[..., None], newpos[rows, None, :], corners)
+    n_old = cross_rows(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    n_new = cross_rows(new_corners[:, 1] - new_corners[:, 0], new_corners[:, 2] - new_corners[:, 0])
+    ok_face = np.einsum("ij,ij->i", n_old, n_new) > COLLAPSE_MIN_COS * np.linalg.norm(n_old, axis=1) * \
+        np.linalg.norm(n_new, axis=1)
+    bad = np.zeros(len(a), bool)
+    np.logical_or.at(bad, rows, ~ok_face)
+    return bad
+
+
+def _joins_forbidden(A, survivor, victim, candidates, n_fixed, forbidden):
+    """Mask of the ``candidates`` whose collapse onto the loop would join a forbidden pair of loop vertices."""
+    bad = np.zeros(len(survivor), bool)
+    for t in candidates:
+        s, vct = int(survivor[t]), int(victim[t])
+        nbrs = A[vct].indices
+        if any(tuple(sorted((s, int(x)))) in forbidden for x in nbrs if x < n_fixed and x != s):
+            bad[t] = True
+    return bad
+
+
+def _collapse(V, F, survivor, victim, newpos, n):
+    """Move each survivor to its new position, merge its victim into it and drop the degenerate faces."""
+    V[survivor] = newpos
+    remap = np.arange(n)
+    remap[victim] = survivor
+    F = remap[F]
+    return F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
 
 
 def decimate_short_edges(V, F, n_fixed, threshold, forbidden_edges=(), max_rounds=100, sliver_angle=None,
@@ -216,65 +297,23 @@ def decimate_short_edges(V, F, n_fixed, threshold, forbidden_edges=(), max_round
     collapses = 0
     for _ in range(max_rounds):
         E, A = adjacency(F, n)
-        lengths = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
-        if sliver_angle is not None:
-            lengths = _sliver_priority(V, F, E, lengths, n_fixed, sliver_angle, sliver_eligible)
-        cand = np.flatnonzero((lengths < threshold) & ~((E[:, 0] < n_fixed) & (E[:, 1] < n_fixed)))
+        cand = _short_edges(V, F, E, n_fixed, threshold, sliver_angle, sliver_eligible)
         if len(cand) == 0:
             break
-        cand = cand[np.argsort(lengths[cand], kind="stable")]
         a, b = E[cand, 0], E[cand, 1]
-        # Independent set: closed neighbourhoods of chosen edges are disjoint, shortest wins.
-        R = (A + sp.identity(n, dtype=np.int8, format="csr")).tocsr()
-        M = (R[a] + R[b]).tocoo()
-        rank = np.arange(len(cand))
-        claim = np.full(n, len(cand))
-        np.minimum.at(claim, M.col, rank[M.row])
-        lost = np.zeros(len(cand), bool)
-        np.logical_or.at(lost, M.row, claim[M.col] != rank[M.row])
-        sel = ~lost
-        # Link condition: exactly two common neighbours (the edge's opposite vertices).
-        common = np.asarray(A[a].multiply(A[b]).sum(axis=1)).ravel()
-        sel &= common == 2
+        sel = _independent_edges(A, a, b, n)
         if not sel.any():
             break
         a, b = a[sel], b[sel]
-        # Survivor: the boundary end if any (a < b, so only b can be... either can be boundary).
-        a_fixed, b_fixed = a < n_fixed, b < n_fixed
-        survivor = np.where(b_fixed, b, a)
-        victim = np.where(b_fixed, a, b)
-        newpos = np.where((a_fixed | b_fixed)[:, None], V[survivor], 0.5 * (V[a] + V[b]))
-        # Faces around either end, except the two on the edge.
-        VF = sp.csr_matrix((np.ones(3 * len(F), np.int8), (F.ravel(), np.repeat(np.arange(len(F)), 3))),
-                           shape=(n, len(F)))
-        around = (VF[a] + VF[b]).tocoo()
-        on_edge = around.data > 1
-        rows, faces = around.row[~on_edge], around.col[~on_edge]
-        corners = V[F[faces]]
-        moved = (F[faces] == a[rows, None]) | (F[faces] == b[rows, None])
-        new_corners = np.where(moved[..., None], newpos[rows, None, :], corners)
-        n_old = cross_rows(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        n_new = cross_rows(new_corners[:, 1] - new_corners[:, 0], new_corners[:, 2] - new_corners[:, 0])
-        ok_face = np.einsum("ij,ij->i", n_old, n_new) > COLLAPSE_MIN_COS * np.linalg.norm(n_old, axis=1) * \
-            np.linalg.norm(n_new, axis=1)
-        bad = np.zeros(len(a), bool)
-        np.logical_or.at(bad, rows, ~ok_face)
+        survivor, victim, newpos, on_loop = _collapse_targets(V, a, b, n_fixed)
+        bad = _turns_faces(V, F, a, b, newpos, n)
         if forbidden:
-            for t in np.flatnonzero(~bad & (a_fixed | b_fixed)):
-                s, vct = int(survivor[t]), int(victim[t])
-                nbrs = A[vct].indices
-                if any(tuple(sorted((s, int(x)))) in forbidden for x in nbrs if x < n_fixed and x != s):
-                    bad[t] = True
+            bad |= _joins_forbidden(A, survivor, victim, np.flatnonzero(~bad & on_loop), n_fixed, forbidden)
         good = ~bad
         if not good.any():
             break
-        s, vct, p = survivor[good], victim[good], newpos[good]
-        V[s] = p
-        remap = np.arange(n)
-        remap[vct] = s
-        F = remap[F]
-        F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
-        alive_v[vct] = False
+        F = _collapse(V, F, survivor[good], victim[good], newpos[good], n)
+        alive_v[victim[good]] = False
         collapses += int(good.sum())
     V, F, keep = compact_vertices(V, F, alive_v)
     return V, F, collapses, keep

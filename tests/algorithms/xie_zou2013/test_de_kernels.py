@@ -61,3 +61,99 @@ def test_turning_terms_equal_numpy():
     dot_ref = sx[..., :-1] * sx[..., 1:] + sy[..., :-1] * sy[..., 1:]
     cross, dot = K.turning_terms(Y, seg_x, seg_y_add)
     assert cross.tobytes() == cross_ref.tobytes() and dot.tobytes() == dot_ref.tobytes()
+
+
+def test_mutate_crossover_equals_distinct_triples_and_numpy_trial():
+    from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import _distinct_triples
+
+    rng = np.random.default_rng(4)
+    X, _, _ = _problem(rng, B=4, N=9, n=6)
+    B, N, n = X.shape
+    pop = np.array([9, 3, 5, 8], np.int64)
+    dims = np.array([6, 1, 4, 6], np.int64)
+    F, CR = 0.8, 0.05
+    draws = np.random.default_rng(7)
+    u_index, u_rn, u_take = draws.random((3, B, N)), draws.random((B, N)), draws.random((B, N, n))
+    r1, r2, r3 = _distinct_triples(np.random.default_rng(7), pop, (B, N))  # the same first 3 B N numbers
+    assert np.all((r1 != r2) & (r2 != r3) & (r1 != r3))
+    assert np.all((r1 < pop[:, None]) & (r2 < pop[:, None]) & (r3 < pop[:, None]))
+    rn = np.floor(u_rn * dims[:, None]).astype(np.int64)
+    rows = np.arange(B)[:, None]
+    V = X[rows, r1] + F * (X[rows, r2] - X[rows, r3])
+    take = (u_take <= CR) | (np.arange(n)[None, None, :] == rn[..., None])
+    U = K.mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR)
+    assert U.tobytes() == np.where(take, V, X).tobytes()
+
+
+def test_uniform_blocks_equal_per_generation_draws():
+    import importlib
+
+    D = importlib.import_module("meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin")
+    shape, generations = (3, 5, 4), 7
+    blocked = D._Uniforms(np.random.default_rng(9), shape, generations)
+    old_block = D.BLOCK_DOUBLES
+    try:
+        D.BLOCK_DOUBLES = 3 * blocked.ends[2]  # blocks of 3 generations: 3 + 3 + 1
+        blocked = D._Uniforms(np.random.default_rng(9), shape, generations)
+        reference = np.random.default_rng(9)
+        for _ in range(generations):
+            got = blocked.next()
+            want = (reference.random((3, 3, 5)), reference.random((3, 5)), reference.random((3, 5, 4)))
+            assert all(a.tobytes() == b.tobytes() for a, b in zip(got, want))
+        assert blocked.rng.random() == reference.random()  # no number drawn beyond the last generation
+    finally:
+        D.BLOCK_DOUBLES = old_block
+
+
+def test_patch_lowest_frequency_matches_dense_spectrum():
+    import pymeshlab
+
+    from meshlab_holefill.algorithms.xie_zou2013 import smoothing
+    from meshlab_holefill.geometry.laplacian import adjacency_matrix, lowest_dirichlet_frequency
+
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=4)
+    V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    A = adjacency_matrix(F, len(V))
+    for height in (0.3, 0.7, 0.9, 0.97):  # caps of 900 down to 37 free vertices, loop fixed
+        free = V[:, 2] > height
+        got = smoothing.patch_lowest_frequency(F, len(V), free, A)
+        want = lowest_dirichlet_frequency(F, len(V), free, adjacency=A)
+        assert 0.0 < got <= 1.0
+        assert abs(got - want) <= 1e-10 * want
+        if free.sum() <= smoothing.DENSE_SPECTRUM_MAX:
+            assert got == want
+
+
+def test_independent_link_edges_equal_sparse_expression():
+    import importlib
+
+    import pymeshlab
+    import scipy.sparse as sp
+
+    from meshlab_holefill.geometry.quality import unique_edges
+
+    O = importlib.import_module("meshlab_holefill.algorithms.xie_zou2013.optimisation")
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix().astype(np.int64)
+    F = F[V[F].mean(axis=1)[:, 2] > -0.3]  # an open cap: border edges fail the link condition
+    n = len(V)
+    E, A = O.adjacency(F, n)
+    assert np.array_equal(E, unique_edges(F))
+    R = (A + sp.identity(n, dtype=np.int8, format="csr")).tocsr()
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        c = rng.choice(len(E), size=int(rng.integers(1, len(E))), replace=False)
+        a, b = E[c, 0], E[c, 1]
+        # the sparse-matrix expression the kernel replaces
+        M = (R[a] + R[b]).tocoo()
+        rank = np.arange(len(a))
+        claim = np.full(n, len(a))
+        np.minimum.at(claim, M.col, rank[M.row])
+        lost = np.zeros(len(a), bool)
+        np.logical_or.at(lost, M.row, claim[M.col] != rank[M.row])
+        common = np.asarray(A[a].multiply(A[b]).sum(axis=1)).ravel()
+        want = ~lost & (common == 2)
+        got = O._independent_edges(A, a, b, n)
+        assert np.array_equal(got, want) and want.any()
