@@ -106,5 +106,6 @@ def fill_holes(V, F, algorithm="min_angle_bilateral", *, selected_faces=None, **
         raise ValueError(f"selected_faces has {len(selected)} entries for {len(F)} faces")
     arrays = MeshArrays(V=V, F=F, face_attrs={"selected": selected.astype(np.float64)[:, None]}, label="mesh")
     filled, result = fill_mesh_holes(arrays, module.fill, resolved, algorithm_params=[p.name for p in own],
-                                     rings=module.RINGS, prepare=getattr(module, "PREPARE", None))
+                                     rings=module.RINGS, prepare=getattr(module, "PREPARE", None),
+                                     warm_up=getattr(module, "WARM_UP", None))
     return filled.V, filled.F, result

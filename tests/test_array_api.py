@@ -66,3 +66,19 @@ def test_non_manifold_edges_are_refused_and_the_arrays_are_untouched():
     with pytest.raises(meshlab_holefill.MeshTopologyError, match="non-manifold edges"):
         meshlab_holefill.fill_holes(V, F)
     np.testing.assert_array_equal(F, before)
+
+
+def test_the_algorithms_warm_up_runs_once_before_any_hole_is_filled(holed_sphere, monkeypatch):
+    # forked workers then inherit the loaded kernels instead of loading them within their first hole
+    from meshlab_holefill.algorithms.xu2013 import lssvm_poisson
+
+    calls = []
+    monkeypatch.setattr(lssvm_poisson, "WARM_UP", lambda: calls.append("warm"))
+    fill = lssvm_poisson.fill
+    monkeypatch.setattr(lssvm_poisson, "fill", lambda ctx, **kw: (calls.append("fill"), fill(ctx, **kw))[1])
+    V, F = holed_sphere
+    _, _, result = meshlab_holefill.fill_holes(V, F, "lssvm_poisson", workers=1)
+    assert result["closed_holes"] == 2 and calls == ["warm", "fill", "fill"]
+    calls.clear()
+    meshlab_holefill.fill_holes(V, F, "lssvm_poisson", maxholesize=3)  # no hole to fill: nothing to load
+    assert calls == []

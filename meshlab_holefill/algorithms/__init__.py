@@ -4,7 +4,8 @@ Each subpackage holds every step of its paper, its options beyond the paper, and
 ``fill(ctx, **params) -> Patch`` on one :class:`~meshlab_holefill.core.holes.HoleContext`,
 ``PARAMS`` (its own ParamSpecs, after :data:`~meshlab_holefill.core.pipeline.COMMON_PARAMS`),
 ``RINGS`` (rings of surrounding mesh its HoleContext needs) and optionally ``PREPARE`` (a
-border refinement run before any hole is filled). Algorithms are pure numpy/scipy: they may
+border refinement run before any hole is filled) and ``WARM_UP`` (loads its compiled kernels
+before holes are filled in forked workers). Algorithms are pure numpy/scipy: they may
 import ``errors``, ``geometry`` and ``core``, never ``meshlab`` or ``evaluation``.
 
 ========================  =====================================  ===================================

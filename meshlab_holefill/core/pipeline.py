@@ -109,7 +109,8 @@ class FilledMesh:
             vertex_selected=s.vertex_selected)
 
 
-def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepare=None, progress=None):
+def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepare=None, warm_up=None,
+                    progress=None):
     """Run one hole-filling algorithm on every eligible hole of a mesh given as arrays.
 
     Parameters
@@ -133,6 +134,10 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
         ``edge_weights``, ``face_parents`` (see :func:`.attributes.refine_mesh_arrays`) and
         ``split_counts``. When a hole with a refined border fails, the holes are filled
         again without it, so its border is left as it was.
+    warm_up : callable, optional
+        The algorithm module's ``WARM_UP``: loads its compiled kernels, called once before the
+        holes are filled, so that forked workers inherit them instead of each loading them
+        within its first hole's time.
 
     Returns
     -------
@@ -154,6 +159,8 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     fill_kwargs = {name: params[name] for name in algorithm_params}
     base = (arrays, list(loops), [dict(entry) for entry in report], incidence)
     fills = {}  # hole -> outcome of its fill, reused by a later pass while its surroundings are the same
+    if warm_up is not None and todo:
+        warm_up()
     while True:
         arrays, V, F, V2, F2, done_loops, patches, refinement, report = _fill_holes(
             base, todo, params, fill, fill_kwargs, rings, prepare, fills, progress)

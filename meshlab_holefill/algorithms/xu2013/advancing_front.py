@@ -415,6 +415,9 @@ def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75,
     return new_vertices, faces, stats
 
 
+_WARM = []  # set once the kernels are loaded in this process
+
+
 def warm_up():
     """Load (or compile) the front's numba kernels now, by running the front on a small hole.
 
@@ -423,6 +426,8 @@ def warm_up():
     first, so that the workers inherit the loaded kernels instead of each loading them again
     inside its first hole's time.
     """
+    if _WARM:
+        return
     t = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
     ring = np.stack([np.cos(t), np.sin(t), 0.1 * np.cos(3 * t)], axis=1)
     outer = 1.5 * ring
@@ -431,3 +436,4 @@ def warm_up():
     F = [(i, (i + 1) % k, k + i) for i in range(k)] + [((i + 1) % k, k + (i + 1) % k, k + i) for i in range(k)]
     advancing_front_triangulation(ring, obstacles=(V, np.array(F)))
     near_any(np.zeros(1, np.int64), ring[[0]], 1.0, ring, np.zeros(1, np.int64), np.ones(1, np.bool_), TWO)
+    _WARM.append(True)

@@ -30,6 +30,7 @@ import time
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from .advancing_front import warm_up
 from .border_split import split_long_boundary_edges
 from ...geometry.laplacian import tangential_umbrella_smoothing
 from ...core.holes import boundary_halfedges
@@ -127,6 +128,7 @@ def prepare_boundary(V, F, loops, params):
 
 
 PREPARE = prepare_boundary
+WARM_UP = warm_up  # the 3D front's compiled kernels, loaded before holes are filled in forked workers
 
 
 def training_set(ctx, layers):
