@@ -53,7 +53,7 @@ REAL_SIZE_HOLES = ("irregular", "large", "irregular")  # targets 250, 150, 250 b
 # Ours with defaults; two measured variants (Xu et al.'s Table 1 membrane comparison, Hu's optional
 # fairing); MeshLab's Close Holes with its defaults and with every hole allowed.
 # CGAL's Liepa fill and MeshFix as open anchors (skipped with a note when not installed).
-DEFAULT_FILTERS = ("ours,lssvm_poisson:laplacian_prediction=zero,min_angle_bilateral:fairing=thinplate:iterations=0:smoothing=10,"
+DEFAULT_FILTERS = ("ours,lssvm_poisson:laplacian_prediction=zero:poisson_boundary=dirichlet,min_angle_bilateral:fairing=thinplate:iterations=0:smoothing=10,"
                    "anchors,baseline")
 
 

@@ -68,7 +68,7 @@ def test_capped_island_outline_quality_is_not_judged():
 
 def test_reference_table_judges_option_sets_but_not_the_comparison_variant():
 
-    fillers = parse_fillers("lssvm_poisson,lssvm_poisson:laplacian_prediction=zero,"
+    fillers = parse_fillers("lssvm_poisson,lssvm_poisson:laplacian_prediction=zero:poisson_boundary=dirichlet,"
                             "min_angle_bilateral:fairing=thinplate,meshing_close_holes:maxholesize=all")
     labels = [f.label for f in fillers]
     holes = [dict(_row(case="sphere"), filler=lab) for lab in labels]
