@@ -73,7 +73,7 @@ def test_fill_with_a_builtin_filter_reports_a_bad_value_or_name_clearly(tmp_path
     assert not out.exists()
 
 
-# --- issue 18: exit codes, progress, --report, output checked first, one hole numbering ---------------------------
+# --- exit codes, progress, --report, output checked first, one hole numbering ---------------------------
 
 import csv
 import io

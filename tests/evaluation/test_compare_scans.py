@@ -1,8 +1,8 @@
 """compare on meshes with holes of their own (scans), the report's dependencies, progress and logging.
 
-Issue 18, items 5 and 8: ``--report`` without matplotlib failed only after every run; a scan's
-report showed ground-truth rows and text, pictured only 8 holes, coloured each hole's panels on
-a scale running to the worst filter, and numbered holes otherwise than ``holes`` and ``fill``.
+``--report`` checks for matplotlib before any run; a scan's report has no ground-truth rows or
+text, pictures every hole, colours each hole's panels on one scale of its own, and numbers holes
+as ``holes`` and ``fill`` do.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""compare() from a plain script: no ``if __name__ == "__main__":`` guard needed (issue 18, item 1)."""
+"""compare() from a plain script: no ``if __name__ == "__main__":`` guard needed."""
 from __future__ import annotations
 
 import json

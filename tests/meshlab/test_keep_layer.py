@@ -1,4 +1,4 @@
-"""Issue 18 item 2: after one of our filters the filled layer keeps the current layer's id and place."""
+"""After one of our filters the filled layer keeps the current layer's id and place."""
 import os
 
 import numpy as np
