@@ -64,6 +64,15 @@ def _group_halfedges(F, n, other, code):
 
 
 @njit(cache=True)
+def _run_end(other, i, stop):
+    """End of the run of half-edges from ``i`` that share the larger vertex ``other[i]`` (one edge)."""
+    j = i + 1
+    while j < stop and other[j] == other[i]:
+        j += 1
+    return j
+
+
+@njit(cache=True)
 def _edge_runs(start, other, code, want_all):
     """Walk the sorted groups of :func:`_group_halfedges`: one row per undirected edge kept.
 
@@ -72,13 +81,11 @@ def _edge_runs(start, other, code, want_all):
     code of the first half-edge (its face and direction, meaningful for one-face edges).
     """
     n = start.shape[0] - 1
-    rows = 0
+    rows = 0  # a first walk counts the rows, so the table is allocated once at its size
     for v in range(n):
         i = start[v]
         while i < start[v + 1]:
-            j = i + 1
-            while j < start[v + 1] and other[j] == other[i]:
-                j += 1
+            j = _run_end(other, i, start[v + 1])
             if want_all or j - i != 2:
                 rows += 1
             i = j
@@ -87,9 +94,7 @@ def _edge_runs(start, other, code, want_all):
     for v in range(n):
         i = start[v]
         while i < start[v + 1]:
-            j = i + 1
-            while j < start[v + 1] and other[j] == other[i]:
-                j += 1
+            j = _run_end(other, i, start[v + 1])
             if want_all or j - i != 2:
                 out[r, 0] = v
                 out[r, 1] = other[i]
