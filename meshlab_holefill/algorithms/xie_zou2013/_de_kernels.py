@@ -44,13 +44,18 @@ def trial_vectors(X, r1, r2, r3, u_take, rn, F, CR):
     U = np.empty_like(X)
     for b in range(B):
         for i in range(N):
-            a, c, d, r = r1[b, i], r2[b, i], r3[b, i], rn[b, i]
-            for j in range(n):
-                if u_take[b, i, j] <= CR or j == r:
-                    U[b, i, j] = X[b, a, j] + F * (X[b, c, j] - X[b, d, j])
-                else:
-                    U[b, i, j] = X[b, i, j]
+            _trial_row(U, X, u_take, b, i, r1[b, i], r2[b, i], r3[b, i], rn[b, i], F, CR)
     return U
+
+
+@njit(cache=True)
+def _trial_row(U, X, u_take, b, i, r1, r2, r3, r, F, CR):
+    """Eq. 2 and 3 for individual i of problem b: U[b, i] from X[b, r1] + F (X[b, r2] - X[b, r3]) and X[b, i]."""
+    for j in range(X.shape[2]):
+        if u_take[b, i, j] <= CR or j == r:
+            U[b, i, j] = X[b, r1, j] + F * (X[b, r2, j] - X[b, r3, j])
+        else:
+            U[b, i, j] = X[b, i, j]
 
 
 @njit(cache=True)
@@ -123,9 +128,5 @@ def mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR):
             if r3 >= hi:
                 r3 += 1
             r = np.int64(np.floor(u_rn[b, i] * db))
-            for j in range(n):
-                if u_take[b, i, j] <= CR or j == r:
-                    U[b, i, j] = X[b, r1, j] + F * (X[b, r2, j] - X[b, r3, j])
-                else:
-                    U[b, i, j] = X[b, i, j]
+            _trial_row(U, X, u_take, b, i, r1, r2, r3, r, F, CR)
     return U
