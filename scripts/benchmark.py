@@ -31,6 +31,7 @@ import numpy as np
 import pymeshlab
 
 import meshlab_holefill
+from meshlab_holefill.evaluation.analytic import ANALYTIC_SURFACES, analytic_area, analytic_distance, analytic_mesh
 from meshlab_holefill.evaluation.comparison import BASELINE, MeshCase, parse_fillers, prepare_case, run_comparison
 from meshlab_holefill.evaluation.creased import CREASED_CASES, creased_case
 from meshlab_holefill.evaluation.cut_holes import cut_holes
@@ -57,14 +58,6 @@ DEFAULT_FILTERS = ("ours,lssvm_poisson:laplacian_prediction=zero:poisson_boundar
                    "anchors,baseline")
 
 
-def _sphere_distance(X):
-    return np.linalg.norm(X, axis=1) - 1.0
-
-
-def _torus_distance(X, R=1.0, r=0.4):
-    return np.hypot(np.hypot(X[:, 0], X[:, 1]) - R, X[:, 2]) - r
-
-
 def load_case(name):
     """The suite's meshes as MeshCase (analytic distance functions for the sphere and torus)."""
     analytic = area = None
@@ -72,15 +65,9 @@ def load_case(name):
         return creased_case(name)
     if name == "bunny_212k":
         return real_size_case()
-    if name in ("sphere", "torus"):
-        ms = pymeshlab.MeshSet()
-        if name == "sphere":
-            ms.create_sphere(subdiv=5)
-            analytic, area = _sphere_distance, 4 * np.pi
-        else:
-            ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=192, vsubdiv=96)
-            analytic, area = _torus_distance, 4 * np.pi ** 2 * 1.0 * 0.4
-        V, F = mesh_arrays(ms)
+    if name in ANALYTIC_SURFACES:
+        V, F = analytic_mesh(name)
+        analytic, area = analytic_distance(name), analytic_area(name)
     else:
         V, F = load_mesh(os.path.join(SAMPLES, "rangemaps", name) if name == "face000.ply" else os.path.join(SAMPLES, name))
     return MeshCase(name, V, F, analytic=analytic, surface_area=area)

@@ -1,5 +1,6 @@
 """Build the HPDE large-hole cases: (name, V, F_cut, holes, diag, analytic) saved as npz."""
 import os, sys, numpy as np, pymeshlab
+from meshlab_holefill.evaluation.analytic import ANALYTIC_SURFACES, analytic_mesh
 from meshlab_holefill.evaluation.cut_holes import cut_holes
 from meshlab_holefill.meshlab.mesh_files import load_mesh, mesh_arrays
 SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
@@ -7,13 +8,8 @@ OUT = os.environ.get("HPDE_CASES", "/tmp/hpde/cases") + ""
 os.makedirs(OUT, exist_ok=True)
 
 def base(name):
-    if name in ("sphere", "torus"):
-        ms = pymeshlab.MeshSet()
-        if name == "sphere":
-            ms.create_sphere(subdiv=5)
-        else:
-            ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=192, vsubdiv=96)
-        return mesh_arrays(ms)
+    if name in ANALYTIC_SURFACES:
+        return analytic_mesh(name)
     if name == "bunny_sub":
         ms = pymeshlab.MeshSet(); ms.load_new_mesh(os.path.join(SAMPLES, "bunny.obj"))
         ms.meshing_surface_subdivision_loop(iterations=1, threshold=pymeshlab.PercentageValue(0))

@@ -5,29 +5,19 @@ bounding-box diagonal): sphere 262-edge hole, DE prediction points 0.44, smoothe
 patch 0.37; torus 225-edge hole 0.21 / 0.21 / 0.21. A flat cap of these holes is 20-30.
 """
 import numpy as np
-import pymeshlab
 import pytest
 
 from meshlab_holefill.algorithms.xie_zou2013 import _algorithm2 as A2
 from meshlab_holefill.algorithms.xie_zou2013 import differential_evolution as de
 from meshlab_holefill.algorithms.xie_zou2013 import prediction as PR
 from meshlab_holefill.core.holes import boundary_loops, hole_context
+from meshlab_holefill.evaluation.analytic import analytic_mesh
 from meshlab_holefill.evaluation.cut_holes import cut_holes
 from meshlab_holefill.evaluation.metrics import compact_mesh, hausdorff_one_way, point_to_surface_distances
-from meshlab_holefill.meshlab.mesh_files import mesh_arrays
-
-
-def _analytic(name):
-    ms = pymeshlab.MeshSet()
-    if name == "sphere":
-        ms.create_sphere(subdiv=5)
-    else:
-        ms.create_torus(hradius=1.0, vradius=0.4, hsubdiv=192, vsubdiv=96)
-    return mesh_arrays(ms)
 
 
 def _large_hole(name, hole):
-    V, F = _analytic(name)
+    V, F = analytic_mesh(name)
     F_cut, holes = cut_holes(V, F, sizes=["large", "irregular"], shapes=["compact", "irregular"], seed=0)
     G = holes[hole].removed_faces
     gv = set(np.unique(G).tolist())
