@@ -4,14 +4,18 @@ Each kernel does, element by element, the same IEEE operations in the same order
 numpy expression it replaces (no fastmath, no contraction to FMA), so the results are bit
 for bit those of the numpy code (tests/algorithms/xie_zou2013/test_de_kernels.py checks it
 against the numpy reference kept there). The transcendental step (arctan2 of the turning
-angles) stays in numpy, whose SIMD arctan2 differs from libm's in the last bits.
+angles) stays in numpy, whose SIMD arctan2 differs from libm's in the last bits, and so does the
+sum of squares (numpy's einsum accumulates with fused multiply-adds): a generation of the Eq. 14
+objective is one kernel for the trial vectors and their turning terms, numpy's arctan2, sum and
+einsum, then one kernel for the selection, the reflection and the terms of the reflected ones.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-__all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms"]
+__all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms", "trial_turning_terms",
+           "select_variation", "reflect_gather_terms", "renew_variation"]
 
 
 @njit(cache=True)
@@ -130,3 +134,77 @@ def mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR):
             r = np.int64(np.floor(u_rn[b, i] * db))
             _trial_row(U, X, u_take, b, i, r1, r2, r3, r, F, CR)
     return U
+
+
+@njit(cache=True)
+def trial_turning_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y_add):
+    """(U, cross, dot): the trial vectors of :func:`mutate_crossover` and their :func:`turning_terms`."""
+    U = mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR)
+    cross, dot = turning_terms(U, seg_x, seg_y_add)
+    return U, cross, dot
+
+
+@njit(cache=True)
+def _variation(square_sum, total, count):
+    """Eq. 14 from the sums of one candidate: np.maximum(square_sum - total * total / count, 0.0)."""
+    v = square_sum - total * total / count
+    if v >= 0.0 or v != v:  # NaN passes, as through np.maximum
+        return v
+    return 0.0
+
+
+@njit(cache=True)
+def select_variation(X, fX, U, square_sum, total, count, active):
+    """Eq. 4 in place with f(U) from its turning-angle sums (:func:`_variation`; count (B,) angles per problem)."""
+    B, N, n = X.shape
+    for b in range(B):
+        for i in range(N):
+            if active[b, i]:
+                f = _variation(square_sum[b, i], total[b, i], count[b])
+                if f <= fX[b, i]:
+                    fX[b, i] = f
+                    for j in range(n):
+                        X[b, i, j] = U[b, i, j]
+
+
+@njit(cache=True)
+def reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add):
+    """Eq. 5 on X and the turning terms of the active individuals it moved, gathered per problem.
+
+    Returns
+    -------
+    Xr : (B, N, n) reflected X
+    order : (B, K) int64  per problem the moved rows first, then the others (both ascending: a
+        stable argsort of ~moved), K = the largest number moved
+    counts : (B,) int64  rows moved
+    cross, dot : (B, K, n + 2) turning terms of Xr[b, order[b]]
+    """
+    Xr, moved = reflect_moved(X, lower, upper)
+    B, N, n = X.shape
+    counts = np.zeros(B, np.int64)
+    for b in range(B):
+        for i in range(N):
+            moved[b, i] = moved[b, i] and active[b, i]
+            if moved[b, i]:
+                counts[b] += 1
+    K = counts.max() if B else 0
+    order = np.empty((B, K), np.int64)
+    G = np.empty((B, K, n))
+    for b in range(B):
+        r = 0
+        for want in (True, False):
+            for i in range(N):
+                if moved[b, i] == want and r < K:
+                    order[b, r] = i
+                    G[b, r, :] = Xr[b, i, :]
+                    r += 1
+    cross, dot = turning_terms(G, seg_x, seg_y_add)
+    return Xr, order, counts, cross, dot
+
+
+@njit(cache=True)
+def renew_variation(fX, order, counts, square_sum, total, count):
+    """Algorithm 1, step 9: fX[b, order[b, r]] = f of the r-th reflected individual, r < counts[b]."""
+    for b in range(len(counts)):
+        for r in range(counts[b]):
+            fX[b, order[b, r]] = _variation(square_sum[b, r], total[b, r], count[b])

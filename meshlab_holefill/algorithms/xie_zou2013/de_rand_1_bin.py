@@ -19,7 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._de_kernels import mutate_crossover, reflect_moved, select
+from ._de_kernels import (mutate_crossover, reflect_gather_terms, reflect_moved, renew_variation, select,
+                          select_variation, trial_turning_terms)
 
 __all__ = ["reflect_into_bounds", "de_rand_1_bin"]
 
@@ -186,6 +187,29 @@ def _generation(objective, state, draws, F, CR, bounds):
         _reflect_and_renew(objective, state)
 
 
+def _turning_generation(objective, state, draws, F, CR):
+    """One generation of Algorithm 1 (bounds 'paper') for a turning-angle objective, fused.
+
+    The same operations as :func:`_generation` with ``objective(X) = objective.variation(
+    *objective.square_sums(cross, dot))`` split at the numpy steps it keeps (arctan2, sums):
+    the trial vectors and their turning terms in one kernel, the selection (Eq. 4), the
+    reflection (Eq. 5) and the terms of the reflected individuals in another.
+    """
+    seg_x, seg_y_add, count = objective.turning_chain
+    u_index, u_rn, u_take = draws.next()
+    U, cross, dot = trial_turning_terms(state.X, u_index, u_rn, u_take, state.pop, state.dims, float(F), float(CR),
+                                        seg_x, seg_y_add)
+    square_sum, total = objective.square_sums(cross, dot)
+    select_variation(state.X, state.fX, U, square_sum, total, count, state.active)
+    Xr, order, counts, cross, dot = reflect_gather_terms(state.X, state.lower, state.upper, state.active, seg_x,
+                                                         seg_y_add)
+    if order.shape[1] == 0:
+        return
+    state.X = Xr
+    square_sum, total = objective.square_sums(cross, dot)
+    renew_variation(state.fX, order, counts, square_sum, total, count)
+
+
 def _population_spread_within(state, tol):
     """True when every problem's max f - min f is <= tol (the optional early stop)."""
     f_act = np.where(state.active, state.fX, np.nan)
@@ -201,6 +225,11 @@ def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0
     objective : callable
         ``objective(X) -> f`` with X : (B, N, n) float64 and f : (B, N) float64; evaluated
         once per generation on all trial individuals (vectorised over population and batch).
+        An objective of the turning-angle form of Eq. 14 may say so with the attribute
+        ``turning_chain`` = (seg_x, seg_y_add, count) of :func:`._de_kernels.turning_terms`
+        and the method ``square_sums(cross, dot) -> (sum of squared angles, sum of angles)``
+        (as :class:`.prediction.AngleVariation`); with ``bounds='paper'`` its generations
+        then run fused (the same arithmetic, fewer calls).
     lower, upper : (B, n) or (n,) float64
         Bounds l_j <= x_j <= u_j. A 1-D input is one problem (B = 1) and the result is 1-D.
     pop_size : int or (B,) int, optional
@@ -240,8 +269,12 @@ def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0
     state = _initial_population(objective, lower, upper, pop, dims, rng, init)
     draws = _Uniforms(rng, state.X.shape, generations, per_block=tol <= 0)
     g = 0
+    fused = bounds == "paper" and getattr(objective, "turning_chain", None) is not None
     for g in range(1, generations + 1):
-        _generation(objective, state, draws, F, CR, bounds)
+        if fused:
+            _turning_generation(objective, state, draws, F, CR)
+        else:
+            _generation(objective, state, draws, F, CR, bounds)
         if tol > 0 and _population_spread_within(state, tol):
             break
     B = len(pop)

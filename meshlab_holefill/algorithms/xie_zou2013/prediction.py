@@ -16,7 +16,8 @@ from ._de_kernels import turning_terms
 from .de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
 
 __all__ = ["arc_points", "arc_height", "circle_start_angle", "forward_tangents", "prediction_counts",
-           "SectionProblem", "section_problems", "turning_angles", "angle_variation", "initial_population",
+           "SectionProblem", "section_problems", "turning_angles", "angle_variation", "AngleVariation",
+           "initial_population",
            "subset", "predict_y", "predicted_points", "predict_points"]
 
 
@@ -262,6 +263,31 @@ def angle_variation(problem, Y):
     return np.maximum(np.einsum("pnk,pnk->pn", beta, beta) - total * total / count, 0.0)
 
 
+class AngleVariation:
+    """The objective of Eq. 14 on a SectionProblem, ``f = AngleVariation(problem)(Y)``.
+
+    Also exposes its parts to the fused DE generation of :func:`.de_rand_1_bin.de_rand_1_bin`:
+    ``turning_chain`` (the chain constants of :func:`turning_angles` and the number of angles
+    per plane) and :meth:`square_sums`; :func:`_de_kernels.select_variation` finishes
+    ``np.maximum(square_sum - total * total / count, 0)`` as :func:`angle_variation` does.
+    """
+
+    def __init__(self, problem):
+        self.problem = problem
+        seg_x, seg_y_add, valid = _chain_constants(problem)
+        self.valid = valid[:, None, :]
+        self.turning_chain = (seg_x, seg_y_add, np.ascontiguousarray(self.valid.sum(axis=2)[:, 0]))
+
+    def __call__(self, Y):
+        return angle_variation(self.problem, Y)
+
+    def square_sums(self, cross, dot):
+        """(sum of squared angles, sum of angles), (p, N) each, of the turning terms of :func:`turning_angles`."""
+        beta = np.arctan2(cross, dot)
+        beta *= self.valid
+        return np.einsum("pnk,pnk->pn", beta, beta), beta.sum(axis=2)
+
+
 def initial_population(problem, pop_size, rng, spread=0.5):
     """Initial DE population around the vector of Eq. 16 (Sec. 4.8).
 
@@ -325,7 +351,7 @@ def predict_y(problem, N_factor=3.0, F=0.8, CR=0.05, generations=100, seed=0, bo
         sub = subset(problem, idx)
         pop = np.maximum(np.ceil(N_factor * sub.m).astype(np.int64), 3)
         init = initial_population(sub, pop, rng)
-        Yg, fg, g = de_rand_1_bin(lambda Z, sub=sub: angle_variation(sub, Z), sub.lower, sub.upper,
+        Yg, fg, g = de_rand_1_bin(AngleVariation(sub), sub.lower, sub.upper,
                                   pop_size=pop, dims=sub.m, F=F, CR=CR, generations=generations, seed=rng,
                                   init=init, bounds=bounds)
         Y[idx, :Yg.shape[1]] = Yg

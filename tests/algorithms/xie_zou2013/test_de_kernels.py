@@ -157,3 +157,53 @@ def test_independent_link_edges_equal_sparse_expression():
         want = ~lost & (common == 2)
         got = O._independent_edges(A, a, b, n)
         assert np.array_equal(got, want) and want.any()
+
+
+def _section_batch(rng, m):
+    """Section problems of Sec. 4.5 with m prediction points each (random chords and end tangents)."""
+    from meshlab_holefill.algorithms.xie_zou2013 import prediction
+
+    p = len(m)
+    L = rng.uniform(1.0, 4.0, p)
+    a1, a2 = rng.uniform(0.05, 1.2, p), rng.uniform(0.05, 1.2, p)
+    tv1 = np.stack([np.cos(a1), np.sin(a1), np.zeros(p)], axis=1)
+    tv2 = np.stack([np.cos(-a2), np.sin(-a2), np.zeros(p)], axis=1)
+    P2 = np.stack([L, np.zeros(p), np.zeros(p)], axis=1)
+    normal = np.tile([0.0, 0.0, 1.0], (p, 1))
+    problem, _ = prediction.section_problems(np.zeros((p, 3)), P2, tv1, tv2, normal, np.asarray(m, np.int64))
+    return problem
+
+
+def test_fused_turning_generation_equals_generic_objective():
+    from meshlab_holefill.algorithms.xie_zou2013 import prediction
+    from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import de_rand_1_bin
+
+    rng = np.random.default_rng(11)
+    problem = _section_batch(rng, [1, 3, 5, 9, 6, 2])
+    pop = np.maximum(3 * problem.m, 3)
+    init = prediction.initial_population(problem, pop, np.random.default_rng(5), spread=2.0)  # many reflections
+    objective = prediction.AngleVariation(problem)
+    assert objective(init).tobytes() == prediction.angle_variation(problem, init).tobytes()
+    for generations in (1, 40):
+        generic = de_rand_1_bin(lambda Y: prediction.angle_variation(problem, Y), problem.lower, problem.upper,
+                                pop_size=pop, dims=problem.m, generations=generations, seed=3, init=init)
+        fused = de_rand_1_bin(objective, problem.lower, problem.upper, pop_size=pop, dims=problem.m,
+                              generations=generations, seed=3, init=init)
+        assert generic[0].tobytes() == fused[0].tobytes() and generic[1].tobytes() == fused[1].tobytes()
+
+
+def test_reflect_gather_terms_orders_moved_rows_first():
+    rng = np.random.default_rng(12)
+    X, lower, upper = _problem(rng, B=3, N=8, n=4)
+    active = np.ones((3, 8), bool)
+    active[2, 5:] = False
+    seg_x = rng.normal(size=(3, 7))
+    seg_y_add = rng.normal(size=(3, 7))
+    Xr, order, counts, cross, dot = K.reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add)
+    ref = reflect_into_bounds(X, lower, upper)
+    moved = np.any(ref != X, axis=2) & active
+    assert Xr.tobytes() == ref.tobytes() and np.array_equal(counts, moved.sum(axis=1))
+    want = np.argsort(~moved, axis=1, kind="stable")[:, :counts.max()]
+    assert np.array_equal(order, want)
+    cross_ref, dot_ref = K.turning_terms(np.ascontiguousarray(ref[np.arange(3)[:, None], want]), seg_x, seg_y_add)
+    assert cross.tobytes() == cross_ref.tobytes() and dot.tobytes() == dot_ref.tobytes()
