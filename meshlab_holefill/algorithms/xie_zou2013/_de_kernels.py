@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms", "trial_turning_terms",
-           "select_variation", "reflect_gather_terms", "renew_variation"]
+           "select_variation", "reflect_gather_terms", "renew_variation", "masked_row_sums"]
 
 
 @njit(cache=True)
@@ -208,3 +208,52 @@ def renew_variation(fX, order, counts, square_sum, total, count):
     for b in range(len(counts)):
         for r in range(counts[b]):
             fX[b, order[b, r]] = _variation(square_sum[b, r], total[b, r], count[b])
+
+
+# numpy sums blocks of up to this many numbers with 8 accumulators; longer rows it halves
+# recursively (not replicated here: recursion does not survive numba's cache).
+PAIRWISE_BLOCK = 128
+
+
+@njit(cache=True)
+def _pairwise_sum(a, n):
+    """numpy's pairwise summation of a[:n] for n <= PAIRWISE_BLOCK: 8 accumulators, then the rest in order."""
+    if n < 8:
+        res = -0.0
+        for i in range(n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3, r4, r5, r6, r7 = a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]
+    i = 8
+    while i < n - n % 8:
+        r0 += a[i]
+        r1 += a[i + 1]
+        r2 += a[i + 2]
+        r3 += a[i + 3]
+        r4 += a[i + 4]
+        r5 += a[i + 5]
+        r6 += a[i + 6]
+        r7 += a[i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[i]
+        i += 1
+    return res
+
+
+@njit(cache=True)
+def masked_row_sums(beta, valid):
+    """beta *= valid[:, None, :] in place, then beta.sum(axis=2) in numpy's order, (p, N); valid (p, K).
+
+    For K <= PAIRWISE_BLOCK (numpy's reduction of a row: 0.0 + its pairwise sum).
+    """
+    p, N, K = beta.shape
+    total = np.empty((p, N))
+    for a in range(p):
+        for i in range(N):
+            row = beta[a, i]
+            for k in range(K):
+                row[k] = row[k] * valid[a, k]
+            total[a, i] = 0.0 + _pairwise_sum(row, K)
+    return total

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import sections
-from ._de_kernels import turning_terms
+from ._de_kernels import PAIRWISE_BLOCK, masked_row_sums, turning_terms
 from .de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
 
 __all__ = ["arc_points", "arc_height", "circle_start_angle", "forward_tangents", "prediction_counts",
@@ -275,7 +275,7 @@ class AngleVariation:
     def __init__(self, problem):
         self.problem = problem
         seg_x, seg_y_add, valid = _chain_constants(problem)
-        self.valid = valid[:, None, :]
+        self.valid = np.ascontiguousarray(valid)[:, None, :]
         self.turning_chain = (seg_x, seg_y_add, np.ascontiguousarray(self.valid.sum(axis=2)[:, 0]))
 
     def __call__(self, Y):
@@ -284,8 +284,12 @@ class AngleVariation:
     def square_sums(self, cross, dot):
         """(sum of squared angles, sum of angles), (p, N) each, of the turning terms of :func:`turning_angles`."""
         beta = np.arctan2(cross, dot)
-        beta *= self.valid
-        return np.einsum("pnk,pnk->pn", beta, beta), beta.sum(axis=2)
+        if beta.shape[2] <= PAIRWISE_BLOCK:
+            total = masked_row_sums(beta, self.valid[:, 0, :])  # beta * valid, beta.sum(axis=2): numpy's order
+        else:
+            beta *= self.valid
+            total = beta.sum(axis=2)
+        return np.einsum("pnk,pnk->pn", beta, beta), total
 
 
 def initial_population(problem, pop_size, rng, spread=0.5):

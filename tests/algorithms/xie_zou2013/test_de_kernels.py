@@ -175,11 +175,16 @@ def _section_batch(rng, m):
 
 
 def test_fused_turning_generation_equals_generic_objective():
+    rng = np.random.default_rng(11)
+    problem = _section_batch(rng, [1, 3, 5, 9, 6, 2])
+    _assert_fused_equals_generic(problem)
+    _assert_fused_equals_generic(_section_batch(rng, [127, 130]))  # rows longer than one pairwise block
+
+
+def _assert_fused_equals_generic(problem):
     from meshlab_holefill.algorithms.xie_zou2013 import prediction
     from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import de_rand_1_bin
 
-    rng = np.random.default_rng(11)
-    problem = _section_batch(rng, [1, 3, 5, 9, 6, 2])
     pop = np.maximum(3 * problem.m, 3)
     init = prediction.initial_population(problem, pop, np.random.default_rng(5), spread=2.0)  # many reflections
     objective = prediction.AngleVariation(problem)
@@ -207,3 +212,15 @@ def test_reflect_gather_terms_orders_moved_rows_first():
     assert np.array_equal(order, want)
     cross_ref, dot_ref = K.turning_terms(np.ascontiguousarray(ref[np.arange(3)[:, None], want]), seg_x, seg_y_add)
     assert cross.tobytes() == cross_ref.tobytes() and dot.tobytes() == dot_ref.tobytes()
+
+
+def test_masked_row_sums_equal_numpy_sum():
+    rng = np.random.default_rng(13)
+    for shape in [(1, 1, 1), (1, 3, 7), (2, 5, 8), (3, 4, 9), (6, 11, 17), (2, 3, 64), (2, 2, 127), (1, 2, 128)]:
+        beta = rng.normal(size=shape) * 10.0 ** rng.integers(-8, 8, size=shape)
+        beta[beta > 5] = -0.0
+        valid = (rng.random((shape[0], shape[2])) < 0.8).astype(np.float64)
+        ref = beta * valid[:, None, :]
+        got = beta.copy()
+        total = K.masked_row_sums(got, valid)
+        assert got.tobytes() == ref.tobytes() and total.tobytes() == ref.sum(axis=2).tobytes()
