@@ -142,6 +142,40 @@ def test_pca_segmentation_matches_brute_force_eq8():
     assert max(lams) == pytest.approx(best)
 
 
+def _all_splits_argmin(C1, C2):
+    """The Eq. 8 minimum through LAPACK on every split (what the screened search must return)."""
+    lam1 = np.maximum(np.linalg.eigh(C1)[0][:, 0], 0.0)
+    lam2 = np.maximum(np.linalg.eigh(C2)[0][:, 0], 0.0)
+    return int(np.argmin(np.maximum(lam1, lam2)))
+
+
+@pytest.mark.parametrize("shape", ["noisy", "planar", "bent", "circle"])
+def test_screened_eq8_split_equals_lapack_on_every_split(shape):
+    rng = np.random.default_rng(7)
+    t = np.linspace(0, 2 * np.pi, 60, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], axis=1)
+    if shape == "noisy":
+        ring += rng.normal(scale=0.05, size=ring.shape)
+    elif shape == "bent":
+        ring[:, 2] = np.abs(ring[:, 0])  # two planes meeting along the y-axis
+    elif shape == "circle":
+        ring = ring[:, [0, 2, 1]] * 1e3 + 5e3  # far from the origin, another scale
+    n = len(ring)
+    X = ring - ring.mean(axis=0)
+    S1 = np.concatenate([np.zeros((1, 3)), np.cumsum(X, axis=0)])
+    S2 = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(X[:, :, None] * X[:, None, :], axis=0)])
+    i, j = np.triu_indices(n, k=1)
+    c2 = (j - i).astype(np.float64)
+    keep = (c2 >= 10) & (n - c2 >= 10)
+    i, j, c2 = i[keep], j[keep], c2[keep]
+    C2 = hpde_sections._moment_covariances(c2, S1[j] - S1[i], S2[j] - S2[i])
+    C1 = hpde_sections._moment_covariances(n - c2, S1[n] - (S1[j] - S1[i]), S2[n] - (S2[j] - S2[i]))
+    assert hpde_sections._eq8_best_split(C1, C2) == _all_splits_argmin(C1, C2)
+    est = hpde_sections.smallest_eigenvalue_estimate(C1)
+    norm = np.abs(np.linalg.eigvalsh(C1)).max(axis=1)
+    assert np.all(np.abs(est - np.linalg.eigvalsh(C1)[:, 0]) <= 1e-7 * norm)
+
+
 def test_cube_edge_hole_is_segmented_along_the_characteristic_line(cube_edge_hole):
     _, _, _, ctx = cube_edge_hole
     e = hpde_sections.ring_edge_length(ctx)
