@@ -9,6 +9,7 @@ no plane can flatten; fold-overs are handled in :mod:`.folds`.
 from __future__ import annotations
 
 import numpy as np
+import triangle
 from scipy.spatial import cKDTree
 
 from ...geometry.pca import fit_plane, plane_frame
@@ -26,6 +27,8 @@ EDGE_CLEARANCE = 0.35  # beyond the paper: a sliver apex nearer than this * L to
 LONG_EDGE = 2.0  # ... longer than this * EdgeLen is left out (triangulate_planar)
 CLEARANCE = 0.25  # prediction points nearer than this * EdgeLen to the projected boundary are left out
 STANDING_PLANE_COS = 0.5  # a PCA plane whose normal is further than 60 deg from the surface's stands across it
+# Triangle's switches of triangulate_polygon without refinement (polygon kept, quiet, no boundary Steiner points)
+CDT_SWITCHES = "pQY"
 
 
 class PlaneMap:
@@ -225,8 +228,9 @@ def triangulate_planar(loop_points, predicted, Q, X, clearance, edge_clearance=0
                 keep[idx[max(i, j)]] = False
     L = np.linalg.norm(np.roll(Q, -1, axis=0) - Q, axis=1)
     unused_rounds = cleared = 0
+    _, T = triangulate_polygon(Q, extra_points=X[keep])
+    checked = True  # T is triangulate_polygon's (validated, oriented); later rounds take Triangle's own faces
     while True:
-        _, T = triangulate_polygon(Q, extra_points=X[keep])
         idx = np.flatnonzero(keep)
         used = np.zeros(k + len(idx), bool)
         used[T.ravel()] = True
@@ -235,16 +239,58 @@ def triangulate_planar(loop_points, predicted, Q, X, clearance, edge_clearance=0
             if unused_rounds >= 3:
                 raise HoleFillError("triangulation left prediction points unused")
             keep[idx[~used[k:]]] = False
-            continue
-        drop = edge_sliver_apexes(np.concatenate([Q, X[keep]]), T, k, L, long_edge, edge_clearance)
-        if len(drop) == 0:
-            break
-        keep[idx[drop - k]] = False
-        cleared += len(drop)
+        else:
+            drop = edge_sliver_apexes(np.concatenate([Q, X[keep]]), T, k, L, long_edge, edge_clearance)
+            if len(drop) == 0:
+                break
+            keep[idx[drop - k]] = False
+            cleared += len(drop)
+        T, checked = _retriangulation(Q, X[keep])
+    if not checked:
+        _, T = triangulate_polygon(Q, extra_points=X[keep])
     if stats is not None:
         stats["edge_cleared"] = int(cleared)
     V = np.concatenate([loop_points, predicted[keep]])
     return V, T, orientation, np.flatnonzero(keep)
+
+
+def _retriangulation(Q, X):
+    """(faces, checked): the triangulation of one of triangulate_planar's rounds with fewer points.
+
+    Which points a round leaves out depends only on which triangles Triangle makes, so the
+    rounds take Triangle's faces as they come (``checked`` False: unoriented), without
+    triangulate_polygon's checks of the input (the first round made them: a subset of its
+    points has no repeated point either) and of the output edges, which cost as much as
+    Triangle on a large hole (104 rounds on a 274-edge hole); the last round's faces come from
+    triangulate_polygon. Where Triangle fails, drops or moves a point or loses a loop edge,
+    triangulate_polygon is called and raises its error as before (``checked`` True).
+    """
+    k = len(Q)
+    pts = np.concatenate([Q, X]) if len(X) else Q
+    segments = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    try:
+        out = triangle.triangulate({"vertices": pts, "segments": segments}, CDT_SWITCHES)
+    except Exception:  # noqa: BLE001  (triangulate_polygon below reports it)
+        out = {}
+    P, T = out.get("vertices"), out.get("triangles")
+    if P is not None and T is not None and len(T) and len(P) == len(pts) and np.array_equal(P, pts):
+        T = np.asarray(T, np.int64)
+        if _has_loop_edges(T, k):
+            return T, False
+    return triangulate_polygon(Q, extra_points=X)[1], True
+
+
+def _has_loop_edges(T, k):
+    """True when every loop edge (i, i + 1 mod k) is an edge of a face of T."""
+    seen = np.zeros(k, bool)
+    for c in range(3):
+        u, w = T[:, c], T[:, (c + 1) % 3]
+        loop = (u < k) & (w < k)
+        fwd = loop & (w == (u + 1) % k)
+        bwd = loop & (u == (w + 1) % k)
+        seen[u[fwd]] = True
+        seen[w[bwd]] = True
+    return bool(seen.all())
 
 
 def edge_sliver_apexes(Y, T, k, L, long_edge, edge_clearance):

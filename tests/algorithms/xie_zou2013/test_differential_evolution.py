@@ -1198,3 +1198,22 @@ def test_a_hole_in_tiny_or_huge_units_keeps_its_prediction(scale):
     # DE follows a slightly different path in other units (rounding), so the counts may differ a little
     assert abs(len(patch.vertices) - len(ref.vertices)) <= 0.25 * len(ref.vertices) + 2
     assert np.abs(np.linalg.norm(patch.vertices / scale, axis=1) - 1).max() < 0.05
+
+
+def test_retriangulation_rounds_give_triangulate_polygons_faces():
+    from meshlab_holefill.errors import HoleFillError
+    from meshlab_holefill.geometry.triangulate import triangulate_polygon
+
+    rng = np.random.default_rng(5)
+    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    Q = np.stack([np.cos(t), 0.6 * np.sin(t)], axis=1) * (1 + 0.1 * np.cos(5 * t))[:, None]
+    X = rng.uniform(-0.5, 0.5, (60, 2)) * [1.0, 0.5]
+    T, checked = hpde_mesh._retriangulation(Q, X)
+    _, T_ref = triangulate_polygon(Q, extra_points=X)
+    assert not checked
+    assert np.array_equal(np.sort(np.sort(T, axis=1), axis=0), np.sort(np.sort(T_ref, axis=1), axis=0))
+    bow_tie = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]])
+    with pytest.raises(HoleFillError, match="constrained triangulation|not simple"):
+        triangulate_polygon(bow_tie)
+    with pytest.raises(HoleFillError, match="constrained triangulation|not simple"):
+        hpde_mesh._retriangulation(bow_tie, np.zeros((0, 2)))
