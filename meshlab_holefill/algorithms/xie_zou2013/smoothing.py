@@ -14,6 +14,7 @@ from scipy.sparse.linalg import ArpackNoConvergence, eigsh
 
 from ...geometry.laplacian import adjacency_matrix, lowest_dirichlet_frequency
 from ...geometry.quality import unique_edges
+from ._smoothing_kernels import umbrella_passes
 
 __all__ = ["taubin_mu", "patch_lowest_frequency", "taubin_smooth", "curvature_smooth"]
 
@@ -97,9 +98,10 @@ def taubin_smooth(V, F, fixed, passes=60, lam=TAUBIN_LAMBDA, mu=None, pass_band=
     deg = np.asarray(A.sum(axis=1)).ravel()
     W = sp.diags(1.0 / np.maximum(deg, 1)) @ A
     Wf = W[free].tocsr()
-    for _ in range(passes):
-        for factor in (lam, mu):
-            V[free] += factor * (Wf @ V - V[free])
+    # V[free] += factor * (Wf @ V - V[free]) for factor in (lam, mu), ``passes`` times, compiled
+    umbrella_passes(V, np.flatnonzero(free).astype(np.int64), Wf.indptr.astype(np.int64),
+                    Wf.indices.astype(np.int64), np.ascontiguousarray(Wf.data, np.float64),
+                    np.array([lam, mu], np.float64), int(passes))
     return V
 
 

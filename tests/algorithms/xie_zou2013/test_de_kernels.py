@@ -224,3 +224,28 @@ def test_masked_row_sums_equal_numpy_sum():
         got = beta.copy()
         total = K.masked_row_sums(got, valid)
         assert got.tobytes() == ref.tobytes() and total.tobytes() == ref.sum(axis=2).tobytes()
+
+
+def test_umbrella_passes_equal_the_sparse_expression():
+    import pymeshlab
+    import scipy.sparse as sp
+
+    from meshlab_holefill.algorithms.xie_zou2013._smoothing_kernels import umbrella_passes
+    from meshlab_holefill.geometry.laplacian import adjacency_matrix
+
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V0, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix().astype(np.int64)
+    V0 = V0 + np.random.default_rng(14).normal(scale=0.02, size=V0.shape)
+    free = V0[:, 2] > -0.2
+    A = adjacency_matrix(F, len(V0))
+    W = sp.diags(1.0 / np.maximum(np.asarray(A.sum(axis=1)).ravel(), 1)) @ A
+    Wf = W[free].tocsr()
+    ref = V0.copy()
+    for _ in range(7):
+        for factor in (0.33, -0.41):
+            ref[free] += factor * (Wf @ ref - ref[free])
+    got = V0.copy()
+    umbrella_passes(got, np.flatnonzero(free).astype(np.int64), Wf.indptr.astype(np.int64),
+                    Wf.indices.astype(np.int64), Wf.data, np.array([0.33, -0.41]), 7)
+    assert got.tobytes() == ref.tobytes()
