@@ -1,14 +1,15 @@
-"""Compiled kernel of the decimation of Sec. 4.7 (numba): the independent set of edges collapsed in one round.
+"""Compiled kernels of the decimation of Sec. 4.7 (numba): the edge table and vertex adjacency of a
+face list, and the independent set of edges collapsed in one round.
 
-Integer logic only, so the result is exactly that of the sparse-matrix expression it replaces
-(tests/algorithms/xie_zou2013/test_de_kernels.py checks it against that expression).
+Integer logic only, so the results are exactly those of the numpy / sparse-matrix expressions
+they replace (tests/algorithms/xie_zou2013/test_de_kernels.py checks them against those).
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-__all__ = ["independent_link_edges"]
+__all__ = ["independent_link_edges", "edge_adjacency"]
 
 
 @njit(cache=True)
@@ -50,3 +51,43 @@ def independent_link_edges(indptr, indices, a, b, n):
                 common += 1
         keep[r] = common == 2
     return keep
+
+
+@njit(cache=True)
+def edge_adjacency(F, n):
+    """Unique edges and the CSR vertex adjacency of a face list on n vertices.
+
+    Returns
+    -------
+    E : (e, 2) int64  rows (a, b), a < b, in lexicographic order (optimisation.sorted_edges)
+    indptr : (n + 1,) int64, indices : (2 e,) int64
+        The symmetric adjacency, each row's neighbours ascending (scipy's canonical CSR of
+        the pairs (a, b) and (b, a)): one pass over E in order appends b to row a and a to
+        row b, and every row's smaller neighbours come from edges before its larger ones.
+    """
+    m = F.shape[0]
+    keys = np.empty(3 * m, np.int64)
+    for f in range(m):
+        for c in range(3):
+            u, w = F[f, c], F[f, (c + 1) % 3]
+            keys[3 * f + c] = min(u, w) * np.int64(n) + max(u, w)
+    keys = np.unique(keys)
+    e = len(keys)
+    E = np.empty((e, 2), np.int64)
+    indptr = np.zeros(n + 1, np.int64)
+    for r in range(e):
+        E[r, 0] = keys[r] // n
+        E[r, 1] = keys[r] % n
+        indptr[E[r, 0] + 1] += 1
+        indptr[E[r, 1] + 1] += 1
+    for v in range(n):
+        indptr[v + 1] += indptr[v]
+    fill = indptr[:-1].copy()
+    indices = np.empty(2 * e, np.int64)
+    for r in range(e):
+        a, b = E[r, 0], E[r, 1]
+        indices[fill[a]] = b
+        fill[a] += 1
+        indices[fill[b]] = a
+        fill[b] += 1
+    return E, indptr, indices

@@ -14,7 +14,7 @@ import scipy.sparse as sp
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
 from ...geometry.topology import edge_pair_set, interior_edges
-from ._optimisation_kernels import independent_link_edges
+from ._optimisation_kernels import edge_adjacency, independent_link_edges
 
 __all__ = ["split_obtuse_edges", "remove_valence_three", "compact_vertices", "sorted_edges", "adjacency",
            "decimate_short_edges",
@@ -155,11 +155,18 @@ def sorted_edges(F, n):
 
 
 def adjacency(F, n):
-    """Unique edges (e, 2) and the symmetric (n, n) int8 CSR vertex adjacency of a face list."""
-    E = sorted_edges(np.asarray(F), n) if len(F) else unique_edges(F)
-    A = sp.coo_matrix((np.ones(2 * len(E), np.int8), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
-                      shape=(n, n)).tocsr()
-    return E, A
+    """Unique edges (e, 2) and the symmetric (n, n) int8 CSR vertex adjacency of a face list.
+
+    Compiled (:func:`._optimisation_kernels.edge_adjacency`): the edges of :func:`sorted_edges`
+    and the canonical CSR arrays of the COO matrix of the pairs (a, b), (b, a).
+    """
+    if not len(F):
+        E = unique_edges(F)
+        A = sp.coo_matrix((np.ones(2 * len(E), np.int8), (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])),
+                          shape=(n, n)).tocsr()
+        return E, A
+    E, indptr, indices = edge_adjacency(np.ascontiguousarray(F, np.int64), int(n))
+    return E, sp.csr_matrix((np.ones(len(indices), np.int8), indices, indptr), shape=(n, n))
 
 
 def _sliver_priority(V, F, E, lengths, n_fixed, sliver_angle, eligible=None):

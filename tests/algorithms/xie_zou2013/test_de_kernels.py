@@ -1,7 +1,8 @@
-"""The compiled DE kernels give bit for bit the numpy expressions they replace."""
+"""The compiled HPDE kernels give bit for bit the numpy / scipy expressions they replace."""
 import numpy as np
 
 from meshlab_holefill.algorithms.xie_zou2013 import _de_kernels as K
+from meshlab_holefill.algorithms.xie_zou2013 import _optimisation_kernels as KO
 from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import reflect_into_bounds
 
 
@@ -249,3 +250,26 @@ def test_umbrella_passes_equal_the_sparse_expression():
     umbrella_passes(got, np.flatnonzero(free).astype(np.int64), Wf.indptr.astype(np.int64),
                     Wf.indices.astype(np.int64), Wf.data, np.array([0.33, -0.41]), 7)
     assert got.tobytes() == ref.tobytes()
+
+
+def test_edge_adjacency_equals_sorted_edges_and_scipy_csr():
+    import importlib
+
+    import pymeshlab
+    import scipy.sparse as sp
+
+    O = importlib.import_module("meshlab_holefill.algorithms.xie_zou2013.optimisation")
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    F = ms.current_mesh().face_matrix().astype(np.int64)
+    F = F[np.random.default_rng(15).permutation(len(F))][: len(F) // 2]  # an irregular open piece
+    n = int(F.max()) + 3  # vertices without faces too
+    E, indptr, indices = KO.edge_adjacency(F, n)
+    E_ref = O.sorted_edges(F, n)
+    A_ref = sp.coo_matrix((np.ones(2 * len(E_ref), np.int8), (np.r_[E_ref[:, 0], E_ref[:, 1]],
+                                                             np.r_[E_ref[:, 1], E_ref[:, 0]])), shape=(n, n)).tocsr()
+    assert np.array_equal(E, E_ref)
+    assert np.array_equal(indptr, A_ref.indptr) and np.array_equal(indices, A_ref.indices)
+    _, A = O.adjacency(F, n)
+    assert (A != A_ref).nnz == 0 and A.dtype == np.int8
+
