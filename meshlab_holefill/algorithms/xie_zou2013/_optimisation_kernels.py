@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["independent_link_edges", "edge_adjacency"]
+__all__ = ["independent_link_edges", "edge_adjacency", "faces_around_edges"]
 
 
 @njit(cache=True)
@@ -91,3 +91,49 @@ def edge_adjacency(F, n):
         indices[fill[b]] = a
         fill[b] += 1
     return E, indptr, indices
+
+
+@njit(cache=True)
+def faces_around_edges(F, n, a, b):
+    """(rows, faces): for each edge r = (a[r], b[r]) the faces holding exactly one of its ends.
+
+    Ordered by r, then face index: the nonzeros of (VF[a] + VF[b]) below 2, VF the (n, m)
+    vertex-face incidence, in scipy's canonical order.
+    """
+    m = F.shape[0]
+    start = np.zeros(n + 1, np.int64)
+    for f in range(m):
+        for c in range(3):
+            start[F[f, c] + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    faces_of = np.empty(3 * m, np.int64)
+    for f in range(m):  # faces ascending within each vertex
+        for c in range(3):
+            faces_of[fill[F[f, c]]] = f
+            fill[F[f, c]] += 1
+    total = 0
+    for r in range(len(a)):
+        total += start[a[r] + 1] - start[a[r]] + start[b[r] + 1] - start[b[r]]
+    rows = np.empty(total, np.int64)
+    faces = np.empty(total, np.int64)
+    out = 0
+    for r in range(len(a)):
+        i, i_end = start[a[r]], start[a[r] + 1]
+        j, j_end = start[b[r]], start[b[r] + 1]
+        while i < i_end or j < j_end:  # merge the two ascending lists, dropping the shared faces
+            if j == j_end or (i < i_end and faces_of[i] < faces_of[j]):
+                f = faces_of[i]
+                i += 1
+            elif i == i_end or faces_of[j] < faces_of[i]:
+                f = faces_of[j]
+                j += 1
+            else:
+                i += 1
+                j += 1
+                continue
+            rows[out] = r
+            faces[out] = f
+            out += 1
+    return rows[:out], faces[:out]

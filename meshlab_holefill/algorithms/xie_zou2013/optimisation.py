@@ -14,7 +14,7 @@ import scipy.sparse as sp
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
 from ...geometry.topology import edge_pair_set, interior_edges
-from ._optimisation_kernels import edge_adjacency, independent_link_edges
+from ._optimisation_kernels import edge_adjacency, faces_around_edges, independent_link_edges
 
 __all__ = ["split_obtuse_edges", "remove_valence_three", "compact_vertices", "sorted_edges", "adjacency",
            "decimate_short_edges",
@@ -227,11 +227,9 @@ def _collapse_targets(V, a, b, n_fixed):
 
 def _turns_faces(V, F, a, b, newpos, n):
     """Collapses that would turn a surrounding face (not one on the edge) by more than 60 degrees."""
-    VF = sp.csr_matrix((np.ones(3 * len(F), np.int8), (F.ravel(), np.repeat(np.arange(len(F)), 3))),
-                       shape=(n, len(F)))
-    around = (VF[a] + VF[b]).tocoo()
-    on_edge = around.data > 1
-    rows, faces = around.row[~on_edge], around.col[~on_edge]
+    # the faces around each edge but not on it (compiled: the nonzeros below 2 of VF[a] + VF[b])
+    rows, faces = faces_around_edges(np.ascontiguousarray(F, np.int64), int(n), np.asarray(a, np.int64),
+                                     np.asarray(b, np.int64))
     corners = V[F[faces]]
     moved = (F[faces] == a[rows, None]) | (F[faces] == b[rows, None])
     new_corners = np.where(moved[..., None], newpos[rows, None, :], corners)

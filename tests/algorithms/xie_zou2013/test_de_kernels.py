@@ -273,3 +273,22 @@ def test_edge_adjacency_equals_sorted_edges_and_scipy_csr():
     _, A = O.adjacency(F, n)
     assert (A != A_ref).nnz == 0 and A.dtype == np.int8
 
+
+
+def test_faces_around_edges_equal_the_incidence_matrix_expression():
+    import pymeshlab
+    import scipy.sparse as sp
+
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=2)
+    F = ms.current_mesh().face_matrix().astype(np.int64)
+    n = int(F.max()) + 1
+    E = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]]]), axis=1), axis=0)
+    pick = np.random.default_rng(16).choice(len(E), 40, replace=False)
+    a, b = E[pick, 0], E[pick, 1]
+    a[:3] = b[3:6]  # edges sharing vertices
+    VF = sp.csr_matrix((np.ones(3 * len(F), np.int8), (F.ravel(), np.repeat(np.arange(len(F)), 3))), shape=(n, len(F)))
+    around = (VF[a] + VF[b]).tocoo()
+    on_edge = around.data > 1
+    rows, faces = KO.faces_around_edges(F, n, a, b)
+    assert np.array_equal(rows, around.row[~on_edge]) and np.array_equal(faces, around.col[~on_edge])
