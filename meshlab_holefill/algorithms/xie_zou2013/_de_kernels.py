@@ -192,12 +192,17 @@ def reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add):
     G = np.empty((B, K, n))
     for b in range(B):
         r = 0
-        for want in (True, False):
-            for i in range(N):
-                if moved[b, i] == want and r < K:
-                    order[b, r] = i
-                    G[b, r, :] = Xr[b, i, :]
-                    r += 1
+        for i in range(N):  # the moved rows, then the others up to K
+            if moved[b, i]:
+                order[b, r] = i
+                r += 1
+        for i in range(N):
+            if r < K and not moved[b, i]:
+                order[b, r] = i
+                r += 1
+        for r in range(K):
+            for j in range(n):
+                G[b, r, j] = Xr[b, order[b, r], j]
     cross, dot = turning_terms(G, seg_x, seg_y_add)
     return Xr, order, counts, cross, dot
 

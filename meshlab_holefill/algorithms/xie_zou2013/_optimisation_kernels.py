@@ -71,8 +71,12 @@ def edge_adjacency(F, n):
         for c in range(3):
             u, w = F[f, c], F[f, (c + 1) % 3]
             keys[3 * f + c] = min(u, w) * np.int64(n) + max(u, w)
-    keys = np.unique(keys)
-    e = len(keys)
+    keys.sort()
+    e = 0
+    for r in range(len(keys)):  # unique, in place
+        if r == 0 or keys[r] != keys[e - 1]:
+            keys[e] = keys[r]
+            e += 1
     E = np.empty((e, 2), np.int64)
     indptr = np.zeros(n + 1, np.int64)
     for r in range(e):
