@@ -39,7 +39,8 @@ def patch_lowest_frequency(F, n, free, adjacency):
     The value of :func:`...geometry.laplacian.lowest_dirichlet_frequency`; patches with more than
     DENSE_SPECTRUM_MAX free vertices take the smallest eigenvalue of the symmetric form
     D^-1/2 (D - A) D^-1/2 by shift-invert Lanczos about 0 instead of the full dense spectrum
-    (equal to ~1e-13 relative; the dense spectrum is the fallback if the sparse solve fails).
+    (equal to ~1e-13 relative; the dense spectrum is the fallback if the sparse solve fails),
+    started from the constant vector so that the value is the same in every run.
     """
     idx = np.flatnonzero(np.asarray(free, bool))
     if len(idx) <= DENSE_SPECTRUM_MAX:
@@ -48,7 +49,9 @@ def patch_lowest_frequency(F, n, free, adjacency):
     scale = sp.diags(1.0 / np.sqrt(deg))
     S = (sp.identity(len(idx)) - scale @ adjacency[idx][:, idx] @ scale).tocsc()
     try:
-        return float(eigsh(S, k=1, sigma=0.0, which="LM", return_eigenvectors=False)[0])
+        # A fixed start (the lowest mode is positive on the free part): without v0 ARPACK starts
+        # from fresh random numbers, and k_1 would change in its last bits from run to run.
+        return float(eigsh(S, k=1, sigma=0.0, which="LM", v0=np.ones(len(idx)), return_eigenvectors=False)[0])
     except (RuntimeError, ArpackNoConvergence):  # singular S (a free part not touching the loop)
         return float(np.linalg.eigvalsh(S.toarray())[0])
 

@@ -292,3 +292,19 @@ def test_faces_around_edges_equal_the_incidence_matrix_expression():
     on_edge = around.data > 1
     rows, faces = KO.faces_around_edges(F, n, a, b)
     assert np.array_equal(rows, around.row[~on_edge]) and np.array_equal(faces, around.col[~on_edge])
+
+
+def test_patch_lowest_frequency_is_the_same_in_every_call():
+    import pymeshlab
+
+    from meshlab_holefill.algorithms.xie_zou2013 import smoothing
+    from meshlab_holefill.geometry.laplacian import adjacency_matrix
+
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=4)
+    V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    A = adjacency_matrix(F, len(V))
+    free = V[:, 2] > 0.3
+    assert free.sum() > smoothing.DENSE_SPECTRUM_MAX  # the sparse solve
+    values = {smoothing.patch_lowest_frequency(F, len(V), free, A).hex() for _ in range(4)}
+    assert len(values) == 1
