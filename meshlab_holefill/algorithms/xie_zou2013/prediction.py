@@ -391,8 +391,7 @@ def predict_points(ctx, base, normals, split, I_c, edge_len, de_options, arc_tan
     info : dict
     """
     P = ctx.points
-    tangent, inward = sections.boundary_frames(base.points, normals)
-    pairs, cinfo = sections.correspondences(base.points, tangent, inward, split, I_c)
+    tangent, inward, pairs, cinfo = sections.base_point_pairs(base, normals, split, I_c)
     info = {"pairs": int(len(pairs)), "skipped_base_points": cinfo["skipped"], "M": 0, "predicted": 0,
             "de_generations": 0, "dropped_pairs": 0}
     empty = (np.zeros((0, 3)), np.zeros((0, 2), np.int64), np.zeros(0), info)

@@ -6,7 +6,7 @@ in the module docstring of :mod:`meshlab_holefill.algorithms.xie_zou2013.differe
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -14,8 +14,8 @@ from ...geometry.quality import mean_edge_length
 
 __all__ = ["BasePoints", "base_points", "ring_edge_length", "base_point_normals", "pca_segmentation",
            "dihedral_angle", "segment_boundary", "boundary_frames", "intersection_angle", "best_start",
-           "pair_chain", "correspondences", "pairing_coverage", "section_normals", "border_third_vertices",
-           "ring_intersections"]
+           "pair_chain", "correspondences", "base_point_pairs", "pairing_coverage", "section_normals",
+           "border_third_vertices", "ring_intersections"]
 
 # Dihedral comparisons (Sec. 4.2) allow this rounding slack, so that the cube of Fig. 15(b),
 # whose two faces meet at exactly A_c = pi/2, is segmented as the paper reports.
@@ -38,6 +38,8 @@ class BasePoints:
     edge: np.ndarray
     t: np.ndarray
     perimeter: float
+    # pairings already found for these base points (:func:`base_point_pairs`)
+    _pairings: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __len__(self):
         return len(self.points)
@@ -365,10 +367,26 @@ def correspondences(BP, tangent, inward, segmentation=None, I_c=np.pi / 15):
     return pairs, {"start": sp, "skipped": skipped}
 
 
+def base_point_pairs(base, normals, split, I_c):
+    """(tangent, inward, pairs, info): :func:`boundary_frames` and :func:`correspondences` of the base points.
+
+    Found once per (split, I_c) for the same ``normals`` and kept on ``base``: the layout
+    order (:func:`pairing_coverage`, both pairings) and the prediction of each attempt ask
+    for the same pairs. The arrays are shared: read them, do not write them.
+    """
+    key = (None if split is None else tuple(int(x) for x in split), float(I_c))
+    hit = base._pairings.get(key)
+    if hit is not None and hit[0] is normals:
+        return hit[1]
+    tangent, inward = boundary_frames(base.points, normals)
+    pairs, info = correspondences(base.points, tangent, inward, split, I_c)
+    base._pairings[key] = (normals, (tangent, inward, pairs, info))
+    return tangent, inward, pairs, info
+
+
 def pairing_coverage(base, normals, split, I_c):
     """Share of the base points that the correspondences of Sec. 4.3 keep in a pair."""
-    tangent, inward = boundary_frames(base.points, normals)
-    pairs, _ = correspondences(base.points, tangent, inward, split, I_c)
+    pairs = base_point_pairs(base, normals, split, I_c)[2]
     return 2.0 * len(pairs) / max(len(base), 1)
 
 

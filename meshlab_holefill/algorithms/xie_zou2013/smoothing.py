@@ -51,7 +51,8 @@ def patch_lowest_frequency(F, n, free, adjacency):
     try:
         # A fixed start (the lowest mode is positive on the free part): without v0 ARPACK starts
         # from fresh random numbers, and k_1 would change in its last bits from run to run.
-        return float(eigsh(S, k=1, sigma=0.0, which="LM", v0=np.ones(len(idx)), return_eigenvectors=False)[0])
+        start = np.ones(len(idx))
+        return float(eigsh(S, k=1, sigma=0.0, which="LM", v0=start, return_eigenvectors=False)[0])
     except (RuntimeError, ArpackNoConvergence):  # singular S (a free part not touching the loop)
         return float(np.linalg.eigvalsh(S.toarray())[0])
 

@@ -1217,3 +1217,17 @@ def test_retriangulation_rounds_give_triangulate_polygons_faces():
         triangulate_polygon(bow_tie)
     with pytest.raises(HoleFillError, match="constrained triangulation|not simple"):
         hpde_mesh._retriangulation(bow_tie, np.zeros((0, 2)))
+
+
+def test_base_point_pairs_are_found_once_per_pairing(cube_edge_hole):
+    _, _, _, ctx = cube_edge_hole
+    base = hpde_sections.base_points(ctx.points, hpde_sections.ring_edge_length(ctx))
+    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
+    seg = hpde_sections.segment_boundary(base, normals, np.pi / 2)
+    for split in (seg["split"], None):
+        got = hpde_sections.base_point_pairs(base, normals, split, np.radians(12))
+        tangent, inward = hpde_sections.boundary_frames(base.points, normals)
+        pairs, info = hpde_sections.correspondences(base.points, tangent, inward, split, np.radians(12))
+        assert np.array_equal(got[2], pairs) and got[3] == info and np.array_equal(got[0], tangent)
+        assert hpde_sections.base_point_pairs(base, normals, split, np.radians(12))[2] is got[2]
+    assert hpde_sections.base_point_pairs(base, normals.copy(), None, np.radians(12))[2] is not got[2]
