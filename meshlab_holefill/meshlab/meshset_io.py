@@ -119,7 +119,7 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
     target = arrays.mesh_id
     record = filter_record(ms)
     visible = bool(ms.is_mesh_visible(target))
-    with tempfile.TemporaryDirectory(prefix="holefill-") as tmp:
+    with _scratch_folder() as tmp:
         source = _layer_source(tmp, V2, F2, vertex_attrs, face_attrs, wedge)
         ms.set_current_mesh(target)
         ms.delete_current_mesh()
@@ -129,13 +129,25 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
             _restore_filter_record(ms, record)
 
 
+@contextlib.contextmanager
+def _scratch_folder():
+    """A temporary folder for the layer file, removed afterwards; None where none can be made."""
+    try:
+        folder = tempfile.TemporaryDirectory(prefix="holefill-", ignore_cleanup_errors=True)
+    except OSError:  # no usable temporary folder
+        yield None
+        return
+    with folder as path:
+        yield path
+
+
 def _layer_source(folder, V, F, vertex_attrs, face_attrs, wedge):
     """What the filled layer is built from: a PLY file in ``folder`` (its path), else the arrays themselves.
 
-    The arrays, when a face repeats a vertex: pymeshlab's PLY reader drops such faces, which
-    ``pymeshlab.Mesh`` keeps (and the originals must stay as they are).
+    The arrays when there is no folder, and when a face repeats a vertex: pymeshlab's PLY reader
+    drops such faces, which ``pymeshlab.Mesh`` keeps (and the originals must stay as they are).
     """
-    if has_repeated_corners(F):
+    if folder is None or has_repeated_corners(F):
         return (V, F, vertex_attrs, face_attrs, wedge)
     path = os.path.join(folder, "filled.ply")
     try:

@@ -421,7 +421,29 @@ def test_a_filled_layer_that_cannot_be_written_to_a_file_is_built_from_arrays(bu
 
     monkeypatch.setattr(meshset_io, "write_layer_ply", disk_full)
     getattr(bunny_scan, NAME)()
-    a, b = reference.current_mesh(), bunny_scan.current_mesh()
+    _same_layer(reference.current_mesh(), bunny_scan.current_mesh())
+
+
+def test_a_filled_layer_without_a_temporary_folder_is_built_from_arrays(bunny_scan, monkeypatch, tmp_path):
+    import tempfile
+
+    m = bunny_scan.current_mesh()  # no textures: re-attaching those needs a temporary folder too
+    plain = [pymeshlab.MeshSet() for _ in range(2)]
+    for ms in plain:
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=m.vertex_matrix(), face_matrix=m.face_matrix()), "plain")
+    getattr(plain[0], NAME)()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "missing"))
+    with pytest.raises(FileNotFoundError):
+        tempfile.TemporaryDirectory()
+    getattr(plain[1], NAME)()
+    a, b = plain[0].current_mesh(), plain[1].current_mesh()
+    for getter in ("vertex_matrix", "face_matrix", "vertex_color_matrix", "face_selection_array",
+                   "vertex_normal_matrix"):
+        assert np.array_equal(getattr(a, getter)(), getattr(b, getter)()), getter
+    assert b.label() == "plain"
+
+
+def _same_layer(a, b):
     for getter in ("vertex_matrix", "face_matrix", "face_color_matrix", "wedge_tex_coord_matrix",
                    "face_selection_array", "vertex_normal_matrix"):
         assert np.array_equal(getattr(a, getter)(), getattr(b, getter)()), getter
