@@ -204,15 +204,14 @@ def clip_ears(ctx, Q, keep, ears, bad_vertices):
 
 
 def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangential=False, density="surrounding",
-                     record=None):
+                     record=None, bad=None):
     """Repair (beyond the paper, option ``repair``): a patch that crosses nothing, best quality first.
 
     ``domains`` are planar polygons of the loop, the unfolding used first (its patch given as
     ``vertices``, ``faces``), then the loop's simple developments (:func:`..geometry.development.simple_developments`).
     When the first patch crosses the surrounding mesh, the patches of the other domains are
     tried as they are, least relaxed first, and the one of best minimum quality that crosses
-    nothing is taken (the first reaching RESAMPLE_TOLERANCE = 0.1  # density 'surrounding': a patch whose mean edge is within 10 % of the surroundings' is kept
-GOOD_QUALITY = 0.3 ends the search):
+    nothing is taken (the first reaching quality GOOD_QUALITY = 0.3 ends the search):
     the triangulation near a folded border face depends on the domain, and a domain whose
     patch clears the fold needs no clipped ear (an ear at a wide corner is a sliver;
     measured on bunny10k_textured's 22-edge hole: ear 0.116, the 0.2-relaxed development's
@@ -226,6 +225,7 @@ GOOD_QUALITY = 0.3 ends the search):
     domains : list of ((k, 2) float64, str, float or None)  polygon, unfolding name, development blend
     vertices, faces : the patch of the first domain
     energy, refinement, tangential, density, record : see :func:`triangulate_and_embed`
+    bad : (h,) int64, optional  :func:`crossing_faces` of the first patch, when already known
 
     Returns
     -------
@@ -236,7 +236,8 @@ GOOD_QUALITY = 0.3 ends the search):
     relax : float or None  its development blend
     """
     m = ctx.size
-    bad = crossing_faces(ctx, vertices, faces)
+    if bad is None:
+        bad = crossing_faces(ctx, vertices, faces)
     if len(bad) == 0:
         return 0, vertices, faces, 0, domains[0][1], domains[0][2]
     patches = [(vertices, faces, bad)]
@@ -349,6 +350,23 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
     return best[1], best[2], best[3]
 
 
+def domain_area_ratios(P, gap_angles, domains):
+    """Area of each planar domain, scaled to the loop's perimeter, over the missing surface's (beyond the paper).
+
+    Parameters as :func:`domains_within_area`.
+
+    Returns
+    -------
+    list of float  (0 for every domain of a loop whose development has no area: nothing to compare with)
+    """
+    reference = developed_area(P, gap_angles)
+    if not reference > 0.0:
+        return [0.0] * len(domains)
+    perimeter = polygon_perimeter(P)
+    return [abs(polygon_signed_area(D)) * (perimeter / polygon_perimeter(D)) ** 2 / reference
+            for D, _, _ in domains]
+
+
 def domains_within_area(P, gap_angles, domains, max_ratio):
     """The planar domains whose area is at most ``max_ratio`` times the missing surface's (beyond the paper).
 
@@ -377,12 +395,7 @@ def domains_within_area(P, gap_angles, domains, max_ratio):
     HoleFillError
         when no domain is small enough.
     """
-    reference = developed_area(P, gap_angles)
-    if not reference > 0.0:  # a loop with no area at all: nothing to compare with
-        return list(domains)
-    perimeter = polygon_perimeter(P)
-    ratios = [abs(polygon_signed_area(D)) * (perimeter / polygon_perimeter(D)) ** 2 / reference
-              for D, _, _ in domains]
+    ratios = domain_area_ratios(P, gap_angles, domains)
     kept = [d for d, r in zip(domains, ratios) if r <= max_ratio]
     if not kept:
         raise HoleFillError(
@@ -390,6 +403,71 @@ def domains_within_area(P, gap_angles, domains, max_ratio):
             f"missing surface (max_domain_area = {max_ratio:g}): a strip-shaped hole whose patch would bulge "
             f"out of the surface")
     return kept
+
+
+class _PlanarDomains:
+    """The planar domains of one hole, each computed when first needed.
+
+    Developing the loop and testing a development for simplicity cost O(m^2) each (the exact
+    clearance of every pair of segments), and the annealing's first projection is simple on
+    most holes, whose patches then cross nothing: the fallback polygon is only developed when
+    the first annealing run fails, the repair's developments only when the first patch crosses
+    the mesh (the same polygons and the same choices as when all were developed up front).
+
+    Parameters
+    ----------
+    P : (m, 3) float64  loop
+    gaps : (m,) float64 or None  gap angles of the surrounding surface (None for a triangle)
+    epsilon : float  relative clearance, as :func:`fill`'s
+    developments : bool  the repair may try the loop's developments
+    max_domain_area : float  as :func:`fill`'s (0: no bound)
+    """
+
+    def __init__(self, P, gaps, epsilon, developments, max_domain_area):
+        self.P, self.gaps, self.epsilon = P, gaps, epsilon
+        self.developments, self.max_domain_area = developments, max_domain_area
+        self.relax = None  # blend of the fallback development, once developed (None: none simple)
+        self._fallback = self._all = None
+
+    def fallback(self):
+        """The development offered to :func:`.unfolding.unfold_loop`: the least relaxed simple one, else the plain one."""
+        if self._fallback is None:
+            m = len(self.P)
+            h = polygon_perimeter(self.P) / m
+            self._fallback, self.relax = simple_development(self.P, self.gaps, self.epsilon * h)
+            if self._fallback is None:  # offered anyway: unfold_loop then names it in its failure
+                self._fallback = develop_loop(self.P, self.gaps)
+        return self._fallback
+
+    def _bounded(self):
+        return self.max_domain_area > 0 and self.gaps is not None
+
+    def first(self, Q, method):
+        """[the unfolding's domain] if it is within the area bound, else every domain within it (:meth:`all`)."""
+        first = [(Q, method, self.relax if method == "development" else None)]
+        if not self._bounded() or domain_area_ratios(self.P, self.gaps, first)[0] <= self.max_domain_area:
+            return first
+        return self.all(Q, method)
+
+    def all(self, Q, method):
+        """The unfolding's domain, then the loop's other simple developments, those within the area bound.
+
+        Raises
+        ------
+        HoleFillError
+            when none is within the area bound (:func:`domains_within_area`).
+        """
+        if self._all is None:
+            domains = [(Q, method, self.relax if method == "development" else None)]
+            if self.developments:
+                m = len(self.P)
+                eps_abs = self.epsilon * polygon_perimeter(self.P) / m
+                domains += [(D, "development", r) for D, r in simple_developments(self.P, self.gaps, eps_abs)
+                            if not (method == "development" and r == self.relax)]
+            if self._bounded():
+                domains = domains_within_area(self.P, self.gaps, domains, self.max_domain_area)
+            self._all = domains
+        return self._all
 
 
 def _edge_ratio(ctx, vertices, faces):
@@ -447,8 +525,8 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         ``vertices`` (p, 3) float64 and ``faces`` (q, 3) int64 in loop-local indices (i < k:
         loop vertex i). ``info``: ``unfolding`` ('annealing' or 'development'), ``restarts``, ``sa_steps``,
         ``energy_pe_start`` / ``energy_pe_end`` (E_PE before / after annealing),
-        ``development_relax`` (blend of the development used or offered, see
-        :func:`simple_development`), ``ears_clipped``, ``edge_swaps``, ``crossing_faces`` (left
+        ``development_relax`` (blend of the development used, or offered to the annealing
+        after its first run failed, see :func:`simple_development`; None when none was developed), ``ears_clipped``, ``edge_swaps``, ``crossing_faces`` (left
         after repair; the filter rejects such a patch),
         ``unfolding_seconds`` (Sec. 3.1), ``embedding_seconds`` (Sec. 3.2-3.3: triangulation,
         refinement and energy solve, as the paper's embedding times), ``repair_seconds`` and
@@ -483,24 +561,14 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     if energy == "area" and area_rows == "interior":
         energy = "area_interior"  # the embedding's name for E_AREA summed over P_Int only
     t0 = time.perf_counter()
-    development = relax = None
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m) if m > 3 else None
-    if fallback and m > 3:
-        h = polygon_perimeter(P) / m
-        development, relax = simple_development(P, gaps, epsilon * h)
-        if development is None:  # offered anyway: unfold_loop then names it in its failure
-            development = develop_loop(P, gaps)
+    planar_domains = _PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
     Q, unfold_info = unfold_loop(P, rng, k=k, temperature=temperature, epsilon=epsilon,
                                  max_restarts=max_restarts, sa_steps=sa_steps, step_bound=step_bound,
-                                 fallback=development)
+                                 fallback=planar_domains.fallback if fallback and m > 3 else None)
     method = unfold_info["method"]
-    domains = [(Q, method, relax if method == "development" else None)]
-    if repair and development is not None:
-        eps_abs = epsilon * polygon_perimeter(P) / m
-        domains += [(D, "development", r) for D, r in simple_developments(P, gaps, eps_abs)
-                    if not (method == "development" and r == relax)]
-    if max_domain_area > 0 and gaps is not None:
-        domains = domains_within_area(P, gaps, domains, max_domain_area)
+    relax = planar_domains.relax
+    domains = planar_domains.first(Q, method)
     Q, method, used = domains[0]
     if method == "development":
         relax = used
@@ -511,8 +579,11 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     t2 = time.perf_counter()
     n_bad, clipped = 0, 0
     if repair:
+        bad = crossing_faces(ctx, vertices, faces)
+        if len(bad):  # the other domains are only built for a patch that crosses the mesh
+            domains = planar_domains.all(Q, method)
         n_bad, vertices, faces, clipped, method, used = repair_crossings(
-            ctx, domains, vertices, faces, energy, refinement, tangential, density, records)
+            ctx, domains, vertices, faces, energy, refinement, tangential, density, records, bad=bad)
         if method == "development":
             relax = used
     n_swaps = 0

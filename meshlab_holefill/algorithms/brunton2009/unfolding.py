@@ -393,7 +393,9 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
         Clearance threshold relative to the loop's mean edge length.
     max_restarts : int
         Maximum number of annealing runs (paper: 100).
-    fallback : (m, 2) float64, optional
+    fallback : (m, 2) float64 or callable, optional
+        The fallback polygon, or a function returning it, called only when the first run fails
+        (developing a loop costs O(m^2)).
 
     Returns
     -------
@@ -435,9 +437,11 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
         Q, _, _ = project_to_best_plane(annealed)
         if linear_motion_is_simple(Q, eps):
             return Q, info
-        if run == 0 and fallback is not None and linear_motion_is_simple(fallback, eps):
-            info["method"] = "development"
-            return np.asarray(fallback, np.float64), info
+        if run == 0 and fallback is not None:
+            polygon = np.asarray(fallback() if callable(fallback) else fallback, np.float64)
+            if linear_motion_is_simple(polygon, eps):
+                info["method"] = "development"
+                return polygon, info
     if m == 3:
         raise HoleFillError("boundary loop is a degenerate (zero-area) triangle")
     raise HoleFillError(f"curve unfolding failed: no annealing run out of {runs} gave a loop whose projection "
