@@ -45,6 +45,8 @@ from ...geometry.flips import relax_edges
 from ...geometry.intersections import faces_intersecting
 from ...geometry.quality import edge_lengths, triangle_quality
 from ...geometry.topology import edge_pair_set
+from ...core import examples
+from ...core.holes import hole_context
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
@@ -53,9 +55,9 @@ from .slivers import repair_slivers
 from .unfolded_triangulation import DENSITIES, resample_patch, surrounding_edge_length, triangulate_and_embed
 from ...geometry.development import boundary_gap_angles, develop_loop, developed_area, simple_development, simple_developments
 from ...geometry.triangulate import polygon_perimeter, polygon_signed_area
-from .unfolding import linear_motion_is_simple, unfold_loop
+from .unfolding import anneal_loop, linear_motion_is_simple, unfold_loop
 
-__all__ = ["fill", "PARAMS", "RINGS", "crossing_faces", "clip_ears", "repair_crossings", "improve_by_swaps",
+__all__ = ["fill", "PARAMS", "RINGS", "WARM_UP", "warm_up", "crossing_faces", "clip_ears", "repair_crossings", "improve_by_swaps",
            "domains_within_area"]
 
 RINGS = 2
@@ -632,3 +634,29 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         "sliver_seconds": t6 - t5,
     }
     return Patch(vertices=vertices, faces=faces, info=info)
+
+
+_WARM = []  # set once the compiled kernels are loaded in this process
+
+
+def warm_up():
+    """Load the compiled kernels a fill calls now: a small hole filled, a small loop annealed.
+
+    The kernels (the annealing's moves, the segment distances, the triangle intersection tests)
+    are compiled on first use and cached on disk; loading them takes a few tenths of a second
+    per process. Called before holes are filled in forked worker processes, it lets the workers
+    inherit them instead of each loading them within its first hole's time.
+    """
+    if _WARM:
+        return
+    V, F, loop = examples.bowl_with_hole()
+    fill(hole_context(V, F, loop, rings=RINGS))
+    t = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t), 0.3 * np.cos(2.0 * t)], axis=1)
+    for step_bound in ("global", "local"):
+        anneal_loop(ring, np.random.default_rng(0), eps=1e-6, sa_steps=24, step_bound=step_bound,
+                    stop_when_simple=False)
+    _WARM.append(True)
+
+
+WARM_UP = warm_up  # loads the compiled kernels before holes are filled in forked workers

@@ -62,12 +62,14 @@ from ...geometry.pca import fit_plane, plane_frame
 from ...geometry.quality import cross_rows
 from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
 from ...errors import HoleFillError
+from ._anneal_kernels import apply_moves, propose_moves
 
 __all__ = ["triple_normals", "planarity_terms", "planarity_energy", "colour_classes", "anneal_loop",
            "project_to_best_plane", "linear_motion_is_simple", "unfold_loop"]
 
 TEMPERATURE_FLOOR = 1e-3  # a run ends when k T < TEMPERATURE_FLOOR * T_start
 CONE_DEGREES = 10.0  # Sec. 3.1: next direction within 10 degrees of the previous one
+TAN_CONE = float(np.tan(np.radians(CONE_DEGREES)))  # the cone's tilt factor, as _cone_directions computes it
 NEAR_EDGES = 4.0  # exact segment distances within this many mean edge lengths, lower bounds beyond
 
 
@@ -137,7 +139,7 @@ def _cone_directions(prev, G, r):
 
 
 def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bound="global",
-                stop_when_simple=True, on_move=None):
+                stop_when_simple=True, on_move=None, compiled=True):
     """One simulated-annealing run lowering E_PE subject to d_MD > eps (Sec. 3.1).
 
     A move displaces one vertex; the moves of a colour class (:func:`colour_classes`) are
@@ -166,7 +168,11 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
     stop_when_simple : bool
         End the run at the first temperature stage whose loop projects to a simple polygon.
     on_move : callable, optional
-        Called as ``on_move(P)`` with the new loop after every accepted batch of moves (tests).
+        Called as ``on_move(P)`` with the new loop after every accepted batch of moves (tests;
+        runs the numpy steps).
+    compiled : bool
+        Make each colour class's moves by the compiled kernels (:mod:`._anneal_kernels`, the same
+        loop to the last bit); False runs the numpy steps (the reference).
 
     Returns
     -------
@@ -208,6 +214,11 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
             if len(J) == 0:
                 break
             steps += len(J)
+            if compiled and on_move is None:
+                acc, d_md = _compiled_class(P, N, T, D, J, rng, improving, last_dir, d_md, mask, near, eps, kT,
+                                            step_bound)
+                accepted += int(acc.sum())
+                continue
             q, U = _propose_moves(P, J, rng, improving, last_dir, D, d_md, eps, step_bound)
             jm = (J - 1) % m
             n_a, n_b, n_c, t0, t1, t2, t3, dE = _energy_change(P, N, T, J, q)
@@ -231,6 +242,32 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
         kT *= k
     return P, {"steps": steps, "accepted": accepted, "stages": stages, "energy_start": energy_start,
                "energy_end": planarity_energy(P), "d_md": min_segment_distance(P), "simple": simple}
+
+
+def _compiled_class(P, N, T, D, J, rng, improving, last_dir, d_md, mask, near, eps, kT, step_bound):
+    """One colour class's moves by the compiled kernels, the loop state (P, N, T, D) updated in place.
+
+    The same random numbers in the same order as :func:`_propose_moves`, the same arithmetic
+    (:mod:`._anneal_kernels`); arctan2 and exp stay numpy's, whose vectorised implementations
+    differ from the C library's in the last bit.
+
+    Returns
+    -------
+    acc : (b,) bool  the moves kept
+    d_md : float  the clearance afterwards
+    """
+    m = len(P)
+    G = rng.standard_normal((len(J), 3))
+    U = rng.random((len(J), 3))
+    q, normals, y, x = propose_moves(P, N, D, J, G, U, last_dir, improving, d_md, eps, step_bound == "local",
+                                     TAN_CONE)
+    angles = np.arctan2(y, x)
+    dE = (angles[0] + angles[1] + angles[2] + angles[3]) - (T[(J - 3) % m] + T[(J - 2) % m] + T[(J - 1) % m] + T[J])
+    with np.errstate(over="ignore"):
+        acc = (dE <= 0.0) | (U[:, 2] < np.exp(-dE / kT))
+    acc, new_d_md = apply_moves(P, N, T, D, J, q, normals, angles, acc, mask, near, eps)
+    improving[J] = acc & (dE < 0.0)
+    return acc, (d_md if new_d_md < 0.0 else float(new_d_md))
 
 
 def _propose_moves(P, J, rng, improving, last_dir, D, d_md, eps, step_bound):

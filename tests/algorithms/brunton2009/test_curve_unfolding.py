@@ -153,6 +153,33 @@ def test_annealing_keeps_the_loop_simple_throughout(bunny_loops):
     assert stats["d_md"] > eps
 
 
+@pytest.mark.parametrize("step_bound", ["global", "local"])
+def test_compiled_annealing_moves_equal_the_numpy_steps(bunny_loops, step_bound):
+    # The kernels of _anneal_kernels against the numpy steps they replace: the same loop to the
+    # last bit, the same statistics and the same generator state afterwards (restarts continue
+    # from it), on wrapped, knotted and scanned loops, with uphill moves and cone directions.
+    V, _, loops = bunny_loops
+    for P in (wrapped_rectangle(), trefoil(), V[loops[0].vertices], V[loops[1].vertices]):
+        eps = 1e-5 * mean_edge(P)
+        runs = []
+        for compiled in (True, False):
+            rng = np.random.default_rng(5)
+            A, stats = anneal_loop(P, rng, eps=eps, sa_steps=30 * len(P), step_bound=step_bound,
+                                   stop_when_simple=False, compiled=compiled)
+            runs.append((A, stats, rng.random()))
+        (A, stats, after), (B, reference, after_reference) = runs
+        assert np.array_equal(A, B)
+        assert stats == reference and after == after_reference
+        assert stats["accepted"] > 0
+
+
+def test_warm_up_loads_the_annealing_kernels():
+    from meshlab_holefill.algorithms.brunton2009 import _anneal_kernels as K
+    cu.WARM_UP()
+    for name in ("propose_moves", "apply_moves"):
+        assert len(getattr(K, name).signatures) >= 1, name
+
+
 def test_linear_motion_to_the_projection_is_checked_exactly(bunny_loops):
     V, _, loops = bunny_loops
     P = V[loops[0].vertices]
