@@ -5,6 +5,7 @@ import numpy as np
 import pymeshlab
 import pytest
 import scipy.optimize
+import scipy.sparse.linalg
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -328,6 +329,19 @@ def test_embedding_solves_its_energy(energy, order):
                                   options={"maxiter": 20000, "gtol": 1e-12, "ftol": 1e-15})
     assert res.fun >= energy_value - 1e-12
     assert np.abs(res.x.reshape(-1, 3) - interior).max() < 1e-3
+
+
+@pytest.mark.parametrize("energy", ["area", "fairing"])
+def test_symmetric_mode_lu_moves_the_patch_by_rounding_only(energy, monkeypatch):
+    # SuperLU's symmetric mode (minimum degree on A + A^T, diagonal pivots preferred) against its
+    # default (COLAMD, partial pivoting), for the energy solve and the tangential relaxation.
+    from meshlab_holefill.algorithms.brunton2009 import embedding
+    ctx, points, Fp = sphere_cap_domain()
+    s = len(points) - ctx.size
+    fast = embed_patch(ctx, s, Fp, energy=energy, tangential=True)
+    monkeypatch.setattr(embedding, "symmetric_lu", lambda A: scipy.sparse.linalg.splu(A.tocsc()))
+    reference = embed_patch(ctx, s, Fp, energy=energy, tangential=True)
+    assert np.abs(fast - reference).max() < 1e-12 * np.abs(reference).max()
 
 
 def test_least_squares_mesh_rows_follow_the_surrounding_slope():
