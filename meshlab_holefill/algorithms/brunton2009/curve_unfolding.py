@@ -37,6 +37,7 @@ splits and collapses (:func:`.slivers.repair_slivers`).
 """
 from __future__ import annotations
 
+import hashlib
 import time
 
 import numpy as np
@@ -286,8 +287,37 @@ def _quality_improving(V, F, A, B, replaced):
     return new > old + 1e-9
 
 
+class _CrossingCounts:
+    """``len(crossing_faces(ctx, vertices, faces))``, remembered per patch (by content) for one hole.
+
+    The filter's later steps count the same patch more than once (the swaps' best round, the
+    resampling's check, the sliver repair's input): one count each, the same numbers.
+    """
+
+    def __init__(self, ctx):
+        self.ctx = ctx
+        self._counts = {}
+
+    @staticmethod
+    def _key(vertices, faces):
+        digest = hashlib.sha1()
+        for a in (np.asarray(vertices, np.float64), np.asarray(faces, np.int64)):
+            digest.update(repr(a.shape).encode())
+            digest.update(np.ascontiguousarray(a).tobytes())
+        return digest.digest()
+
+    def remember(self, vertices, faces, count):
+        self._counts[self._key(vertices, faces)] = int(count)
+
+    def __call__(self, vertices, faces):
+        key = self._key(vertices, faces)
+        if key not in self._counts:
+            self._counts[key] = len(crossing_faces(self.ctx, vertices, faces))
+        return self._counts[key]
+
+
 def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, crossings=None, tangential=False,
-                     resolve=True):
+                     resolve=True, count_crossings=None):
     """Quality-improving edge swaps followed by a new energy solve (beyond the paper, option ``swaps``).
 
     Sec. 3.3 places the interior vertices by a uniform-Laplacian energy on the connectivity
@@ -315,6 +345,9 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
         are (a patch sampled from the energy's shape on a finer refinement, density
         'surrounding': a new solve on the coarser connectivity would change the shape) and only
         relaxes them tangentially on the new connectivity if ``tangential``.
+    count_crossings : callable, optional
+        ``(vertices, faces) -> int``, the patch's faces crossing the mesh (default: the length of
+        :func:`crossing_faces`; the filter passes one that remembers the patches it counted).
 
     Returns
     -------
@@ -345,9 +378,11 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
         sc = score(X, F)
         if sc <= best[0]:
             continue
+        if count_crossings is None:
+            count_crossings = _CrossingCounts(ctx)
         if crossings is None:
-            crossings = len(crossing_faces(ctx, vertices, faces))
-        if len(crossing_faces(ctx, interior, F)) <= crossings:
+            crossings = count_crossings(vertices, faces)
+        if count_crossings(interior, F) <= crossings:
             best = (sc, interior, F, total)
     return best[1], best[2], best[3]
 
@@ -588,31 +623,34 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
             ctx, domains, vertices, faces, energy, refinement, tangential, density, records, bad=bad)
         if method == "development":
             relax = used
+    counts = _CrossingCounts(ctx)
+    if repair:
+        counts.remember(vertices, faces, n_bad)
     n_swaps = 0
     t3 = time.perf_counter()
     planar = next((r for r in records if r.faces.shape == faces.shape and np.array_equal(r.faces, faces)), None)
     if swaps:
         vertices, faces, n_swaps = improve_by_swaps(ctx, vertices, faces, energy,
                                                     crossings=int(n_bad) if repair else None,
-                                                    tangential=tangential)
+                                                    tangential=tangential, count_crossings=counts)
     t4 = time.perf_counter()
     resampled = False
     if (refinement and density == "surrounding" and planar is not None and len(vertices)
             and abs(_edge_ratio(ctx, vertices, faces) - 1.0) > RESAMPLE_TOLERANCE):
         def finish(V, F):
-            return improve_by_swaps(ctx, V, F, energy, tangential=tangential, resolve=False)[:2]
+            return improve_by_swaps(ctx, V, F, energy, tangential=tangential, resolve=False,
+                                    count_crossings=counts)[:2]
 
         resampled_patch = resample_patch(ctx, planar, vertices, tangential=tangential,
                                          finish=finish if swaps else None)
         # The sampled patch lies on the shape; it is kept unless it crosses more of the mesh.
-        if len(crossing_faces(ctx, *resampled_patch)) <= n_bad:
+        if counts(*resampled_patch) <= n_bad:
             vertices, faces = resampled_patch
             resampled = True
     t5 = time.perf_counter()
     sliver_rounds = 0
     if slivers:
-        vertices, faces, sliver_rounds = repair_slivers(ctx, vertices, faces,
-                                                        lambda V, F: len(crossing_faces(ctx, V, F)))
+        vertices, faces, sliver_rounds = repair_slivers(ctx, vertices, faces, counts)
     t6 = time.perf_counter()
     info = {
         "unfolding": method,
