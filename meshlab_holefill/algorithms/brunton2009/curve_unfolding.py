@@ -89,6 +89,13 @@ PARAMS = [
               "independent vertices move together); 'local' = the clearance of the moved segments instead of "
               "d_MD (same no-crossing guarantee, larger steps).",
               choices=("global", "local")),
+    ParamSpec("lengths", "enum", "loop",
+              "Edge lengths of the unfolded polygon (Sec. 3.1 read as an unfolding that keeps the loop's edge "
+              "lengths): 'loop' = the accepted projection's edge directions walked with the loop's own edge "
+              "lengths, closed by the smallest relative change (the projection where that polygon is not "
+              "simple); 'projection' = the projection as it is, its edges shortened by their tilt from the "
+              "best plane (scaled to the loop's perimeter as a whole in Sec. 3.3).",
+              choices=("loop", "projection")),
     ParamSpec("energy", "enum", "area",
               "Energy of the interior vertices (Sec. 3.3): 'area' = least-squares mesh E_AREA (the energy of the "
               "paper's Table 1 run), 'fairing' = discrete fairing E_DF.",
@@ -521,7 +528,7 @@ def _corner_angle(P, keep, v):
 
 def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000, step_bound="global",
          energy="area", refinement=True, fallback=True, repair=True, swaps=True, tangential=True, seed=0,
-         area_rows="mesh", max_domain_area=6.0, density="surrounding", slivers=True):
+         area_rows="mesh", max_domain_area=6.0, density="surrounding", slivers=True, lengths="loop"):
     """Fill one hole by unfolding, triangulation and embedding (Sec. 3.1-3.3).
 
     The loop is unfolded into a simple planar polygon (:func:`.unfolding.unfold_loop`, Sec.
@@ -541,6 +548,8 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         Annealing runs before giving up, and moves per run.
     step_bound : {'global', 'local'}
         Bound of a move's length.
+    lengths : {'loop', 'projection'}
+        Edge lengths of the unfolded polygon (:func:`.unfolding.with_loop_lengths`).
     energy : {'area', 'fairing'}
         E_AREA or E_DF (Sec. 3.3); ``area_rows`` ({'mesh', 'interior'}) chooses E_AREA's rows.
     refinement : bool
@@ -602,7 +611,8 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     planar_domains = _PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
     Q, unfold_info = unfold_loop(P, rng, k=k, temperature=temperature, epsilon=epsilon,
                                  max_restarts=max_restarts, sa_steps=sa_steps, step_bound=step_bound,
-                                 fallback=planar_domains.fallback if fallback and m > 3 else None)
+                                 fallback=planar_domains.fallback if fallback and m > 3 else None,
+                                 lengths=lengths)
     method = unfold_info["method"]
     relax = planar_domains.relax
     domains = planar_domains.first(Q, method)
@@ -655,6 +665,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     info = {
         "unfolding": method,
         "restarts": unfold_info["restarts"],
+        "loop_lengths": unfold_info.get("loop_lengths", False),
         "sa_steps": unfold_info["sa_steps"],
         "energy_pe_start": unfold_info.get("energy_pe_start", 0.0),
         "energy_pe_end": unfold_info.get("energy_pe_end", 0.0),

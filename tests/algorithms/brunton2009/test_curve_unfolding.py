@@ -196,6 +196,33 @@ def test_linear_motion_to_the_projection_is_checked_exactly(bunny_loops):
     assert not linear_motion_is_simple(project_to_best_plane(W)[0], 1e-9)
 
 
+def folded_circle(n=48, fold_degrees=90.0):
+    """A unit circle drawn on a sheet folded along the x axis: the flank v > 0 turned up by ``fold_degrees``."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    x, v = np.cos(t), np.sin(t)
+    a = np.radians(fold_degrees)
+    up = v > 0
+    return np.c_[x, np.where(up, v * np.cos(a), v), np.where(up, v * np.sin(a), 0.0)]
+
+
+def test_unfolded_polygon_keeps_the_loop_edge_lengths_the_projection_shortens():
+    # Around a crease the best plane tilts away from both flanks and the projection shortens
+    # the edges; the unfolding read as a linkage's keeps them: the sheet's own (flat) circle.
+    P = folded_circle()
+    loop_edges = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    Q, info = unfold_loop(P, np.random.default_rng(0))
+    R, reference = unfold_loop(P, np.random.default_rng(0), lengths="projection")
+    assert info["loop_lengths"] and not reference["loop_lengths"]
+    planar = lambda X: np.linalg.norm(np.roll(X, -1, axis=0) - X, axis=1)
+    assert np.abs(planar(Q) / loop_edges - 1).max() < 0.02
+    assert np.abs(planar(R) / loop_edges - 1).max() > 0.2
+    flat = 0.5 * 48 * np.sin(2 * np.pi / 48)  # the flat circle's area (regular polygon of 48 sides)
+    assert abs(abs(polygon_signed_area(Q)) / flat - 1) < 0.05 < abs(abs(polygon_signed_area(R)) / flat - 1)
+    # the directions are the projection's: each edge turned by less than a degree
+    cos = np.einsum("ij,ij->i", np.roll(Q, -1, axis=0) - Q, np.roll(R, -1, axis=0) - R) / (planar(Q) * planar(R))
+    assert np.degrees(np.arccos(np.clip(cos, -1, 1))).max() < 1.0
+
+
 def test_annealing_unfolds_a_wrapped_loop_and_is_reproducible():
     W = wrapped_rectangle()
     Q, info = unfold_loop(W, np.random.default_rng(0))
@@ -565,9 +592,11 @@ def test_tangential_relaxation_lifts_the_triangles_fairing_squeezes_on_scan_hole
     assert outline_ratios(V, F, [loops[i]])[0] < 0.9  # a hole, not an island's outline
     ctx = hole_context(V, F, loops[i], rings=cu.RINGS)
     bound = corner_quality_bound(V, F, loops[i].vertices)
-    # The step on the energy's own patch (no resampling to the surrounding density, no sliver repair).
-    faired = cu.fill(ctx, tangential=False, energy="fairing", density="equilateral", slivers=False)
-    relaxed = cu.fill(ctx, energy="fairing", density="equilateral", slivers=False)
+    # The step on the energy's own patch (no resampling to the surrounding density, no sliver repair),
+    # on the projection's domain (the loop-length domain happens not to squeeze these holes).
+    options = dict(energy="fairing", density="equilateral", slivers=False, lengths="projection")
+    faired = cu.fill(ctx, tangential=False, **options)
+    relaxed = cu.fill(ctx, **options)
     q0 = triangle_quality(faired.all_points(ctx.points), faired.faces)
     q1 = triangle_quality(relaxed.all_points(ctx.points), relaxed.faces)
     # E_DF alone squeezes a triangle below 0.3 although no border corner forces it.
