@@ -22,6 +22,7 @@ from meshlab_holefill.geometry.segments import min_segment_distance, segment_dis
 from meshlab_holefill.geometry.triangulate import polygon_signed_area
 from meshlab_holefill.core.holes import boundary_loops, hole_context, nonmanifold_edges, outline_ratios
 from meshlab_holefill.evaluation.metrics import corner_quality_bound
+from meshlab_holefill.core import examples
 from meshlab_holefill.core.patch import validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
@@ -221,6 +222,29 @@ def test_unfolded_polygon_keeps_the_loop_edge_lengths_the_projection_shortens():
     # the directions are the projection's: each edge turned by less than a degree
     cos = np.einsum("ij,ij->i", np.roll(Q, -1, axis=0) - Q, np.roll(R, -1, axis=0) - R) / (planar(Q) * planar(R))
     assert np.degrees(np.arccos(np.clip(cos, -1, 1))).max() < 1.0
+
+
+def test_loop_lengths_and_the_development_bring_a_patch_across_a_crease_closer():
+    # A round hole across the fold of a sheet bent by 90 degrees: mean distance of the patch's
+    # vertices to the two half-planes, projection > loop lengths (default) > development (option).
+    V, F = grid(25, 25)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0.0)], 0.3)
+    up = V[:, 1] > 0.5
+    V = np.c_[V[:, 0], np.where(up, 0.5, V[:, 1]), np.where(up, V[:, 1] - 0.5, 0.0)]
+    ctx = hole_context(V, F, min(boundary_loops(F), key=len), rings=cu.RINGS)
+
+    def off_sheet(X):
+        y, z = X[:, 1] - 0.5, X[:, 2]
+        corner = np.hypot(y, z)
+        return np.minimum(np.where(y <= 0, np.abs(z), corner), np.where(z >= 0, np.abs(y), corner)).mean()
+
+    patches = {name: cu.fill(ctx, **options) for name, options in
+               [("projection", {"lengths": "projection"}), ("loop", {}), ("development", {"domain": "development"})]}
+    for patch in patches.values():
+        assert examples.is_disc_patch(patch, ctx)
+    assert patches["loop"].info["loop_lengths"] and patches["development"].info["unfolding"] == "development"
+    d = {name: off_sheet(patch.vertices) for name, patch in patches.items()}
+    assert d["development"] < d["loop"] < 0.6 * d["projection"]
 
 
 def test_annealing_unfolds_a_wrapped_loop_and_is_reproducible():
