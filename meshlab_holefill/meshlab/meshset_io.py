@@ -99,26 +99,62 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
         every copy; normals computed by pymeshlab on loading survive, a file's own or a
         filter's do not). Every other layer is then left untouched.
 
-    Memory: the old layer goes first, then the filled mesh exists twice (the new
-    ``pymeshlab.Mesh`` and the MeshSet's copy) as before; the other layers are held twice
-    while they are copied (a MeshSet of one layer costs what it did). Should building the new mesh fail, the old
-    layer is put back from ``arrays`` before the error propagates.
+    The filled layer is loaded from a binary PLY file written here (:func:`write_layer_ply`),
+    which gives the layer ``pymeshlab.Mesh(...)`` and ``add_mesh`` would give, bit for bit
+    (positions, faces, colours, quality, texture coordinates, and the normals pymeshlab
+    computes), at about half the cost: ``pymeshlab.Mesh`` builds the mesh and then copies it
+    inside its constructor, and ``add_mesh`` copies it again, while loading builds it once,
+    in its layer. At 3.6M faces that is 1.45 s instead of 2.4 s (process time) and a peak of
+    370 MB instead of 836 MB above the arrays. The file is written to the temporary folder
+    before the old layer is touched and removed once the layer is in place; where it cannot
+    be written (no temporary folder, disk full) the layer is built with ``pymeshlab.Mesh``.
+    One trace of the file stays: a project saved later (``ms.save_project``) names it as the
+    layer's file, where a layer built from arrays names none.
+
+    Memory: the file is written in blocks of rows; the old layer goes before the filled one
+    is loaded; the other layers are held twice while they are copied (a MeshSet of one layer
+    costs what it did). Should loading the filled mesh fail, the old layer is put back from
+    ``arrays`` before the error propagates.
     """
     target = arrays.mesh_id
     record = filter_record(ms)
     visible = bool(ms.is_mesh_visible(target))
-    ms.set_current_mesh(target)
-    ms.delete_current_mesh()
-    try:
+    with _scratch_folder() as tmp:
+        source = _layer_source(tmp, V2, F2, vertex_attrs, face_attrs, wedge)
+        ms.set_current_mesh(target)
+        ms.delete_current_mesh()
         try:
-            mesh = _new_mesh(V2, F2, vertex_attrs, face_attrs, wedge)
-        except BaseException:
-            original = _new_mesh(arrays.V, arrays.F, arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords)
-            _put_layer(ms, arrays, original, arrays.face_attrs, None, visible)
-            raise
-        return _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible)
-    finally:
-        _restore_filter_record(ms, record)
+            return _put_layer(ms, arrays, source, face_attrs, select_faces, visible)
+        finally:
+            _restore_filter_record(ms, record)
+
+
+@contextlib.contextmanager
+def _scratch_folder():
+    """A temporary folder for the layer file, removed afterwards; None where none can be made."""
+    try:
+        folder = tempfile.TemporaryDirectory(prefix="holefill-", ignore_cleanup_errors=True)
+    except OSError:  # no usable temporary folder
+        yield None
+        return
+    with folder as path:
+        yield path
+
+
+def _layer_source(folder, V, F, vertex_attrs, face_attrs, wedge):
+    """What the filled layer is built from: a PLY file in ``folder`` (its path), else the arrays themselves.
+
+    The arrays when there is no folder, and when a face repeats a vertex: pymeshlab's PLY reader
+    drops such faces, which ``pymeshlab.Mesh`` keeps (and the originals must stay as they are).
+    """
+    if folder is None or has_repeated_corners(F):
+        return (V, F, vertex_attrs, face_attrs, wedge)
+    path = os.path.join(folder, "filled.ply")
+    try:
+        write_layer_ply(path, V, F, vertex_attrs, face_attrs, wedge)
+    except OSError:  # no space, or no temporary folder: pymeshlab.Mesh builds the layer instead
+        return (V, F, vertex_attrs, face_attrs, wedge)
+    return path
 
 
 def layer_kept_note(ms):
@@ -165,9 +201,9 @@ def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
     target = arrays.mesh_id
     note = layer_kept_note(ms)
     if note:
-        new_id = _add_layer(ms, arrays, mesh, face_attrs, select_faces)
-        if not visible:
-            ms.set_current_mesh_visibility(False)
+        new_id, error = _add_filled_layer(ms, arrays, mesh, face_attrs, select_faces, visible)
+        if error is not None:
+            raise error
         return new_id, note
     scratch = pymeshlab.MeshSet()
     kept = {}  # id -> (position in scratch, label, visible, transform, textures)
@@ -180,19 +216,18 @@ def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
             note = (f"layer {i} ('{m.label()}') has per-vertex normals that pymeshlab's copy would recompute, so "
                     "the MeshSet could not be rebuilt with the filled layer in its place: it got a new id and was "
                     "put last")
-            new_id = _add_layer(ms, arrays, mesh, face_attrs, select_faces)
-            if not visible:
-                ms.set_current_mesh_visibility(False)
+            new_id, error = _add_filled_layer(ms, arrays, mesh, face_attrs, select_faces, visible)
+            if error is not None:
+                raise error
             return new_id, note
         kept[i] = (position, m.label(), bool(ms.is_mesh_visible(i)), np.array(m.transform_matrix(), np.float64),
                    dict(m.textures()))
     counter = max(_next_mesh_id(ms), target + 1)
     ms.clear()  # resets the id counter to 0
+    error = None
     for i in range(counter):
         if i == target:
-            _add_layer(ms, arrays, mesh, face_attrs, select_faces)
-            if not visible:
-                ms.set_current_mesh_visibility(False)
+            _, error = _add_filled_layer(ms, arrays, mesh, face_attrs, select_faces, visible)
         elif i in kept:
             position, label, shown, transform, textures = kept[i]
             ms.add_mesh(scratch.mesh(position), label, set_as_current=True)
@@ -209,7 +244,30 @@ def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
         if (i in kept or i == target) and ms.current_mesh_id() != i:
             raise RuntimeError(f"layer {i} came back as id {ms.current_mesh_id()}")  # pymeshlab changed its ids
     ms.set_current_mesh(target)
+    if error is not None:
+        raise error
     return target, None
+
+
+def _add_filled_layer(ms, arrays, source, face_attrs, select_faces, visible):
+    """(layer id, None) once the filled layer is added; (id, error) when it could not be, the old layer added instead.
+
+    The MeshSet is then whole again (the old layer rebuilt from ``arrays`` in the filled one's
+    place) when the caller raises the error.
+    """
+    layers = ms.mesh_number()
+    try:
+        new_id = _add_layer(ms, arrays, source, face_attrs, select_faces)
+        error = None
+    except BaseException as exc:  # e.g. out of memory while loading: the user keeps the mesh they had
+        error = exc
+        if ms.mesh_number() > layers:  # the layer went in and a later step failed
+            ms.delete_current_mesh()
+        original = (arrays.V, arrays.F, arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords)
+        new_id = _add_layer(ms, arrays, original, arrays.face_attrs, None)
+    if not visible:
+        ms.set_current_mesh_visibility(False)
+    return new_id, error
 
 
 def filter_record(ms):
@@ -277,6 +335,113 @@ def _new_mesh(V, F, vertex_attrs, face_attrs, wedge):
     return pymeshlab.Mesh(**kwargs)
 
 
+PLY_BLOCK_ROWS = 1 << 18  # rows of a PLY element written at once: the file's copy of the mesh never exists whole
+
+
+def _vertex_fields(vertex_attrs):
+    """(PLY header lines, numpy fields) of the vertex element.
+
+    Colour and quality are always written (white and 0 when the layer has none): a mesh built
+    by ``pymeshlab.Mesh`` always has them, with those values, and the loaded layer must be the same.
+    """
+    lines, fields = [], []
+    for axis in "xyz":
+        lines.append(f"property double {axis}")
+        fields.append((axis, "<f8"))
+    for channel in ("red", "green", "blue", "alpha"):
+        lines.append(f"property uchar {channel}")
+        fields.append((channel, "u1"))
+    lines.append("property double quality")
+    fields.append(("quality", "<f8"))
+    if "texcoord" in vertex_attrs:
+        lines += ["property float texture_u", "property float texture_v"]
+        fields += [("texture_u", "<f4"), ("texture_v", "<f4")]
+    return lines, fields
+
+
+def _face_fields(face_attrs, wedge):
+    """(PLY header lines, numpy fields) of the face element (colour, quality, wedge texture coordinates when present)."""
+    lines, fields = ["property list uchar int vertex_indices"], [("corners", "u1"), ("vertex_indices", "<i4", 3)]
+    if "color" in face_attrs:
+        for channel in ("red", "green", "blue", "alpha"):
+            lines.append(f"property uchar {channel}")
+            fields.append((channel, "u1"))
+    if "quality" in face_attrs:
+        lines.append("property double quality")
+        fields.append(("quality", "<f8"))
+    if wedge is not None:
+        lines += ["property list uchar float texcoord", "property int texnumber"]
+        fields += [("texcoords", "u1"), ("texcoord", "<f4", 6), ("texnumber", "<i4")]
+    return lines, fields
+
+
+def _color_bytes(colors):
+    """Colours in [0, 1] as the bytes pymeshlab.Mesh stores: clipped, times 255, truncated."""
+    return (_unit_range(colors) * 255.0).astype(np.uint8)
+
+
+def _vertex_block(fields, V, vertex_attrs, rows):
+    block = np.empty(rows.stop - rows.start, dtype=fields)
+    for k, axis in enumerate("xyz"):
+        block[axis] = V[rows, k]
+    colors = _color_bytes(vertex_attrs["color"][rows]) if "color" in vertex_attrs else np.full((len(block), 4), 255)
+    for k, channel in enumerate(("red", "green", "blue", "alpha")):
+        block[channel] = colors[:, k]
+    block["quality"] = vertex_attrs["quality"][rows].ravel() if "quality" in vertex_attrs else 0.0
+    if "texcoord" in vertex_attrs:
+        block["texture_u"], block["texture_v"] = vertex_attrs["texcoord"][rows].T
+    return block
+
+
+def _face_block(fields, F, face_attrs, wedge, rows):
+    block = np.empty(rows.stop - rows.start, dtype=fields)
+    block["corners"] = 3
+    block["vertex_indices"] = F[rows]
+    if "color" in face_attrs:
+        colors = _color_bytes(face_attrs["color"][rows])
+        for k, channel in enumerate(("red", "green", "blue", "alpha")):
+            block[channel] = colors[:, k]
+    if "quality" in face_attrs:
+        block["quality"] = face_attrs["quality"][rows].ravel()
+    if wedge is not None:
+        block["texcoords"] = 6
+        block["texcoord"] = wedge[3 * rows.start:3 * rows.stop].reshape(-1, 6)
+        block["texnumber"] = 0  # the one texture index pymeshlab.Mesh gives wedge coordinates
+    return block
+
+
+def write_layer_ply(path, V, F, vertex_attrs, face_attrs, wedge):
+    """Write a mesh and its attributes as a binary PLY that ``load_new_mesh`` reads into the layer
+    ``pymeshlab.Mesh(...)`` + ``add_mesh`` would build from the same arrays (see :func:`_new_mesh`).
+
+    Doubles stay doubles (positions, quality); colours are the bytes pymeshlab.Mesh makes of
+    them; texture coordinates are single precision as pymeshlab stores them. Written in blocks
+    of PLY_BLOCK_ROWS rows.
+    """
+    vertex_lines, vertex_fields = _vertex_fields(vertex_attrs)
+    face_lines, face_fields = _face_fields(face_attrs, wedge)
+    header = (["ply", "format binary_little_endian 1.0", f"element vertex {len(V)}"] + vertex_lines
+              + [f"element face {len(F)}"] + face_lines + ["end_header"])
+    with open(path, "wb") as fh:
+        fh.write(("\n".join(header) + "\n").encode("ascii"))
+        for start in range(0, len(V), PLY_BLOCK_ROWS):
+            _vertex_block(vertex_fields, V, vertex_attrs, slice(start, min(start + PLY_BLOCK_ROWS, len(V)))).tofile(fh)
+        for start in range(0, len(F), PLY_BLOCK_ROWS):
+            _face_block(face_fields, F, face_attrs, wedge, slice(start, min(start + PLY_BLOCK_ROWS, len(F)))).tofile(fh)
+
+
+def has_repeated_corners(F):
+    """Does a face of F name one vertex twice?"""
+    F = np.asarray(F)
+    return bool(len(F)) and bool(np.any((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])))
+
+
+def load_layer_file(ms, path, label):
+    """Load a file :func:`write_layer_ply` wrote as the new current layer of ``ms``, named ``label``."""
+    ms.load_new_mesh(path)
+    ms.current_mesh().set_label(label)
+
+
 def _unit_range(colors):
     """Colours clipped to [0, 1] as pymeshlab requires; the array itself (no copy) when they already are."""
     colors = np.asarray(colors, np.float64)
@@ -285,9 +450,19 @@ def _unit_range(colors):
     return np.clip(colors, 0.0, 1.0)
 
 
-def _add_layer(ms, arrays, mesh, face_attrs, select_faces=None):
-    """Add ``mesh`` as the current layer with the old layer's name, textures, matrix and selections."""
-    ms.add_mesh(mesh, arrays.label, set_as_current=True)
+def _add_layer(ms, arrays, source, face_attrs, select_faces=None):
+    """Add a layer with the old layer's name, textures, matrix and selections, from ``source``.
+
+    ``source``: a pymeshlab.Mesh, the path of a file :func:`write_layer_ply` wrote, or
+    (V, F, vertex_attrs, face_attrs, wedge) arrays for :func:`_new_mesh`.
+    """
+    if isinstance(source, str):
+        load_layer_file(ms, source, arrays.label)
+    else:
+        mesh = source if isinstance(source, pymeshlab.Mesh) else _new_mesh(*source)
+        ms.add_mesh(mesh, arrays.label, set_as_current=True)
+        del mesh
+    mesh = ms.current_mesh()
     _restore_textures(ms, arrays.textures)
     if not np.array_equal(arrays.transform, np.eye(4)):
         # the layer's placement in the scene (V is in the layer's own frame)

@@ -379,29 +379,72 @@ def test_pymeshlab_print_filter_parameter_list_knows_our_filters(capfd):
     assert "maxholesize" in builtin and "sigma_c" not in builtin
 
 
-def test_a_failure_building_the_filled_layer_puts_the_old_one_back(bunny_scan, monkeypatch):
+def test_a_failure_loading_the_filled_layer_puts_the_old_one_back(bunny_scan, monkeypatch):
     from meshlab_holefill.meshlab import meshset_io
 
     bunny_scan.compute_selection_by_condition_per_face(condselect="fi < 50")
     m0 = bunny_scan.current_mesh()
     before = (m0.vertex_matrix().copy(), m0.face_matrix().copy(), m0.face_color_matrix().copy(),
               m0.wedge_tex_coord_matrix().copy(), m0.face_selection_array().copy())
+    built = []
     build = meshset_io._new_mesh
-    calls = []
 
-    def out_of_memory_once(*args):
-        calls.append(len(args[1]))
-        if len(calls) == 1:
-            raise MemoryError("simulated")
+    def out_of_memory(*args):
+        raise MemoryError("simulated")
+
+    def recording_build(*args):
+        built.append(len(args[1]))
         return build(*args)
 
-    monkeypatch.setattr(meshset_io, "_new_mesh", out_of_memory_once)
+    monkeypatch.setattr(meshset_io, "load_layer_file", out_of_memory)
+    monkeypatch.setattr(meshset_io, "_new_mesh", recording_build)
     with pytest.raises(MemoryError, match="simulated"):
         getattr(bunny_scan, NAME)()
-    assert calls[0] > calls[1] == 9999  # the filled mesh was refused, the old layer rebuilt
+    assert built == [9999]  # the filled mesh was refused, the old layer rebuilt from its arrays
     m1 = bunny_scan.current_mesh()
     after = (m1.vertex_matrix(), m1.face_matrix(), m1.face_color_matrix(), m1.wedge_tex_coord_matrix(),
              m1.face_selection_array())
     for a, b in zip(before, after):
         assert np.array_equal(a, b)
     assert bunny_scan.mesh_number() == 1 and m1.label() == "bunny10k_textured.obj" and m1.texture_number() == 1
+
+
+def test_a_filled_layer_that_cannot_be_written_to_a_file_is_built_from_arrays(bunny_scan, monkeypatch):
+    from meshlab_holefill.meshlab import meshset_io
+
+    reference = pymeshlab.MeshSet()
+    reference.add_mesh(bunny_scan.current_mesh(), "bunny10k_textured.obj")
+    getattr(reference, NAME)()
+
+    def disk_full(*args):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(meshset_io, "write_layer_ply", disk_full)
+    getattr(bunny_scan, NAME)()
+    _same_layer(reference.current_mesh(), bunny_scan.current_mesh())
+
+
+def test_a_filled_layer_without_a_temporary_folder_is_built_from_arrays(bunny_scan, monkeypatch, tmp_path):
+    import tempfile
+
+    m = bunny_scan.current_mesh()  # no textures: re-attaching those needs a temporary folder too
+    plain = [pymeshlab.MeshSet() for _ in range(2)]
+    for ms in plain:
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=m.vertex_matrix(), face_matrix=m.face_matrix()), "plain")
+    getattr(plain[0], NAME)()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "missing"))
+    with pytest.raises(FileNotFoundError):
+        tempfile.TemporaryDirectory()
+    getattr(plain[1], NAME)()
+    a, b = plain[0].current_mesh(), plain[1].current_mesh()
+    for getter in ("vertex_matrix", "face_matrix", "vertex_color_matrix", "face_selection_array",
+                   "vertex_normal_matrix"):
+        assert np.array_equal(getattr(a, getter)(), getattr(b, getter)()), getter
+    assert b.label() == "plain"
+
+
+def _same_layer(a, b):
+    for getter in ("vertex_matrix", "face_matrix", "face_color_matrix", "wedge_tex_coord_matrix",
+                   "face_selection_array", "vertex_normal_matrix"):
+        assert np.array_equal(getattr(a, getter)(), getattr(b, getter)()), getter
+    assert b.label() == "bunny10k_textured.obj" and b.texture_number() == 1
