@@ -33,6 +33,18 @@ Readings of what Sec. 3.1 leaves open:
   runs.
 * **Restart.** A run without a simple projection restarts from the original loop with the
   next random numbers of the same generator (one seed fixes the whole sequence).
+* **Lengths.** An unfolding in the sense of linkages (Sec. 3.1 "unfold the loop ... by
+  gradually moving the vertices", "a planar curve with similar curvature as the boundary loop")
+  keeps the edge lengths, but the projection to the best plane shortens every edge by the cosine
+  of its tilt: by up to 30 % on a loop around a crease, whose two flanks tilt away from the best
+  plane on either side. The accepted projection's edge directions are kept and the loop's own
+  edge lengths walked along them, closed by the smallest relative change of the lengths
+  (:func:`with_loop_lengths`, ``lengths='loop'``, the default); the projection itself when that
+  polygon is not simple. Measured on the benchmark's 45 cut holes (mean patch-to-ground-truth
+  distance per mille of the diagonal, projection -> loop lengths): crease 4.92 -> 4.00, crossing
+  0.73 -> 0.46, real-size 1.35 -> 1.31, large 1.89 -> 1.93, medium 1.68 -> 1.64, small 0.155 ->
+  0.153, all holes 2.34 -> 1.98 (``lengths='projection'`` keeps the projection, scaled to the
+  loop's perimeter in Sec. 3.3 as before).
 * **Units.** epsilon is relative to the loop's mean edge length (the paper's 1e-5 is in model
   units), which makes the method scale invariant.
 
@@ -58,16 +70,19 @@ import math
 
 import numpy as np
 
+from ...geometry.development import close_lengths
 from ...geometry.pca import fit_plane, plane_frame
 from ...geometry.quality import cross_rows
 from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
 from ...errors import HoleFillError
+from ._anneal_kernels import apply_moves, propose_moves
 
 __all__ = ["triple_normals", "planarity_terms", "planarity_energy", "colour_classes", "anneal_loop",
-           "project_to_best_plane", "linear_motion_is_simple", "unfold_loop"]
+           "project_to_best_plane", "linear_motion_is_simple", "with_loop_lengths", "unfold_loop"]
 
 TEMPERATURE_FLOOR = 1e-3  # a run ends when k T < TEMPERATURE_FLOOR * T_start
 CONE_DEGREES = 10.0  # Sec. 3.1: next direction within 10 degrees of the previous one
+TAN_CONE = float(np.tan(np.radians(CONE_DEGREES)))  # the cone's tilt factor, as _cone_directions computes it
 NEAR_EDGES = 4.0  # exact segment distances within this many mean edge lengths, lower bounds beyond
 
 
@@ -137,7 +152,7 @@ def _cone_directions(prev, G, r):
 
 
 def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bound="global",
-                stop_when_simple=True, on_move=None):
+                stop_when_simple=True, on_move=None, compiled=True):
     """One simulated-annealing run lowering E_PE subject to d_MD > eps (Sec. 3.1).
 
     A move displaces one vertex; the moves of a colour class (:func:`colour_classes`) are
@@ -166,7 +181,11 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
     stop_when_simple : bool
         End the run at the first temperature stage whose loop projects to a simple polygon.
     on_move : callable, optional
-        Called as ``on_move(P)`` with the new loop after every accepted batch of moves (tests).
+        Called as ``on_move(P)`` with the new loop after every accepted batch of moves (tests;
+        runs the numpy steps).
+    compiled : bool
+        Make each colour class's moves by the compiled kernels (:mod:`._anneal_kernels`, the same
+        loop to the last bit); False runs the numpy steps (the reference).
 
     Returns
     -------
@@ -208,6 +227,11 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
             if len(J) == 0:
                 break
             steps += len(J)
+            if compiled and on_move is None:
+                acc, d_md = _compiled_class(P, N, T, D, J, rng, improving, last_dir, d_md, mask, near, eps, kT,
+                                            step_bound)
+                accepted += int(acc.sum())
+                continue
             q, U = _propose_moves(P, J, rng, improving, last_dir, D, d_md, eps, step_bound)
             jm = (J - 1) % m
             n_a, n_b, n_c, t0, t1, t2, t3, dE = _energy_change(P, N, T, J, q)
@@ -231,6 +255,32 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
         kT *= k
     return P, {"steps": steps, "accepted": accepted, "stages": stages, "energy_start": energy_start,
                "energy_end": planarity_energy(P), "d_md": min_segment_distance(P), "simple": simple}
+
+
+def _compiled_class(P, N, T, D, J, rng, improving, last_dir, d_md, mask, near, eps, kT, step_bound):
+    """One colour class's moves by the compiled kernels, the loop state (P, N, T, D) updated in place.
+
+    The same random numbers in the same order as :func:`_propose_moves`, the same arithmetic
+    (:mod:`._anneal_kernels`); arctan2 and exp stay numpy's, whose vectorised implementations
+    differ from the C library's in the last bit.
+
+    Returns
+    -------
+    acc : (b,) bool  the moves kept
+    d_md : float  the clearance afterwards
+    """
+    m = len(P)
+    G = rng.standard_normal((len(J), 3))
+    U = rng.random((len(J), 3))
+    q, normals, y, x = propose_moves(P, N, D, J, G, U, last_dir, improving, d_md, eps, step_bound == "local",
+                                     TAN_CONE)
+    angles = np.arctan2(y, x)
+    dE = (angles[0] + angles[1] + angles[2] + angles[3]) - (T[(J - 3) % m] + T[(J - 2) % m] + T[(J - 1) % m] + T[J])
+    with np.errstate(over="ignore"):
+        acc = (dE <= 0.0) | (U[:, 2] < np.exp(-dE / kT))
+    acc, new_d_md = apply_moves(P, N, T, D, J, q, normals, angles, acc, mask, near, eps)
+    improving[J] = acc & (dE < 0.0)
+    return acc, (d_md if new_d_md < 0.0 else float(new_d_md))
 
 
 def _propose_moves(P, J, rng, improving, last_dir, D, d_md, eps, step_bound):
@@ -372,8 +422,39 @@ def linear_motion_is_simple(Q, eps, near=None):
     return is_simple_polygon(Q, eps, near)
 
 
+def with_loop_lengths(Q, P, eps):
+    """The unfolded polygon with the loop's edge lengths: the projection's edge directions, the loop's lengths.
+
+    Reading of Sec. 3.1 (module docstring, **Lengths**): edge i keeps the direction it has in
+    the projection Q and gets the length of loop edge i; the polygon is closed by the smallest
+    relative change of those lengths (:func:`..geometry.development.close_lengths`, no edge
+    shorter than 2 % of its length), the first vertex staying where it is.
+
+    Parameters
+    ----------
+    Q : (m, 2) float64  simple projected polygon
+    P : (m, 3) float64  the loop
+    eps : float  absolute clearance the polygon must keep (d_MD > eps)
+
+    Returns
+    -------
+    (m, 2) float64 or None  None when the polygon is not simple (or Q has a zero-length edge)
+    """
+    Q = np.asarray(Q, np.float64)
+    edges = np.roll(Q, -1, axis=0) - Q
+    planar = np.linalg.norm(edges, axis=1)
+    if not np.all(planar > 0.0):
+        return None
+    directions = edges / planar[:, None]
+    lengths = close_lengths(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1), directions)
+    R = Q[0] + np.concatenate([[[0.0, 0.0]], np.cumsum(lengths[:, None] * directions, axis=0)[:-1]])
+    if not np.all(np.isfinite(R)) or not linear_motion_is_simple(R, eps):
+        return None
+    return R
+
+
 def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000,
-                step_bound="global", fallback=None):
+                step_bound="global", fallback=None, lengths="loop"):
     """Unfold a boundary loop into a simple planar polygon (Sec. 3.1).
 
     Anneal (:func:`anneal_loop`), project to the best-fitting plane
@@ -393,7 +474,12 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
         Clearance threshold relative to the loop's mean edge length.
     max_restarts : int
         Maximum number of annealing runs (paper: 100).
-    fallback : (m, 2) float64, optional
+    fallback : (m, 2) float64 or callable, optional
+        The fallback polygon, or a function returning it, called only when the first run fails
+        (developing a loop costs O(m^2)).
+    lengths : {'loop', 'projection'}
+        Edge lengths of the accepted projection: 'loop' = the loop's own (:func:`with_loop_lengths`,
+        the projection where that polygon is not simple), 'projection' = as projected.
 
     Returns
     -------
@@ -402,7 +488,8 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
     info : dict
         ``method`` ('annealing' or 'development'), ``restarts`` (annealing runs - 1),
         ``sa_steps`` (moves over all runs), ``accepted_steps``, ``energy_pe_start``,
-        ``energy_pe_end`` (E_PE before and after the last run), ``d_md_start``.
+        ``energy_pe_end`` (E_PE before and after the last run), ``d_md_start``, ``loop_lengths``
+        (the annealed projection got the loop's edge lengths).
 
     Raises
     ------
@@ -424,7 +511,8 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
     if d_md <= eps:
         raise HoleFillError(f"boundary loop touches itself (d_MD = {d_md:.3g} <= epsilon = {eps:.3g}); "
                             "curve unfolding needs a simple loop")
-    info = {"method": "annealing", "restarts": 0, "sa_steps": 0, "accepted_steps": 0, "d_md_start": d_md}
+    info = {"method": "annealing", "restarts": 0, "sa_steps": 0, "accepted_steps": 0, "d_md_start": d_md,
+            "loop_lengths": False}
     runs = max(int(max_restarts), 1)
     for run in range(runs):
         annealed, stats = anneal_loop(P, rng, k=k, temperature=temperature, eps=eps,
@@ -434,10 +522,14 @@ def unfold_loop(P, rng, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, 
                     energy_pe_start=stats["energy_start"], energy_pe_end=stats["energy_end"])
         Q, _, _ = project_to_best_plane(annealed)
         if linear_motion_is_simple(Q, eps):
-            return Q, info
-        if run == 0 and fallback is not None and linear_motion_is_simple(fallback, eps):
-            info["method"] = "development"
-            return np.asarray(fallback, np.float64), info
+            R = with_loop_lengths(Q, P, eps) if lengths == "loop" else None
+            info["loop_lengths"] = R is not None
+            return (Q if R is None else R), info
+        if run == 0 and fallback is not None:
+            polygon = np.asarray(fallback() if callable(fallback) else fallback, np.float64)
+            if linear_motion_is_simple(polygon, eps):
+                info["method"] = "development"
+                return polygon, info
     if m == 3:
         raise HoleFillError("boundary loop is a degenerate (zero-area) triangle")
     raise HoleFillError(f"curve unfolding failed: no annealing run out of {runs} gave a loop whose projection "

@@ -5,6 +5,7 @@ import numpy as np
 import pymeshlab
 import pytest
 import scipy.optimize
+import scipy.sparse.linalg
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -21,6 +22,7 @@ from meshlab_holefill.geometry.segments import min_segment_distance, segment_dis
 from meshlab_holefill.geometry.triangulate import polygon_signed_area
 from meshlab_holefill.core.holes import boundary_loops, hole_context, nonmanifold_edges, outline_ratios
 from meshlab_holefill.evaluation.metrics import corner_quality_bound
+from meshlab_holefill.core import examples
 from meshlab_holefill.core.patch import validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
@@ -153,6 +155,33 @@ def test_annealing_keeps_the_loop_simple_throughout(bunny_loops):
     assert stats["d_md"] > eps
 
 
+@pytest.mark.parametrize("step_bound", ["global", "local"])
+def test_compiled_annealing_moves_equal_the_numpy_steps(bunny_loops, step_bound):
+    # The kernels of _anneal_kernels against the numpy steps they replace: the same loop to the
+    # last bit, the same statistics and the same generator state afterwards (restarts continue
+    # from it), on wrapped, knotted and scanned loops, with uphill moves and cone directions.
+    V, _, loops = bunny_loops
+    for P in (wrapped_rectangle(), trefoil(), V[loops[0].vertices], V[loops[1].vertices]):
+        eps = 1e-5 * mean_edge(P)
+        runs = []
+        for compiled in (True, False):
+            rng = np.random.default_rng(5)
+            A, stats = anneal_loop(P, rng, eps=eps, sa_steps=30 * len(P), step_bound=step_bound,
+                                   stop_when_simple=False, compiled=compiled)
+            runs.append((A, stats, rng.random()))
+        (A, stats, after), (B, reference, after_reference) = runs
+        assert np.array_equal(A, B)
+        assert stats == reference and after == after_reference
+        assert stats["accepted"] > 0
+
+
+def test_warm_up_loads_the_annealing_kernels():
+    from meshlab_holefill.algorithms.brunton2009 import _anneal_kernels as K
+    cu.WARM_UP()
+    for name in ("propose_moves", "apply_moves"):
+        assert len(getattr(K, name).signatures) >= 1, name
+
+
 def test_linear_motion_to_the_projection_is_checked_exactly(bunny_loops):
     V, _, loops = bunny_loops
     P = V[loops[0].vertices]
@@ -166,6 +195,56 @@ def test_linear_motion_to_the_projection_is_checked_exactly(bunny_loops):
     # A loop wrapped around a cylinder collides with itself on the way to its projection.
     W = wrapped_rectangle()
     assert not linear_motion_is_simple(project_to_best_plane(W)[0], 1e-9)
+
+
+def folded_circle(n=48, fold_degrees=90.0):
+    """A unit circle drawn on a sheet folded along the x axis: the flank v > 0 turned up by ``fold_degrees``."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    x, v = np.cos(t), np.sin(t)
+    a = np.radians(fold_degrees)
+    up = v > 0
+    return np.c_[x, np.where(up, v * np.cos(a), v), np.where(up, v * np.sin(a), 0.0)]
+
+
+def test_unfolded_polygon_keeps_the_loop_edge_lengths_the_projection_shortens():
+    # Around a crease the best plane tilts away from both flanks and the projection shortens
+    # the edges; the unfolding read as a linkage's keeps them: the sheet's own (flat) circle.
+    P = folded_circle()
+    loop_edges = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    Q, info = unfold_loop(P, np.random.default_rng(0))
+    R, reference = unfold_loop(P, np.random.default_rng(0), lengths="projection")
+    assert info["loop_lengths"] and not reference["loop_lengths"]
+    planar = lambda X: np.linalg.norm(np.roll(X, -1, axis=0) - X, axis=1)
+    assert np.abs(planar(Q) / loop_edges - 1).max() < 0.02
+    assert np.abs(planar(R) / loop_edges - 1).max() > 0.2
+    flat = 0.5 * 48 * np.sin(2 * np.pi / 48)  # the flat circle's area (regular polygon of 48 sides)
+    assert abs(abs(polygon_signed_area(Q)) / flat - 1) < 0.05 < abs(abs(polygon_signed_area(R)) / flat - 1)
+    # the directions are the projection's: each edge turned by less than a degree
+    cos = np.einsum("ij,ij->i", np.roll(Q, -1, axis=0) - Q, np.roll(R, -1, axis=0) - R) / (planar(Q) * planar(R))
+    assert np.degrees(np.arccos(np.clip(cos, -1, 1))).max() < 1.0
+
+
+def test_loop_lengths_and_the_development_bring_a_patch_across_a_crease_closer():
+    # A round hole across the fold of a sheet bent by 90 degrees: mean distance of the patch's
+    # vertices to the two half-planes, projection > loop lengths (default) > development (option).
+    V, F = grid(25, 25)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0.0)], 0.3)
+    up = V[:, 1] > 0.5
+    V = np.c_[V[:, 0], np.where(up, 0.5, V[:, 1]), np.where(up, V[:, 1] - 0.5, 0.0)]
+    ctx = hole_context(V, F, min(boundary_loops(F), key=len), rings=cu.RINGS)
+
+    def off_sheet(X):
+        y, z = X[:, 1] - 0.5, X[:, 2]
+        corner = np.hypot(y, z)
+        return np.minimum(np.where(y <= 0, np.abs(z), corner), np.where(z >= 0, np.abs(y), corner)).mean()
+
+    patches = {name: cu.fill(ctx, **options) for name, options in
+               [("projection", {"lengths": "projection"}), ("loop", {}), ("development", {"domain": "development"})]}
+    for patch in patches.values():
+        assert examples.is_disc_patch(patch, ctx)
+    assert patches["loop"].info["loop_lengths"] and patches["development"].info["unfolding"] == "development"
+    d = {name: off_sheet(patch.vertices) for name, patch in patches.items()}
+    assert d["development"] < d["loop"] < 0.6 * d["projection"]
 
 
 def test_annealing_unfolds_a_wrapped_loop_and_is_reproducible():
@@ -301,6 +380,19 @@ def test_embedding_solves_its_energy(energy, order):
                                   options={"maxiter": 20000, "gtol": 1e-12, "ftol": 1e-15})
     assert res.fun >= energy_value - 1e-12
     assert np.abs(res.x.reshape(-1, 3) - interior).max() < 1e-3
+
+
+@pytest.mark.parametrize("energy", ["area", "fairing"])
+def test_symmetric_mode_lu_moves_the_patch_by_rounding_only(energy, monkeypatch):
+    # SuperLU's symmetric mode (minimum degree on A + A^T, diagonal pivots preferred) against its
+    # default (COLAMD, partial pivoting), for the energy solve and the tangential relaxation.
+    from meshlab_holefill.algorithms.brunton2009 import embedding
+    ctx, points, Fp = sphere_cap_domain()
+    s = len(points) - ctx.size
+    fast = embed_patch(ctx, s, Fp, energy=energy, tangential=True)
+    monkeypatch.setattr(embedding, "symmetric_lu", lambda A: scipy.sparse.linalg.splu(A.tocsc()))
+    reference = embed_patch(ctx, s, Fp, energy=energy, tangential=True)
+    assert np.abs(fast - reference).max() < 1e-12 * np.abs(reference).max()
 
 
 def test_least_squares_mesh_rows_follow_the_surrounding_slope():
@@ -524,9 +616,11 @@ def test_tangential_relaxation_lifts_the_triangles_fairing_squeezes_on_scan_hole
     assert outline_ratios(V, F, [loops[i]])[0] < 0.9  # a hole, not an island's outline
     ctx = hole_context(V, F, loops[i], rings=cu.RINGS)
     bound = corner_quality_bound(V, F, loops[i].vertices)
-    # The step on the energy's own patch (no resampling to the surrounding density, no sliver repair).
-    faired = cu.fill(ctx, tangential=False, energy="fairing", density="equilateral", slivers=False)
-    relaxed = cu.fill(ctx, energy="fairing", density="equilateral", slivers=False)
+    # The step on the energy's own patch (no resampling to the surrounding density, no sliver repair),
+    # on the projection's domain (the loop-length domain happens not to squeeze these holes).
+    options = dict(energy="fairing", density="equilateral", slivers=False, lengths="projection")
+    faired = cu.fill(ctx, tangential=False, **options)
+    relaxed = cu.fill(ctx, **options)
     q0 = triangle_quality(faired.all_points(ctx.points), faired.faces)
     q1 = triangle_quality(relaxed.all_points(ctx.points), relaxed.faces)
     # E_DF alone squeezes a triangle below 0.3 although no border corner forces it.
