@@ -14,9 +14,11 @@ The state lives in arrays: per vertex its position ``P``, reference normal ``N``
 value ``S`` and the newest of its nodes ``vhead`` (older ones chained by ``nvnext``); per node
 its vertex, neighbours, front label, alive flag, version, angle and angle plane; the list of
 alive nodes; the faces; the heap of (angle, node, version) entries, stale ones skipped when
-popped; per front label its size (0: closed). Edges made and directed front edges (with the
-normal of the triangle behind, NaN where unknown) are typed dicts. Scalars sit in the int
-array ``C`` (indices below) and ``max_edge`` in ``Fs[0]``.
+popped; per front label its size (0: closed). The edges made (``ekeys``) and the directed
+front edges (``fkeys``, with the normal of the triangle behind in ``fvals``, NaN where unknown)
+are open-addressing hash tables of vertex pairs (:func:`_find`, :func:`_insert`; typed dicts
+took several times as long to compile). Scalars sit in the int array ``C`` (indices below)
+and ``max_edge`` in ``Fs[0]``.
 """
 from __future__ import annotations
 
@@ -24,8 +26,7 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit, types
-from numba.typed import Dict
+from numba import njit
 
 from ._front_kernels import (merge_target, min_point_triangle_distance, near_any, obstacle_candidates,
                              step_geometry_valid, triangles_cross_faces)
@@ -34,12 +35,13 @@ from ._front_kernels import (merge_target, min_point_triangle_distance, near_any
 N_VERT, N_NODES, N_ALIVE, N_FACES, N_HEAP, N_BLOCKED, NEXT_LABEL = 0, 1, 2, 3, 4, 5, 6
 STEPS, RULE1, RULE2, RULE3, MERGES, SPLITS, REJECTED, OBSTACLE_TESTS = 7, 8, 9, 10, 11, 12, 13, 14
 MAX_FRONT, KEPT_BLOCKED, FAN_CLOSURES, RELEASED_NEAR = 15, 16, 17, 18
-N_COUNTERS = 19
+E_USED, F_USED = 19, 20  # slots used (live or deleted) in the edge tables
+N_COUNTERS = 21
 # Outcomes of run_front.
 CLOSED, TOO_MANY_FACES, GREW, STUCK = 0, 1, 2, 3
 
-_EDGE = types.UniTuple(types.int64, 2)
-_NORMAL = types.UniTuple(types.float64, 3)
+# Slots of the hash tables of vertex pairs: never used, deleted.
+EMPTY, DELETED = -1, -2
 
 
 # --------------------------------------------------------------------------- small vector helpers
@@ -139,12 +141,94 @@ def heap_pop(ht, hn, hv, C):
 
 
 
+# --------------------------------------------------------------------------- hash tables of vertex pairs
+@njit(cache=True)
+def _slot(key, mask):
+    """Home slot of a key (Fibonacci hashing)."""
+    return np.int64((np.uint64(key) * np.uint64(11400714819323198485)) >> np.uint64(32)) & mask
+
+
+@njit(cache=True)
+def _find(keys, a, b):
+    """Slot of the pair (a, b) in the table ``keys`` (linear probing), or -1; pairs with a negative id are never in it."""
+    if a < 0 or b < 0:
+        return -1
+    key = (a << 32) | b
+    mask = keys.shape[0] - 1
+    i = _slot(key, mask)
+    while keys[i] != EMPTY:
+        if keys[i] == key:
+            return i
+        i = (i + 1) & mask
+    return -1
+
+
+@njit(cache=True)
+def _insert(keys, a, b, C, used):
+    """Slot of the pair (a, b) >= 0, added if absent (C[used] counts the slots taken); the table must have room."""
+    key = (a << 32) | b
+    mask = keys.shape[0] - 1
+    i = _slot(key, mask)
+    free = -1
+    while keys[i] != EMPTY:
+        if keys[i] == key:
+            return i
+        if keys[i] == DELETED and free < 0:
+            free = i
+        i = (i + 1) & mask
+    if free < 0:
+        free = i
+        C[used] += 1
+    keys[free] = key
+    return free
+
+
+@njit(cache=True)
+def _rehashed(keys, vals, live_factor):
+    """The table (keys, vals) rebuilt without deleted slots, with live_factor times its live pairs of room; its used count."""
+    live = 0
+    for i in range(keys.shape[0]):
+        live += keys[i] >= 0
+    cap = 64
+    while cap < live_factor * (live + 64):
+        cap *= 2
+    new_keys = np.full(cap, EMPTY, np.int64)
+    new_vals = np.empty((cap,) + vals.shape[1:], vals.dtype)
+    mask = cap - 1
+    for i in range(keys.shape[0]):
+        if keys[i] >= 0:
+            j = _slot(keys[i], mask)
+            while new_keys[j] != EMPTY:
+                j = (j + 1) & mask
+            new_keys[j] = keys[i]
+            new_vals[j] = vals[i]
+    return new_keys, new_vals, live
+
+
+@njit(cache=True)
+def _empty_table(n):
+    cap = 64
+    while cap < 4 * (n + 64):
+        cap *= 2
+    return np.full(cap, EMPTY, np.int64)
+
+
+@njit(cache=True)
+def _has_edge(st, a, b):
+    return _find(st.ekeys, min(a, b), max(a, b)) >= 0
+
+
+@njit(cache=True)
+def _add_edge(st, a, b):
+    _insert(st.ekeys, min(a, b), max(a, b), st.C, E_USED)
+
+
 # --------------------------------------------------------------------------- the state
 FrontArrays = namedtuple("FrontArrays", [
     "P", "N", "S", "vhead",  # per vertex
     "nvert", "nprev", "nnext", "nfront", "nalive", "nversion", "ntheta", "nplane", "nvnext",  # per node
     "alive", "alive_at",  # alive nodes (any order), node i at alive_at[i]
-    "faces", "ht", "hn", "hv", "fsize", "blocked", "edges", "fedges", "C", "Fs"])
+    "faces", "ht", "hn", "hv", "fsize", "blocked", "ekeys", "fkeys", "fvals", "C", "Fs"])
 FrontParams = namedtuple("FrontParams", [
     "k", "merge_factor", "merge_ear_max", "S_max", "longest_edge", "cell", "max_faces", "limit", "min_sin",
     "min_cos", "one_max", "two_max", "fallback_one_max", "angle_margin", "fold_min_cos", "hover", "two"])
@@ -171,22 +255,29 @@ def _grown(a, n):
 
 @njit(cache=True)
 def _with_room(st):
-    """The state with room for one more step: 2 vertices, 2 nodes, 4 faces, a split's label, the heap's pushes."""
+    """The state with room for one more step: 2 vertices, 2 nodes, 4 faces, a split's label, the heap's
+    pushes, 12 pairs in each hash table (kept at most half full)."""
     C = st.C
     nv, nn = C[N_VERT] + 2, C[N_NODES] + 2
     if (nv < st.P.shape[0] and nn < st.nvert.shape[0] and C[N_FACES] + 4 < st.faces.shape[0]
             and C[N_HEAP] + C[N_BLOCKED] + 32 < st.ht.shape[0] and C[NEXT_LABEL] + 2 < st.fsize.shape[0]
-            and C[N_BLOCKED] + 1 < st.blocked.shape[0]):
+            and C[N_BLOCKED] + 1 < st.blocked.shape[0] and 2 * (C[E_USED] + 16) < st.ekeys.shape[0]
+            and 2 * (C[F_USED] + 16) < st.fkeys.shape[0]):
         return st
     nh = C[N_HEAP] + C[N_BLOCKED] + 32
     fsize = _grown(st.fsize, C[NEXT_LABEL] + 2)
     fsize[st.fsize.shape[0]:] = 0
+    ekeys, fkeys, fvals = st.ekeys, st.fkeys, st.fvals
+    if 2 * (C[E_USED] + 16) >= ekeys.shape[0]:
+        ekeys, _, C[E_USED] = _rehashed(ekeys, np.empty((ekeys.shape[0], 0)), 4)
+    if 2 * (C[F_USED] + 16) >= fkeys.shape[0]:
+        fkeys, fvals, C[F_USED] = _rehashed(fkeys, fvals, 4)
     return FrontArrays(_grown(st.P, nv), _grown(st.N, nv), _grown(st.S, nv), _grown(st.vhead, nv),
                        _grown(st.nvert, nn), _grown(st.nprev, nn), _grown(st.nnext, nn), _grown(st.nfront, nn),
                        _grown(st.nalive, nn), _grown(st.nversion, nn), _grown(st.ntheta, nn), _grown(st.nplane, nn),
                        _grown(st.nvnext, nn), _grown(st.alive, nn), _grown(st.alive_at, nn),
                        _grown(st.faces, C[N_FACES] + 4), _grown(st.ht, nh), _grown(st.hn, nh), _grown(st.hv, nh),
-                       fsize, _grown(st.blocked, C[N_BLOCKED] + 1), st.edges, st.fedges, C, st.Fs)
+                       fsize, _grown(st.blocked, C[N_BLOCKED] + 1), ekeys, fkeys, fvals, C, st.Fs)
 
 
 @njit(cache=True)
@@ -307,7 +398,7 @@ def _release_blocked_near(st, pr, f0, f1):
     n = C[N_BLOCKED]
     if n == 0:
         return
-    points = P[np.unique(verts)]
+    points = P[verts]  # repeated vertices do not change which nodes are near
     near = near_any(st.blocked[:n], points, reach * reach, P, st.nvert, st.nalive, pr.two)
     kept = 0
     for t in range(n):
@@ -432,8 +523,12 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
         if other >= 0:
             dirty[n_dirty:n_dirty + 4] = _split(st, w, other)
             n_dirty += 4
-    for x in np.unique(dirty[:n_dirty]):
-        if st.nalive[x]:
+    for t in range(n_dirty):
+        x = dirty[t]
+        seen = False
+        for j in range(t):
+            seen = seen or dirty[j] == x
+        if not seen and st.nalive[x]:
             _update_node(st, pr, x)
 
 
@@ -451,9 +546,10 @@ def _update_front_edges(st, f0, nf):
             da[3 * f + j], db[3 * f + j] = faces[f0 + f, j], faces[f0 + f, (j + 1) % 3]
     for i in range(3 * nf):
         a, b = da[i], db[i]
-        st.edges[(min(a, b), max(a, b))] = True
-        if (a, b) in st.fedges:
-            del st.fedges[(a, b)]
+        _add_edge(st, a, b)
+        slot = _find(st.fkeys, a, b)
+        if slot >= 0:
+            st.fkeys[slot] = DELETED
         else:
             reverse_in_step = False
             for j in range(3 * nf):
@@ -461,7 +557,7 @@ def _update_front_edges(st, f0, nf):
                     reverse_in_step = True
             if not reverse_in_step:
                 f = i // 3
-                st.fedges[(b, a)] = (normals[f, 0], normals[f, 1], normals[f, 2])
+                st.fvals[_insert(st.fkeys, b, a, st.C, F_USED)] = normals[f]
 
 
 @njit(cache=True)
@@ -560,9 +656,9 @@ def _valid(st, pr, ob, sc, node, nf):
     ne = 0
     for i in range(nd):
         a, b = da[i], db[i]
-        if (a, b) in st.fedges:
+        if _find(st.fkeys, a, b) >= 0:
             continue
-        if a >= 0 and b >= 0 and (min(a, b), max(a, b)) in st.edges:
+        if a >= 0 and b >= 0 and _has_edge(st, a, b):
             return False
         if a > b:
             reverse_in_step = False
@@ -586,10 +682,9 @@ def _valid(st, pr, ob, sc, node, nf):
     behind = np.full((nf, 3, 3), np.nan)
     for f in range(nf):
         for j in range(3):
-            e = (sc.faces[f, j], sc.faces[f, (j + 1) % 3])
-            if e in st.fedges:
-                b0, b1, b2 = st.fedges[e]
-                behind[f, j, 0], behind[f, j, 1], behind[f, j, 2] = b0, b1, b2
+            slot = _find(st.fkeys, sc.faces[f, j], sc.faces[f, (j + 1) % 3])
+            if slot >= 0:
+                behind[f, j] = st.fvals[slot]
     v = st.nvert[node]
     scale = st.S[v]
     if not step_geometry_valid(sc.faces[:nf], sc.new_pos, behind, st.nplane[node], 1e-10 * scale * scale,
@@ -683,7 +778,7 @@ def _close_small_front(st):
                     ring[j] = st.nvert[cycle[(shift + j) % size]]
                 ok = True
                 for j in range(2, size - 1):
-                    if (min(ring[0], ring[j]), max(ring[0], ring[j])) in st.edges:
+                    if _has_edge(st, ring[0], ring[j]):
                         ok = False
                 for j in range(1, size - 1):
                     a, b, c = ring[0], ring[j], ring[j + 1]
@@ -700,11 +795,11 @@ def _close_small_front(st):
                     st.faces[f, 0], st.faces[f, 1], st.faces[f, 2] = ring[0], ring[j], ring[j + 1]
                     for i in range(3):
                         x, y = st.faces[f, i], st.faces[f, (i + 1) % 3]
-                        st.edges[(min(x, y), max(x, y))] = True
+                        _add_edge(st, x, y)
                 for j in range(size):
-                    e = (ring[j], ring[(j + 1) % size])
-                    if e in st.fedges:
-                        del st.fedges[e]
+                    slot = _find(st.fkeys, ring[j], ring[(j + 1) % size])
+                    if slot >= 0:
+                        st.fkeys[slot] = DELETED
                 for j in range(size):
                     _kill_node(st, cycle[j])
                 fsize[label] = 0
@@ -725,22 +820,24 @@ def initial_state(points, normals, S, forbidden, border_faces, OV, pr):
     """
     k = points.shape[0]
     cap_v, cap_n = 4 * k + 64, 4 * k + 64
-    edges = Dict.empty(key_type=_EDGE, value_type=types.boolean)
-    fedges = Dict.empty(key_type=_EDGE, value_type=_NORMAL)
-    nan = np.nan
+    C = np.zeros(N_COUNTERS, np.int64)
+    ekeys = _empty_table(k + forbidden.shape[0])
+    fkeys = _empty_table(k)
+    fvals = np.full((fkeys.shape[0], 3), np.nan)
     for i in range(k):
         j = (i + 1) % k
-        edges[(min(i, j), max(i, j))] = True
-        fedges[(i, j)] = (nan, nan, nan)
+        _insert(ekeys, min(i, j), max(i, j), C, E_USED)
+        _insert(fkeys, i, j, C, F_USED)
     for t in range(forbidden.shape[0]):
         a, b = forbidden[t, 0], forbidden[t, 1]
-        edges[(min(a, b), max(a, b))] = True
+        _insert(ekeys, min(a, b), max(a, b), C, E_USED)
     for t in range(border_faces.shape[0]):
         f = border_faces[t]
         for j in range(3):
             a, b = f[j], f[(j + 1) % 3]
-            if (b, a) in fedges and a < k and b < k:
-                fedges[(b, a)] = _face_unit_normal(OV, f[0], f[1], f[2])
+            slot = _find(fkeys, b, a)
+            if slot >= 0 and a < k and b < k:
+                fvals[slot, 0], fvals[slot, 1], fvals[slot, 2] = _face_unit_normal(OV, f[0], f[1], f[2])
     P = np.empty((cap_v, 3))
     P[:k] = points
     N = np.empty((cap_v, 3))
@@ -762,12 +859,11 @@ def initial_state(points, normals, S, forbidden, border_faces, OV, pr):
     alive[:k] = np.arange(k)
     fsize = np.zeros(16, np.int64)
     fsize[0] = k
-    C = np.zeros(N_COUNTERS, np.int64)
     C[N_VERT], C[N_NODES], C[N_ALIVE], C[NEXT_LABEL] = k, k, k, 1
     st = FrontArrays(P, N, Sv, vhead, nvert, nprev, nnext, nfront, nalive, np.zeros(cap_n, np.int64),
                      np.zeros(cap_n), np.zeros((cap_n, 3)), np.full(cap_n, -1, np.int64), alive, alive.copy(),
                      np.empty((2 * k + 64, 3), np.int64), np.empty(8 * k + 64), np.empty(8 * k + 64, np.int64),
-                     np.empty(8 * k + 64, np.int64), fsize, np.empty(k + 16, np.int64), edges, fedges, C,
+                     np.empty(8 * k + 64, np.int64), fsize, np.empty(k + 16, np.int64), ekeys, fkeys, fvals, C,
                      np.array([pr.longest_edge]))
     for i in range(k):
         _update_node(st, pr, i)

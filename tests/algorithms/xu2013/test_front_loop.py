@@ -97,3 +97,30 @@ def test_heap_pops_in_heapq_order():
             expected.append(heapq.heappop(ref)[1:])
             popped.append(L.heap_pop(ht, hn, hv, C))
     assert popped == expected and C[L.N_HEAP] == len(ref)
+
+
+def test_pair_tables_behave_as_a_set_and_a_dict():
+    # The loop's hash tables of vertex pairs (insert, find, delete, rebuild) against Python's dict.
+    rng = np.random.default_rng(5)
+    C = np.zeros(L.N_COUNTERS, np.int64)
+    keys = L._empty_table(8)
+    vals = np.zeros((keys.shape[0], 3))
+    ref = {}
+    for step in range(3000):
+        a, b = (int(x) for x in rng.integers(0, 40, 2))
+        op = rng.random()
+        slot = L._find(keys, a, b)
+        assert (slot >= 0) == ((a, b) in ref)
+        if op < 0.5:
+            slot = L._insert(keys, a, b, C, L.F_USED)
+            vals[slot] = step
+            ref[(a, b)] = step
+        elif op < 0.8 and slot >= 0:
+            keys[slot] = L.DELETED
+            del ref[(a, b)]
+        if 2 * (C[L.F_USED] + 16) >= keys.shape[0]:
+            keys, vals, C[L.F_USED] = L._rehashed(keys, vals, 4)
+    assert L._find(keys, -1, 3) == -1  # temporary (negative) ids are never stored
+    for (a, b), value in ref.items():
+        assert vals[L._find(keys, a, b), 0] == value
+    assert (keys >= 0).sum() == len(ref)
