@@ -1,8 +1,8 @@
 """Compiled kernels of the advancing front's per-step tests (numba).
 
-The checks of one step (:meth:`.advancing_front._AdvancingFront._valid`), the merge-target
-search of Step 4, the release of refused nodes and the obstacle tests, over array mirrors of
-the front's state (:class:`._front_state.FrontState`). Each does the IEEE operations of the
+The checks of one step (called by :func:`._front_loop._valid`), the merge-target search of
+Step 4, the release of refused nodes and the obstacle tests, over the arrays of the front's
+state (:mod:`._front_loop`). Each does the IEEE operations of the
 Python predicates it replaces (:mod:`._front_predicates`, kept as their reference) in the same
 order, without fastmath, so the front takes the same decisions in the same order
 (tests/algorithms/xu2013/test_front_compiled.py and test_front_kernels.py compare them).
@@ -69,7 +69,7 @@ def min_point_triangle_distance(x, V, F, cand, radius):
 
 
 # ---------------------------------------------------------------------------------------------
-# The per-step tests of the front over array mirrors of its state (see _front_state.FrontState):
+# The per-step tests of the front over the arrays of its state (see _front_loop.FrontArrays):
 # positions P (n, 3), per node its vertex, next node and front label, and the list of alive
 # nodes. Each kernel does the IEEE operations of the Python code it replaces in the same
 # order; squares are ``x ** two`` with the exponent 2.0 passed at run time, so that they go
@@ -97,7 +97,7 @@ def _cell(x, c):
 
 @njit(cache=True)
 def _in_query_cells(X, pos, radius, cell):
-    """Is X in a grid cell of the box pos +- radius (the cells _FrontState._near visits)?"""
+    """Is X in a grid cell of the box pos +- radius (the cells of the grid query the Python reference made)?"""
     for i in range(3):
         key = _cell(X[i], cell)
         if key < _cell(pos[i] - radius, cell) or key > _cell(pos[i] + radius, cell):
@@ -171,7 +171,7 @@ def _norm3(a0, a1, a2):
 def front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_next, alive, n_alive, cell, two):
     """Does a new edge cross a front edge near V, in the plane of normal m?
 
-    The test of :meth:`._AdvancingFront._no_crossing`: the new edges ``edge_ids`` (e, 2)
+    The crossing test of a step: the new edges ``edge_ids`` (e, 2)
     with end points ``seg`` (e, 2, 3) against the front edges (x, next x) whose x lies within
     the longest new edge's reach from V plus ``longest_edge``, projected on m's plane,
     skipping pairs that share a vertex.
@@ -230,7 +230,7 @@ def front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_
 @njit(cache=True)
 def near_any(nodes, points, r2, P, node_vertex, node_alive, two):
     """Per node of ``nodes``: 1 when its vertex is within sqrt(r2) of one of ``points``, 0 when
-    not, -1 when the node is dead (:meth:`._AdvancingFront._release_blocked_near`)."""
+    not, -1 when the node is dead (:func:`._front_loop._release_blocked_near`)."""
     out = np.empty(nodes.shape[0], np.int64)
     for i in range(nodes.shape[0]):
         b = nodes[i]
@@ -378,7 +378,7 @@ def _at(x, new_pos, P):
 @njit(cache=True)
 def step_geometry_valid(faces, new_pos, behind, m, tiny, fold_min_cos, edge_ids, edge_nodes, angle_margin, V,
                         longest_edge, P, node_vertex, node_next, node_plane, node_theta, alive, n_alive, cell, two):
-    """The geometric checks of one step (:meth:`._AdvancingFront._valid`, before the obstacles).
+    """The geometric checks of one step (:func:`._front_loop._valid`, before the obstacles).
 
     Each new triangle of ``faces`` (f, 3) (vertex ids, temporary ids for ``new_pos``) faces
     the way of m by more than ``tiny`` and does not fold onto the triangle behind a front edge

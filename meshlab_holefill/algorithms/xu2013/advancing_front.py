@@ -14,7 +14,7 @@ the same front is merged with it (Step 4): with one of v's two neighbours the st
 to the rule with one vertex less, with any other vertex the front is split in two there. The
 front is updated (Step 5) and the steps repeat until every front is closed (Step 6). Fronts
 are cyclic linked lists of nodes (a vertex may be on two fronts after a split); a heap keeps
-the angles (:class:`._front_state.FrontState`).
+the angles (:mod:`._front_loop`).
 
 What the paper leaves open, as chosen here:
 
@@ -48,21 +48,22 @@ past 1.3 times the boundary's vertex count plus 20 (the front has left the hole:
 the surrounding surface or out of a hole wrapped around a tube), or past a bound on the
 triangle count: it always ends.
 
-The checks and the merge-target search run as numba kernels (:mod:`._front_kernels`) over
-array mirrors of the front; the bookkeeping (heap, linked lists, edge sets) stays in Python.
+The whole step loop runs compiled (:mod:`._front_loop`: the heap, the linked-list fronts and
+the edge sets in arrays and typed dicts, driving the per-step checks of :mod:`._front_kernels`);
+this module sets up its state, runs it and reports the outcome.
 """
 from __future__ import annotations
 
-import heapq
 import math
 
 import numpy as np
 
 from ...errors import HoleFillError
-from ._front_kernels import merge_target, near_any, step_geometry_valid
+from ._front_loop import (CLOSED, FAN_CLOSURES, GREW, KEPT_BLOCKED, MAX_FRONT, MERGES, N_FACES, N_VERT,
+                          OBSTACLE_TESTS, REJECTED, RELEASED_NEAR, RULE1, RULE2, RULE3, SPLITS, STEPS, STUCK,
+                          FrontObstacleArrays, FrontParams, Scratch, initial_state, run_front)
 from ._front_obstacles import FrontObstacles
-from ._front_state import FrontState
-from ._front_predicates import cross, dot, norm, scaled, sub, unit
+from ._front_predicates import PLANE_MIN_COS, PLANE_MIN_SIN
 
 __all__ = ["advancing_front_triangulation"]
 
@@ -88,262 +89,62 @@ FRONT_GROWTH_LIMIT = 1.3
 HOVER_FACTOR = 0.35
 # The exponent of the compiled kernels' squares, passed at run time (see _front_kernels).
 TWO = 2.0
-_NO_NORMAL = (math.nan, math.nan, math.nan)  # no known triangle behind a front edge
 
 
-class _AdvancingFront(FrontState):
-    """One advancing-front run: Steps 2-4 and 6 on a :class:`FrontState`; see :func:`advancing_front_triangulation`."""
+def _obstacle_arrays(obstacles, cell, k):
+    """The surrounding mesh's grid for the compiled loop, and its faces behind the boundary edges.
 
-    def __init__(self, points, reference_normal, forbidden_edges, merge_factor, max_faces, obstacles=None,
-                 merge_ear_max=None):
-        super().__init__(points, reference_normal, forbidden_edges)
-        self.merge_factor = merge_factor
-        self.merge_ear_max = MERGE_EAR_MAX if merge_ear_max is None else merge_ear_max
-        self.max_faces = max_faces
-        self._set_obstacles(obstacles)
-        # Bounds of the reach of one step's checks (_release_blocked_near): new vertices take
-        # the mean sizing value of three vertices, so no S exceeds the loop's largest.
-        self.S_max = max(self.S)
-        self.max_edge = self.longest_edge
-        for i in range(self.k):
-            self._update_node(i)
+    Without obstacles (or without faces) empty arrays of the same types, so that one
+    compiled loop serves both.
+    """
+    if obstacles is None or len(np.asarray(obstacles[1]).reshape(-1, 3)) == 0:
+        empty_i, empty_f = np.zeros(0, np.int64), np.zeros((0, 3))
+        arrays = FrontObstacleArrays(False, empty_f, np.zeros((0, 3), np.int64), np.zeros(3, np.int64),
+                                     np.ones(3, np.int64), empty_i, np.zeros(1, np.int64), empty_i, empty_f,
+                                     empty_f.copy(), np.zeros(1, np.int64), empty_i)
+        return arrays, np.zeros((0, 3), np.int64)
+    ob = FrontObstacles(obstacles[0], obstacles[1], cell, k)
+    arrays = FrontObstacleArrays(True, ob.V, ob.F, ob._base.astype(np.int64), ob._dims.astype(np.int64),
+                                 ob._keys.astype(np.int64), ob._starts, ob._cell_faces.astype(np.int64),
+                                 np.ascontiguousarray(ob.lo), np.ascontiguousarray(ob.hi), ob._stamp, ob._out)
+    return arrays, np.ascontiguousarray(ob.border_faces(), np.int64)
 
-    # ----------------------------------------------------------------- main loop
-    def run(self):
-        limit = FRONT_GROWTH_LIMIT * self.k + 20
-        while self.front_size:
-            if len(self.faces) > self.max_faces:
-                raise HoleFillError(f"advancing front did not close within {self.max_faces} triangles")
-            size = sum(self.front_size.values())
-            self.stats["max_front"] = max(self.stats.get("max_front", 0), size)
-            if size > limit:
-                raise HoleFillError(f"advancing front grew to {size} vertices from {self.k}: it left the hole")
-            node = self._pop()
-            if node is None:
-                if self._close_small_front():
-                    continue
-                raise HoleFillError("advancing front is stuck: no valid triangle can be added "
-                                    f"({sum(self.front_size.values())} front vertices left)")
-            n_faces, n_topology = len(self.faces), self.stats["merges"] + self.stats["splits"]
-            if self._advance(node):
-                self.stats["steps"] += 1
-                if self.stats["merges"] + self.stats["splits"] != n_topology:
-                    self._release_blocked()  # a split relabels a whole front: any refusal may change
-                else:
-                    self._release_blocked_near(self.faces[n_faces:])
-            else:
-                self.stats["rejected"] += 1
-                self.blocked.append(node)
-        F = np.asarray(self.faces, np.int64).reshape(-1, 3)
-        return np.asarray(self.P[self.k:], np.float64).reshape(-1, 3), F
 
-    def _release_blocked_near(self, new_faces):
-        """Put back on the heap the refused nodes that the step which made ``new_faces`` may unblock.
-
-        The checks of a step at node B (:meth:`_build`, :meth:`_valid`) read the front only
-        near B's vertex: its candidate triangles reach max(longest front edge, (1 +
-        merge_factor) S_max), the crossing test one loop edge further, the front-angle and
-        merge-ear tests the nodes up to three front edges along. A step whose triangles have no
-        vertex within that reach leaves B's verdict as it was, so B stays refused, and the steps
-        taken are those of releasing every refused node after each step (which made failing
-        runs on large holes quadratic: every step retried every refused node). Splits relabel
-        whole fronts and release them all.
-        """
-        verts = {x for f in new_faces for x in f}
-        P = self.P
-        for a, b, c in new_faces:
-            for x, y in ((a, b), (b, c), (c, a)):
-                self.max_edge = max(self.max_edge, norm(sub(P[x], P[y])))
-        reach = 3.0 * self.max_edge + (1.0 + self.merge_factor) * self.S_max + self.longest_edge
-        r2 = reach * reach
-        still = []
-        if self.blocked:
-            near = near_any(np.array(self.blocked, np.int64), self.Pa[sorted(verts)], r2, self.Pa, self.na_vertex,
-                            self.na_alive, TWO)
-            for b, hit in zip(self.blocked, near.tolist()):
-                if hit > 0:
-                    heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
-                elif hit == 0:
-                    still.append(b)
-        self.stats["kept_blocked"] = self.stats.get("kept_blocked", 0) + len(still)
-        self.blocked = still
-
-    def _close_small_front(self):
-        """Last resort when every step is rejected: close a front of at most 6 vertices by a fan.
-
-        On very noisy boundaries the front angles of a tiny remaining front can be
-        inconsistent (each measured in its own plane), so that no single step passes the
-        angle checks although the front bounds a small disk. The first fan (from each
-        vertex in turn) whose triangles reuse no edge and face the way of the hole is used.
-        """
-        for label, size in sorted(self.front_size.items(), key=lambda item: item[1]):
-            if size > 6:
-                return False
-            start = next(i for i, alive in enumerate(self.node_alive)
-                         if alive and self.node_front[i] == label)
-            cycle = [start]
-            while self.node_next[cycle[-1]] != start:
-                cycle.append(self.node_next[cycle[-1]])
-            verts = [self.node_vertex[i] for i in cycle]
-            for shift in range(size):
-                ring = verts[shift:] + verts[:shift]
-                fan = [(ring[0], ring[j], ring[j + 1]) for j in range(1, size - 1)]
-                chords = [(ring[0], ring[j]) for j in range(2, size - 1)]
-                if any((min(a, b), max(a, b)) in self.edges for a, b in chords):
-                    continue
-                if any(dot(cross(sub(self.P[b], self.P[a]), sub(self.P[c], self.P[a])), self.N[a]) <= 0.0
-                       for a, b, c in fan):
-                    continue
-                for f in fan:
-                    self.faces.append(f)
-                    self.edges.update((min(x, y), max(x, y)) for x, y in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0])))
-                for a, b in zip(ring, ring[1:] + ring[:1]):
-                    self.front_edges.pop((a, b), None)
-                for i in cycle:
-                    self._kill_node(i)
-                del self.front_size[label]
-                self.stats["fan_closures"] = self.stats.get("fan_closures", 0) + 1
-                self._release_blocked()
-                return True
-        return False
-
-    def _advance(self, node):
-        """Apply the angle rule at ``node`` (Sec. 3.2, Step 3) or its first valid fallback."""
-        theta = self.node_theta[node]
-        if self.front_size[self.node_front[node]] == 3 or theta <= ONE_TRIANGLE_MAX:
-            rules = (1,)
-        elif theta <= TWO_TRIANGLES_MAX:
-            rules = (2, 1)
-        elif theta <= FALLBACK_ONE_TRIANGLE_MAX:
-            rules = (3, 2, 1)
-        else:
-            rules = (3, 2)
-        for rule in rules:
-            op = self._build(node, rule)
-            if op is not None and self._valid(node, *op):
-                self._apply(node, rule, *op)
-                return True
-        return False
-
-    # ----------------------------------------------------------------- one step
-    def _build(self, node, rule):
-        """Triangles of one rule at ``node`` (Sec. 3.2, Fig. 3) with merged vertices (Step 4).
-
-        Returns (faces, new_positions, sequence) or None when a new vertex falls next to
-        one of v's neighbours (the caller then tries the rule with one vertex less). Faces
-        use vertex ids, new vertices get temporary ids -1, -2; ``sequence`` replaces v
-        between p and q on the front.
-        """
-        v = self.node_vertex[node]
-        p = self.node_vertex[self.node_prev[node]]
-        q = self.node_vertex[self.node_next[node]]
-        if rule == 1:
-            return [(p, v, q)], {}, []
-        theta, m = self.node_theta[node], self.node_plane[node]
-        V = self.P[v]
-        length = (self.S[v] + self.S[p] + self.S[q]) / 3.0
-        a = sub(self.P[q], V)
-        ua = unit(sub(a, scaled(m, dot(a, m))))
-        ut = cross(m, ua)
-        count = rule - 1
-        radius = self.merge_factor * length
-        ids, new_pos = [], {}
-        for j in range(1, count + 1):
-            phi = theta * j / (count + 1)
-            c, s = math.cos(phi) * length, math.sin(phi) * length
-            pos = (V[0] + c * ua[0] + s * ut[0], V[1] + c * ua[1] + s * ut[1], V[2] + c * ua[2] + s * ut[2])
-            for u in (p, q):
-                if sum((pos[i] - self.P[u][i]) ** 2 for i in range(3)) < radius * radius:
-                    return None
-            target = merge_target(np.array(pos), radius, v, p, q, self.node_front[node], self.Pa, self.na_vertex,
-                                  self.na_front, self.alive, self.n_alive, self.cell, TWO)
-            if target < 0:
-                target = -j
-                new_pos[target] = pos
-            ids.append(target)
-        # A merge with the vertex beyond p (or q) makes the triangle at p (or q) an ear that
-        # closes p's whole front angle: allowed only where a single triangle fits the angle.
-        prev2 = self.node_vertex[self.node_prev[self.node_prev[node]]]
-        next2 = self.node_vertex[self.node_next[self.node_next[node]]]
-        if self.merge_ear_max is not None:
-            if ids[-1] == prev2 and self.node_theta[self.node_prev[node]] > self.merge_ear_max:
-                return None
-            if ids[0] == next2 and self.node_theta[self.node_next[node]] > self.merge_ear_max:
-                return None
-        if rule == 2:
-            w = ids[0]
-            return [(v, q, w), (p, v, w)], new_pos, [w]
-        w1, w2 = ids
-        if w1 == w2:
-            return None
-        return [(v, q, w1), (v, w1, w2), (p, v, w2)], new_pos, [w2, w1]
-
-    def _pos(self, x, new_pos):
-        return new_pos[x] if x < 0 else self.P[x]
-
-    def _valid(self, node, faces, new_pos, sequence):
-        """Topological and geometric checks of one step (see module docstring)."""
-        m = self.node_plane[node]
-        label = self.node_front[node]
-        directed = []
-        for a, b, c in faces:
-            directed += [(a, b), (b, c), (c, a)]
-        dset = set(directed)
-        if len(dset) != len(directed):
-            return False
-        new_edges = []
-        for a, b in directed:
-            if (a, b) in self.front_edges:
-                continue
-            if a >= 0 and b >= 0 and (min(a, b), max(a, b)) in self.edges:
-                return False
-            if (b, a) in dset and a > b:
-                continue  # interior edge of the step, kept once
-            new_edges.append((a, b))
-        v = self.node_vertex[node]
-        scale = self.S[v]
-        # The node of each existing end of a new edge, on this front (a new edge must leave
-        # from inside its front angle there).
-        edge_nodes = []
-        for a, b in new_edges:
-            ends = [-1, -1]
-            for j, x in enumerate((a, b)):
-                if x >= 0:
-                    ends[j] = self._same_front_node(x, label)
-                    if ends[j] < 0:
-                        return False
-            edge_nodes.append(ends)
-        positions = np.empty((2, 3))
-        for temp, pos in new_pos.items():
-            positions[-temp - 1] = pos
-        behind = [[self.front_edges.get(e) or _NO_NORMAL for e in ((a, b), (b, c), (c, a))] for a, b, c in faces]
-        if not step_geometry_valid(
-                np.array(faces, np.int64), positions, np.array(behind), self.na_plane[node], 1e-10 * scale * scale,
-                FOLD_MIN_COS, np.array(new_edges, np.int64).reshape(-1, 2), np.array(edge_nodes, np.int64).reshape(-1, 2),
-                ANGLE_MARGIN, self.Pa[v], self.longest_edge, self.Pa, self.na_vertex, self.na_next, self.na_plane,
-                self.na_theta, self.alive, self.n_alive, self.cell, TWO):
-            return False
-        if self.obstacles is None:
-            return True
-        v = self.node_vertex[node]
-        clearance = HOVER_FACTOR * self.S[v]
-        for pos in new_pos.values():
-            if self.obstacles.distance(pos, clearance) < clearance:
-                return False
-        return not self.obstacles.crossed(faces, [[self._pos(x, new_pos) for x in f] for f in faces])
-
-    def _set_obstacles(self, obstacles):
-        """Index the surrounding mesh; its border faces are the triangles behind the boundary edges."""
-        self.obstacles = None
-        if obstacles is None or len(np.asarray(obstacles[1]).reshape(-1, 3)) == 0:
-            return
-        self.obstacles = FrontObstacles(obstacles[0], obstacles[1], self.cell, self.k)
-        OV, k = self.obstacles.V, self.k
-        for f in self.obstacles.border_faces().tolist():
-            for a, b in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0])):
-                if (b, a) in self.front_edges and a < k and b < k:
-                    c = cross(sub(OV[f[1]], OV[f[0]]), sub(OV[f[2]], OV[f[0]]))
-                    self.front_edges[(b, a)] = unit(tuple(map(float, c)))
+def _run(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ear_max):
+    """Set up the compiled loop's state (Step 1) and run it (Steps 2-6); (new vertices, faces, stats)."""
+    k = len(P)
+    lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    S = 0.5 * (lengths + np.roll(lengths, 1))
+    # Cell of the uniform grids of neighbourhood queries (the kernels' query boxes, the obstacles).
+    cell = max(2.0 * float(np.mean(lengths)), 1e-300)
+    params = FrontParams(int(k), float(merge_factor), math.inf if merge_ear_max is None else float(merge_ear_max),
+                         float(S.max()), float(lengths.max()), float(cell), int(max_faces),
+                         float(FRONT_GROWTH_LIMIT * k + 20), PLANE_MIN_SIN, PLANE_MIN_COS, ONE_TRIANGLE_MAX,
+                         TWO_TRIANGLES_MAX, FALLBACK_ONE_TRIANGLE_MAX, ANGLE_MARGIN, FOLD_MIN_COS, HOVER_FACTOR, TWO)
+    ob, border_faces = _obstacle_arrays(obstacles, cell, k)
+    normals = np.ascontiguousarray(np.broadcast_to(n_ref, (k, 3)), np.float64)
+    forbidden = np.ascontiguousarray(np.asarray(forbidden_edges, np.int64).reshape(-1, 2))
+    st = initial_state(P, normals, S, forbidden, border_faces, ob.V, params)
+    scratch = Scratch(np.zeros((3, 3), np.int64), np.zeros((2, 3)), np.zeros(2, np.bool_), np.zeros(2, np.int64),
+                      np.zeros(3))
+    outcome, size, st = run_front(st, params, ob, scratch)
+    C = st.C
+    if outcome == GREW:
+        raise HoleFillError(f"advancing front grew to {size} vertices from {k}: it left the hole")
+    if outcome == STUCK:
+        raise HoleFillError("advancing front is stuck: no valid triangle can be added "
+                            f"({size} front vertices left)")
+    if outcome != CLOSED:
+        raise HoleFillError(f"advancing front did not close within {max_faces} triangles")
+    stats = {name: int(C[i]) for name, i in (("steps", STEPS), ("rule1", RULE1), ("rule2", RULE2), ("rule3", RULE3),
+                                              ("merges", MERGES), ("splits", SPLITS), ("rejected", REJECTED),
+                                              ("obstacle_tests", OBSTACLE_TESTS), ("max_front", MAX_FRONT))}
+    # Keys in the order the counts first occurred (a first release after a fan closure is stamped > 1).
+    late = [("kept_blocked", KEPT_BLOCKED)] if C[RELEASED_NEAR] else []
+    if C[FAN_CLOSURES]:
+        late.insert(0 if C[RELEASED_NEAR] > 1 else len(late), ("fan_closures", FAN_CLOSURES))
+    stats.update((name, int(C[i])) for name, i in late)
+    return st.P[k:C[N_VERT]].copy(), st.faces[:C[N_FACES]].copy(), stats
 
 
 def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75, max_faces=None,
@@ -407,12 +208,7 @@ def advancing_front_triangulation(points, forbidden_edges=(), merge_factor=0.75,
     if max_faces is None:
         h = float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean()) or 1.0
         max_faces = int(20 * area / (0.43 * h * h) + 10 * k + 100)
-    front = _AdvancingFront(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ear_max)
-    new_vertices, faces = front.run()
-    stats = dict(front.stats)
-    if front.obstacles is not None:
-        stats["obstacle_tests"] = front.obstacles.tests
-    return new_vertices, faces, stats
+    return _run(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ear_max)
 
 
 _WARM = []  # set once the kernels are loaded in this process
@@ -421,8 +217,9 @@ _WARM = []  # set once the kernels are loaded in this process
 def warm_up():
     """Load (or compile) the front's numba kernels now, by running the front on a small hole.
 
-    The kernels are compiled lazily, on first use, and cached on disk; loading them takes a
-    few tenths of a second per process. A caller about to fork worker processes can call this
+    The compiled loop (:func:`._front_loop.initial_state`, :func:`._front_loop.run_front`, with
+    the kernels they call linked in) is compiled lazily, on first use, and cached on disk;
+    loading it takes a few tenths of a second per process. A caller about to fork worker processes can call this
     first, so that the workers inherit the loaded kernels instead of each loading them again
     inside its first hole's time.
     """
@@ -435,5 +232,4 @@ def warm_up():
     k = len(ring)
     F = [(i, (i + 1) % k, k + i) for i in range(k)] + [((i + 1) % k, k + (i + 1) % k, k + i) for i in range(k)]
     advancing_front_triangulation(ring, obstacles=(V, np.array(F)))
-    near_any(np.zeros(1, np.int64), ring[[0]], 1.0, ring, np.zeros(1, np.int64), np.ones(1, np.bool_), TWO)
     _WARM.append(True)

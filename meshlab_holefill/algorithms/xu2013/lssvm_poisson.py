@@ -25,11 +25,13 @@ boundary's Laplacian rows in the Poisson system): ``layers`` 1 / 2 / 3 gives 2.0
 """
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
 import scipy.sparse.linalg as spla
 
+from ._blas_threads import single_blas_thread
 from .advancing_front import warm_up
 from .border_split import split_long_boundary_edges
 from ...geometry.laplacian import tangential_umbrella_smoothing
@@ -459,6 +461,16 @@ def reposition(ctx, X, F, regressors, iterations, relax, poisson_boundary="lapla
     return None, F_front, info
 
 
+def _one_blas_thread(fill_function):
+    """Fill with one BLAS thread (:mod:`._blas_threads`: a hole's dense systems are too small to share)."""
+    @functools.wraps(fill_function)
+    def wrapped(*args, **kwargs):
+        with single_blas_thread():
+            return fill_function(*args, **kwargs)
+    return wrapped
+
+
+@_one_blas_thread
 def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1, gamma=10.0,
          kernel_width=0.5, poisson_iterations=1, laplacian_prediction="lssvm", relax=True,
          laplacian_frame="global", model_selection="fixed", poisson_boundary="laplacian"):

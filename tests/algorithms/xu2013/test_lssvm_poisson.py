@@ -198,9 +198,9 @@ def test_front_angle_convex_reflex_and_collinear():
 
 def first_step(P):
     """Apply the advancing front's first step; returns (rule, faces added, vertices added)."""
-    from meshlab_holefill.algorithms.xu2013.advancing_front import _AdvancingFront
+    from xu2013_front_oracle import PythonFront
 
-    front = _AdvancingFront(np.asarray(P, float), UP, (), 0.75, 10_000)
+    front = PythonFront(np.asarray(P, float), UP, (), 0.75, 10_000)
     node = front._pop()
     before = dict(front.stats)
     assert front._advance(node)
@@ -228,15 +228,16 @@ def test_merge_may_not_close_a_wide_neighbour_angle_by_an_ear():
     # so v falls back to the next rule; without the limit the merge goes through.
     import math
 
-    from meshlab_holefill.algorithms.xu2013.advancing_front import MERGE_EAR_MAX, _AdvancingFront
+    from meshlab_holefill.algorithms.xu2013.advancing_front import MERGE_EAR_MAX
+    from xu2013_front_oracle import PythonFront
 
     p = 0.1 * np.array([math.cos(math.radians(100)), math.sin(math.radians(100)), 0.0])
     u = 0.65 * np.array([math.cos(math.radians(50)), math.sin(math.radians(50)), 0.0])
     P = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], u, p])
-    front = _AdvancingFront(P, UP, (), 0.75, 1000)
+    front = PythonFront(P, UP, (), 0.75, 1000)
     assert front.node_theta[3] > MERGE_EAR_MAX and front.node_theta[0] < math.radians(135)
     assert front._build(0, 2) is None
-    free = _AdvancingFront(P, UP, (), 0.75, 1000, None, 4 * math.pi)
+    free = PythonFront(P, UP, (), 0.75, 1000, None, 4 * math.pi)
     faces, new_pos, sequence = free._build(0, 2)
     assert new_pos == {} and sequence == [2] and (3, 0, 2) in faces
 
@@ -260,11 +261,11 @@ def test_swaps_do_not_cut_off_a_worse_ear():
 
 def test_new_vertices_lie_in_the_plane_of_the_two_front_edges():
     # A non-planar boundary: the first (rule 3) step puts its vertices in the plane of p, v, q.
-    from meshlab_holefill.algorithms.xu2013.advancing_front import _AdvancingFront
+    from xu2013_front_oracle import PythonFront
 
     P = circle(30)
     P[:, 2] = 0.2 * P[:, 0] ** 2
-    front = _AdvancingFront(P, UP, (), 0.75, 10_000)
+    front = PythonFront(P, UP, (), 0.75, 10_000)
     node = front._pop()
     v, p, q = (front.node_vertex[node], front.node_vertex[front.node_prev[node]],
                front.node_vertex[front.node_next[node]])
@@ -312,11 +313,11 @@ def test_self_crossing_boundary_fails_clearly():
 
 
 def test_steps_that_cross_the_surrounding_mesh_are_rejected():
-    from meshlab_holefill.algorithms.xu2013.advancing_front import _AdvancingFront
+    from xu2013_front_oracle import PythonFront
 
     P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     wall = np.array([[0.5, 0.5, -1], [0.9, 0.1, -1], [0.7, 0.3, 1.0]], float)  # pierces triangle (0, 1, 2)
-    front = _AdvancingFront(P, UP, (), 0.75, 100, (np.concatenate([P, wall]), np.array([[4, 5, 6]])))
+    front = PythonFront(P, UP, (), 0.75, 100, (np.concatenate([P, wall]), np.array([[4, 5, 6]])))
     corners = lambda f: [[tuple(P[x]) for x in f]]  # noqa: E731
     assert front.obstacles.crossed([(0, 1, 2)], corners((0, 1, 2)))
     assert not front.obstacles.crossed([(0, 2, 3)], corners((0, 2, 3)))
@@ -330,19 +331,21 @@ def test_refused_nodes_far_from_a_step_stay_refused_without_changing_the_patch(m
     # After a step only the refused nodes within the reach of its checks are retried
     # (_release_blocked_near); retrying every refused node must give the same patches. On
     # bunny10k_textured one hole's front refuses 35 steps, 2 of them kept back after far steps.
-    from meshlab_holefill.algorithms.xu2013 import advancing_front
+    # The retry-all run is the Python reference front (xu2013_front_oracle) with that change.
+    import xu2013_front_oracle as oracle
+    from meshlab_holefill.algorithms.xu2013 import poisson_patch
 
     def run():
         ms = pymeshlab.MeshSet()
         ms.load_new_mesh(sample("bunny10k_textured.obj"))
-        res = ms.meshing_close_holes_lssvm_poisson()
+        res = ms.meshing_close_holes_lssvm_poisson(workers=1)
         return mesh_arrays(ms), res["holes"]
 
     (V1, F1), holes = run()
     kept = sum(h.get("afm_kept_blocked") or 0 for h in holes)
     assert kept > 0
-    monkeypatch.setattr(advancing_front._AdvancingFront, "_release_blocked_near",
-                        lambda self, new_faces: self._release_blocked())
+    monkeypatch.setattr(oracle.PythonFront, "_release_blocked_near", lambda self, new_faces: self._release_blocked())
+    monkeypatch.setattr(poisson_patch, "advancing_front_triangulation", oracle.oracle_triangulation)
     (V2, F2), holes_full = run()
     assert np.array_equal(V1, V2) and np.array_equal(F1, F2)
     assert sum(h.get("afm_kept_blocked") or 0 for h in holes_full) == 0
