@@ -33,17 +33,31 @@ def _row(V, i):
 
 
 @njit(cache=True)
-def _angle_at(V, p, q, r):
-    """flips._angle_at for one triangle, with libm's atan2."""
+def _angle_parts(V, p, q, r):
+    """(|u x w|, u . w) of the angle at p of the triangle (p, q, r), as flips._angle_at computes them."""
     P = _row(V, p)
     u, w = _sub(_row(V, q), P), _sub(_row(V, r), P)
-    return math.atan2(_norm(_cross(u, w)), _dot(u, w))
+    return _norm(_cross(u, w)), _dot(u, w)
 
 
 @njit(cache=True)
 def _angle_sum_exceeds(V, p1, q1, r1, p2, q2, r2):
-    """1 / 0 when angle(p1; q1, r1) + angle(p2; q2, r2) > pi (1 + 1e-9) clearly holds / fails, -1 if too close."""
-    s = _angle_at(V, p1, q1, r1) + _angle_at(V, p2, q2, r2)
+    """1 / 0 when angle(p1; q1, r1) + angle(p2; q2, r2) > pi (1 + 1e-9) clearly holds / fails, -1 if too close.
+
+    Most sums are far from the limit, and the sign of sin(alpha + beta) (no arctan2) tells
+    which side they are on: below -1e-6 the sum lies in (pi + 1e-6, 2 pi), above 1e-6 in
+    (1e-6, pi - 1e-6), both angles being in [0, pi]; its rounding error is of order 1e-15.
+    Other sums are computed by arctan2 as the numpy code does.
+    """
+    s1, c1 = _angle_parts(V, p1, q1, r1)
+    s2, c2 = _angle_parts(V, p2, q2, r2)
+    sine = s1 * c2 + c1 * s2
+    scale = math.sqrt(s1 * s1 + c1 * c1) * math.sqrt(s2 * s2 + c2 * c2)
+    if sine < -1e-6 * scale:
+        return 1
+    if sine > 1e-6 * scale:
+        return 0
+    s = math.atan2(s1, c1) + math.atan2(s2, c2)
     limit = np.pi * (1 + 1e-9)
     if not abs(s - limit) > ANGLE_MARGIN:  # NaN too: the numpy code's two tests treat it differently
         return -1
@@ -69,33 +83,70 @@ def _contains(sorted_keys, key):
 
 
 @njit(cache=True)
-def _interior_edges(F, n):
-    """topology.interior_edges: (he, tw) half-edge indices of each interior edge, or ok=False when
-    a directed edge repeats or an index is out of range (the numpy code's order is then its own)."""
+def _outgoing(F, n):
+    """Half-edges grouped by their first vertex: h = 3 f + j (F[f, j] -> F[f, (j + 1) % 3]) for
+    start[a] <= r < start[a + 1] in ascending h; ok=False when an index is out of range or a
+    directed edge repeats (the numpy code's order of such edges is its own)."""
     m = F.shape[0]
-    keys = np.empty(3 * m, np.int64)
+    start = np.zeros(n + 1, np.int64)
+    half = np.empty(3 * m, np.int64)
     for f in range(m):
         for j in range(3):
-            a, b = F[f, j], F[f, (j + 1) % 3]
-            if a < 0 or a >= n or b < 0 or b >= n:
-                return keys[:0], keys[:0], False
-            keys[3 * f + j] = a * n + b
-    order = np.argsort(keys)
-    sk = keys[order]
-    for i in range(1, 3 * m):
-        if sk[i] == sk[i - 1]:
-            return keys[:0], keys[:0], False
+            a = F[f, j]
+            if a < 0 or a >= n:
+                return start, half, False
+            start[a + 1] += 1
+    for a in range(n):
+        start[a + 1] += start[a]
+    fill = start[:-1].copy()
+    for h in range(3 * m):
+        a = F[h // 3, h % 3]
+        half[fill[a]] = h
+        fill[a] += 1
+    for a in range(n):
+        for r in range(start[a], start[a + 1]):
+            b = _head(F, half[r])
+            if b < 0 or b >= n:
+                return start, half, False
+            for t in range(start[a], r):
+                if _head(F, half[t]) == b:
+                    return start, half, False
+    return start, half, True
+
+
+@njit(cache=True)
+def _head(F, h):
+    return F[h // 3, (h % 3 + 1) % 3]
+
+
+@njit(cache=True)
+def _find(F, start, half, a, b):
+    """The half-edge a -> b, or -1."""
+    for r in range(start[a], start[a + 1]):
+        if _head(F, half[r]) == b:
+            return half[r]
+    return -1
+
+
+@njit(cache=True)
+def _interior_edges(F, n):
+    """topology.interior_edges: (he, tw) half-edge indices of each interior edge (he ascending),
+    the half-edge table, and ok=False when the numpy code must decide (see :func:`_outgoing`)."""
+    m = F.shape[0]
+    start, half, fine = _outgoing(F, n)
     he = np.empty(3 * m, np.int64)
     tw = np.empty(3 * m, np.int64)
+    if not fine:
+        return he[:0], tw[:0], start, half, False
     e = 0
     for h in range(3 * m):
-        a, b = keys[h] // n, keys[h] % n
+        a, b = F[h // 3, h % 3], _head(F, h)
         if a < b:
-            i = np.searchsorted(sk, b * n + a)
-            if i < 3 * m and sk[i] == b * n + a:
-                he[e], tw[e] = h, order[i]
+            t = _find(F, start, half, b, a)
+            if t >= 0:
+                he[e], tw[e] = h, t
                 e += 1
-    return he[:e], tw[:e], True
+    return he[:e], tw[:e], start, half, True
 
 
 @njit(cache=True)
@@ -116,7 +167,7 @@ def swap_candidates(V, F, fixed):
     new_key : (e,) int64 min(c, d) * n + max(c, d)
     """
     n, m = V.shape[0], F.shape[0]
-    he, tw, fine = _interior_edges(F, n)
+    he, tw, start, half, fine = _interior_edges(F, n)
     e = he.shape[0]
     abcd = np.empty((e, 4), np.int64)
     f1f2 = np.empty((e, 2), np.int64)
@@ -144,18 +195,12 @@ def swap_candidates(V, F, fixed):
             ok[i] = passes == 0 and _keeps_orientation(V, a, b, c, d) and c != d
     if failing == 0:
         return NO_FAILING, abcd, f1f2, ok, new_key
-    existing = np.empty(3 * m, np.int64)
-    for f in range(m):
-        for j in range(3):
-            x, y = F[f, j], F[f, (j + 1) % 3]
-            existing[3 * f + j] = min(x, y) * n + max(x, y)
-    existing = np.sort(existing)
     for i in range(e):
         if ok[i]:
-            a, b = abcd[i, 0], abcd[i, 1]
+            a, b, c, d = abcd[i, 0], abcd[i, 1], abcd[i, 2], abcd[i, 3]
             old_key = min(a, b) * n + max(a, b)
-            ok[i] = not _contains(existing, new_key[i]) and not _contains(fixed, old_key) \
-                and not _contains(fixed, new_key[i])
+            exists = _find(F, start, half, c, d) >= 0 or _find(F, start, half, d, c) >= 0
+            ok[i] = not exists and not _contains(fixed, old_key) and not _contains(fixed, new_key[i])
     return CANDIDATES, abcd, f1f2, ok, new_key
 
 

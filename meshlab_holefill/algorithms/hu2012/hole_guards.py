@@ -89,6 +89,8 @@ class LoopSectors:
         """
         i = np.ascontiguousarray(i, np.int64)
         T = np.ascontiguousarray(np.atleast_2d(targets), np.float64)
+        if len(i) == 0 and T.size == 0:
+            return np.zeros(0, bool)
         if T.shape == (len(i), 3) and len(i) and 0 <= i.min() and i.max() < len(self.points):
             inside, sure = sector_contains(self.points, self.u, self.w, self.limit, i, T, float(margin))
             if sure:
