@@ -73,7 +73,7 @@ class LoopSectors:
         u = np.roll(P, -1, axis=0) - P
         u -= np.einsum("ij,ij->i", u, N)[:, None] * N
         u /= np.maximum(np.linalg.norm(u, axis=1), 1e-300)[:, None]
-        self.points, self.u, self.w = P, u, np.cross(N, u)
+        self.points, self.u, self.w = np.ascontiguousarray(P), u, np.ascontiguousarray(np.cross(N, u))
         self.limit = self._angle(np.arange(len(P)), np.roll(P, 1, axis=0))
 
     def _angle(self, i, targets):

@@ -604,3 +604,21 @@ def test_a_direction_on_the_sector_bound_is_left_to_numpy():
     assert not sector_contains(sectors.points, sectors.u, sectors.w, sectors.limit, i, targets, 0.0)[1]
     np.testing.assert_array_equal(sectors.contains(i, targets, margin=0.0), sectors.contains_numpy(i, targets, 0.0))
     assert sectors.contains(i[1:], targets[1:]).tolist() == [True]
+
+
+def test_warm_up_loads_every_kernel_of_the_filter():
+    from numba.core.registry import CPUDispatcher
+
+    from meshlab_holefill.algorithms.hu2012 import _bilateral_kernels, _min_angle_kernels, _sector_kernels
+    from meshlab_holefill.algorithms.hu2012 import _smoothing_kernels, min_angle_bilateral
+    from meshlab_holefill.geometry import _flip_kernels, _quality_kernels, _refine_kernels
+
+    min_angle_bilateral.warm_up()
+    assert min_angle_bilateral.WARM_UP is min_angle_bilateral.warm_up
+    for module in (_bilateral_kernels, _min_angle_kernels, _sector_kernels, _smoothing_kernels, _flip_kernels,
+                   _refine_kernels):
+        for name in module.__all__:
+            kernel = getattr(module, name)
+            if isinstance(kernel, CPUDispatcher):
+                assert kernel.signatures, f"{module.__name__}.{name} not loaded"
+    assert _quality_kernels.triangle_quality_kernel.signatures
