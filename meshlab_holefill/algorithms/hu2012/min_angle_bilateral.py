@@ -279,12 +279,29 @@ def embeds_in_projection(V, F, k, min_sine=1e-6):
     return bool(used.all() and np.all(np.abs(total - expected) < 1e-6))
 
 
+_CROSSES = []  # the last few (ctx, V bytes, F bytes, answer) of _crosses
+
+
 def _crosses(ctx, V, F):
     """Does the patch (V loop-first, F) intersect itself or the surrounding faces?
 
     The self-intersection query is skipped when :func:`embeds_in_projection` shows the
     patch is one-to-one over its mean plane (most patches; the query is the costly part).
+    The answers for the last few patches are kept: with the options the same patch is often
+    checked twice (after smoothing and at the end).
     """
+    V, F = np.asarray(V), np.asarray(F)
+    key = (V.dtype.str, V.shape, V.tobytes(), F.dtype.str, F.shape, F.tobytes())
+    for c, k, answer in _CROSSES:
+        if c is ctx and k == key:
+            return answer
+    answer = _crosses_uncached(ctx, V, F)
+    _CROSSES.insert(0, (ctx, key, answer))
+    del _CROSSES[4:]
+    return answer
+
+
+def _crosses_uncached(ctx, V, F):
     from ...geometry.intersections import intersecting_pairs
 
     if len(patch_crossings(ctx, V, F)):

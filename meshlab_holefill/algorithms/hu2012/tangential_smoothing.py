@@ -95,11 +95,13 @@ def bisect_obtuse(V, F, movable, fixed=None, attr=None, min_angle=2.0 * np.pi / 
     V = np.asarray(V, np.float64)
     F = np.asarray(F, np.int64)
     n = len(V)
+    q = triangle_quality(V, F)
+    if not np.any(q < max_quality):  # no candidate (the usual round): spare the edge table and angles
+        return V, F, movable, attr
     E, f1, c1, f2, c2 = interior_edges(F, n)
     if len(E) == 0:
         return V, F, movable, attr
     ang = corner_angles(V, F)
-    q = triangle_quality(V, F)
     o1, o2 = (c1 + 2) % 3, (c2 + 2) % 3
     bad1 = (q[f1] < max_quality) & (ang[f1, o1] > min_angle)
     bad2 = (q[f2] < max_quality) & (ang[f2, o2] > min_angle)

@@ -622,3 +622,19 @@ def test_warm_up_loads_every_kernel_of_the_filter():
             if isinstance(kernel, CPUDispatcher):
                 assert kernel.signatures, f"{module.__name__}.{name} not loaded"
     assert _quality_kernels.triangle_quality_kernel.signatures
+
+
+def test_remembered_crossing_answers_are_those_of_the_check():
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import _crosses, _crosses_uncached
+    from meshlab_holefill.core import examples
+
+    V, F, loop = examples.bowl_with_hole()
+    ctx = hole_context(V, F, loop, rings=2)
+    patch = fill(ctx)
+    X = np.concatenate([ctx.points, patch.vertices])
+    pierced = X.copy()
+    pierced[ctx.size:] = X[ctx.size:][::-1] + [0.05, 0.0, 0.0]  # new vertices shuffled: the patch folds through itself
+    for _ in range(2):  # the second round answers from memory
+        assert _crosses(ctx, X, patch.faces) is False
+        assert _crosses(ctx, pierced, patch.faces) is True
+    assert _crosses_uncached(ctx, pierced, patch.faces) is True
