@@ -17,7 +17,7 @@ bunny subdivided to about 50k, 200k, 800k and 3M faces, per-hole seconds against
 ``--update-readme`` replaces the README's Results section with this run's summary.
 
     .venv/bin/python scripts/benchmark.py [--filters a,b] [--out bench_out] [--seed 0] [--cases bunny.obj,sphere]
-                                          [--scaling] [--papers] [--update-readme]
+                                          [--scaling] [--papers] [--refusals] [--update-readme]
 """
 from __future__ import annotations
 
@@ -422,6 +422,51 @@ def workers_speedup(filters=("meshing_close_holes_min_angle_bilateral", "meshing
     return header, rows
 
 
+# ------------------------------------------------------------------------------ refused loops
+
+def spherical_cap(subdivisions=7, height=0.3):
+    """A cap of the unit icosphere (``subdivisions`` levels), ``height`` high: an open scan-like sheet.
+
+    Its area is 1.1 times the area its rim spans, so its one loop outlines the whole mesh.
+    """
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=subdivisions)
+    V, F = mesh_arrays(ms)
+    keep = V[F].mean(axis=1)[:, 2] > 1 - height
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=F[keep].astype(np.int32)))
+    ms.meshing_remove_unreferenced_vertices()
+    return mesh_arrays(ms)
+
+
+def refusal_times(filters=("meshing_close_holes_min_angle_bilateral", "meshing_close_holes_curve_unfolding",
+                           "meshing_close_holes_lssvm_poisson", "meshing_close_holes_differential_evolution")):
+    """Whole-run seconds of each filter on a mesh whose only loop it refuses: a spherical cap.
+
+    The cap's rim outlines its whole component (an island outline), which the filters skip by
+    default; the run's time is how long the refusal takes, mesh transfer included (each filter first
+    runs once on a small cap, untimed, so imports and compiled kernels are loaded).
+    """
+    V, F = spherical_cap()
+    small = spherical_cap(subdivisions=3)
+    edges = None
+    rows = []
+    for name in filters:
+        ms = pymeshlab.MeshSet()
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=small[0], face_matrix=small[1].astype(np.int32)))
+        getattr(ms, name)()
+        ms = pymeshlab.MeshSet()
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=F.astype(np.int32)))
+        t = time.perf_counter()
+        res = getattr(ms, name)()
+        seconds = time.perf_counter() - t
+        hole = res["holes"][0]
+        edges = hole.get("boundary_edges", edges)
+        rows.append([f"`{short_label(name)}`", hole["status"], f"{seconds:.2f}", hole.get("reason", "").split(":")[0]])
+    header = ["filter", "status", "whole run (s)", "reason"]
+    return f"{len(F):,} faces, one loop of {edges} edges", header, rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--filters", default=DEFAULT_FILTERS,
@@ -446,6 +491,8 @@ def main(argv=None):
     ap.add_argument("--batch", action="store_true",
                     help="also batch throughput (files per minute) with 1 and 2 dask workers, and the speed-up")
     ap.add_argument("--workers", action="store_true", help="also face000.ply with workers=1 and 2")
+    ap.add_argument("--refusals", action="store_true",
+                    help="also the time each filter takes to refuse a loop that outlines its whole mesh")
     ap.add_argument("--batch-files", type=int, default=24, help="files in the batch throughput run (default 24)")
     args = ap.parse_args(argv)
     command = ".venv/bin/python scripts/benchmark.py " + " ".join(argv if argv is not None else sys.argv[1:])
@@ -493,6 +540,10 @@ def main(argv=None):
     if args.workers:
         text += ("\n**Holes on all cores** (face000.ply, whole run of each filter in one process, `workers=1` "
                  "then `workers=2`):\n\n" + markdown_table(*workers_speedup()) + "\n")
+    if args.refusals:
+        what, header, rows = refusal_times()
+        text += (f"\n**Refused loops** (a spherical cap, {what}: the rim outlines the whole mesh, so the "
+                 "filters refuse it; whole run of each filter at its defaults):\n\n" + markdown_table(header, rows) + "\n")
     if args.papers and result is not None:
         papers = papers_table(result, command, args.seed, max(args.timeout, 180.0))
         with open(os.path.join(args.out, "papers.md"), "w") as fh:
