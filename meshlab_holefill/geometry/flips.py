@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _flip_kernels as K
 from .quality import corner_angles, cross_rows, face_normals
 from .topology import interior_edges, undirected_keys
 
@@ -65,7 +66,8 @@ def min_angle_scores(V, old1, old2, new1, new2):
     return old, new
 
 
-def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion="sphere", normal_cos=0.0):
+def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion="sphere", normal_cos=0.0, *,
+                compiled=True):
     """Swap interior edges until every one passes the swap test (default: circumsphere, Hu et al. Sec. III.C).
 
     For an interior edge (a, b) with triangles (a, b, c) and (b, a, d) the test passes when
@@ -114,6 +116,9 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         mean normal of the replaced pair (0: no fold; 0.5: neither new triangle turns by 60
         degrees or more, which keeps the shape of a bent quad). None skips the test, for a
         scorer that judges folds itself.
+    compiled : bool
+        With ``criterion="angles"`` and ``normal_cos=0``, run the rounds compiled
+        (:mod:`._flip_kernels`, the same swaps as the numpy rounds); False runs numpy only.
 
     Returns
     -------
@@ -125,8 +130,43 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
     n = len(V)
     fixed = np.unique(undirected_keys(() if fixed_edges is None else fixed_edges, n))
     scorer = min_angle_scores if criterion == "min_angle" else criterion if callable(criterion) else None
+    if compiled and isinstance(criterion, str) and criterion == "angles" and normal_cos == 0.0:
+        V = np.ascontiguousarray(V, np.float64)
+        return _relax_compiled(V, F, fixed, max_rounds, allowed, criterion)
+    return _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer)
+
+
+def _relax_compiled(V, F, fixed, max_rounds, allowed, criterion):
+    """The rounds of :func:`relax_edges` by :mod:`._flip_kernels`; a round they cannot decide runs in numpy."""
     total = 0
     for _ in range(max_rounds):
+        status, abcd, f1f2, ok, new_key = K.swap_candidates(V, F, fixed)
+        if status == K.UNSURE:
+            F, swaps, more = _relax_numpy(V, F, fixed, 1, allowed, criterion, 0.0, None, rounds_left=True)
+            total += swaps
+            if not more:
+                break
+            continue
+        if status != K.CANDIDATES:
+            break
+        cand = np.flatnonzero(ok)
+        if allowed is not None and len(cand):
+            a, b, c, d = abcd[cand].T
+            cand = cand[allowed(V, F, np.stack([a, d, c], axis=1), np.stack([b, c, d], axis=1), f1f2[cand])]
+        if len(cand) == 0:
+            break
+        total += K.apply_swaps(F, cand, abcd, f1f2, new_key)
+    return F, total
+
+
+def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer, rounds_left=False):
+    """The rounds of :func:`relax_edges` in numpy; with ``rounds_left`` also whether the last round
+    swapped (False: it stopped as relax_edges stops)."""
+    n = len(V)
+    total = 0
+    more = False
+    for _ in range(max_rounds):
+        more = False
         E, f1, c1, f2, c2 = interior_edges(F, n)
         if len(E) == 0:
             break
@@ -161,7 +201,8 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         F[f1[chosen]] = np.stack([a[chosen], d[chosen], c[chosen]], axis=1)
         F[f2[chosen]] = np.stack([b[chosen], c[chosen], d[chosen]], axis=1)
         total += len(chosen)
-    return F, total
+        more = True
+    return (F, total, more) if rounds_left else (F, total)
 
 
 def _in_sorted(x, table):

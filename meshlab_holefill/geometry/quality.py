@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._quality_kernels import triangle_quality_kernel
+
 __all__ = ["cross_rows", "face_normals", "face_areas", "vertex_normals", "edge_lengths", "triangle_quality",
            "corner_angles", "corner_sums", "unique_edges", "mean_edge_length"]
 
@@ -93,7 +95,9 @@ def edge_lengths(V, F):
 def triangle_quality(V, F):
     """Field's quality 2r/R (twice inradius over circumradius), as used by Hu et al. Sec. IV.
 
-    Equals 1 for an equilateral triangle and 0 for a degenerate one.
+    Equals 1 for an equilateral triangle and 0 for a degenerate one. Compiled
+    (:func:`._quality_kernels.triangle_quality_kernel`, the same bits as
+    :func:`triangle_quality_numpy`): the per-hole loops call it thousands of times on a few faces.
 
     Parameters
     ----------
@@ -104,8 +108,19 @@ def triangle_quality(V, F):
     -------
     q : (m,) float64 in [0, 1]
     """
-    # One gather of the corners (the per-hole loops call this on a few faces at a time); the
-    # same arithmetic as edge_lengths and face_areas.
+    F_arr = np.asarray(F)
+    V_arr = np.asarray(V, dtype=np.float64)
+    if F_arr.ndim == 2 and F_arr.shape[1] == 3 and V_arr.ndim == 2 and V_arr.shape[1] == 3 \
+            and F_arr.dtype.kind in "iu":
+        q, ok = triangle_quality_kernel(np.ascontiguousarray(V_arr), np.ascontiguousarray(F_arr, np.int64))
+        if ok:
+            return q
+    return triangle_quality_numpy(V_arr, F_arr)  # other shapes, and the IndexError of a bad index
+
+
+def triangle_quality_numpy(V, F):
+    """:func:`triangle_quality` in numpy (the reference of the compiled kernel)."""
+    # One gather of the corners; the same arithmetic as edge_lengths and face_areas.
     P = np.asarray(V, dtype=np.float64)[np.asarray(F)]
     a, b, c = P[:, 1] - P[:, 2], P[:, 2] - P[:, 0], P[:, 0] - P[:, 1]
     L = np.sqrt(np.stack([(a * a).sum(axis=1), (b * b).sum(axis=1), (c * c).sum(axis=1)], axis=1))

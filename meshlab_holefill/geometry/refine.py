@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._refine_kernels import split_test
 from .flips import relax_edges
 from .quality import corner_angles
 
@@ -22,6 +23,18 @@ def split_condition(V, F, scale, alpha):
     centroids : (m, 3) float64
     centroid_scale : (m,) float64
     """
+    V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
+    if V.ndim == 2 and V.shape[1] == 3 and F.ndim == 2 and F.shape[1] == 3 and len(F) and \
+            np.shape(scale) == (len(V),) and 0 <= F.min() and F.max() < len(V):
+        mask, C, sc, sure = split_test(np.ascontiguousarray(V), np.ascontiguousarray(F),
+                                       np.ascontiguousarray(scale, np.float64), float(alpha))
+        if sure:  # the same bits as the numpy code below, which decides the rest
+            return mask, C, sc
+    return split_condition_numpy(V, F, scale, alpha)
+
+
+def split_condition_numpy(V, F, scale, alpha):
+    """:func:`split_condition` in numpy (the reference of the compiled test)."""
     C = V[F].mean(axis=1)
     sc = scale[F].mean(axis=1)
     dist = alpha * np.linalg.norm(V[F] - C[:, None, :], axis=2)

@@ -204,3 +204,49 @@ def test_sorted_membership_equals_isin():
         table = np.sort(rng.integers(0, 50, int(rng.integers(0, 30))))  # repeats allowed
         x = rng.integers(-5, 55, int(rng.integers(0, 30)))
         np.testing.assert_array_equal(_in_sorted(x, table), np.isin(x, table))
+
+
+def _bumpy_patch(rng, nx=9):
+    """A jittered, bumpy grid with random diagonals: many failing edges, folds and near-ties."""
+    from conftest import grid
+
+    V, F = grid(nx, nx)
+    V = V + np.concatenate([rng.normal(scale=0.3 / nx, size=(len(V), 2)), np.zeros((len(V), 1))], axis=1)
+    V[:, 2] = 0.3 * np.sin(3 * V[:, 0]) * rng.uniform(0, 1) + rng.normal(scale=0.02, size=len(V)) * rng.integers(0, 2)
+    return V, F
+
+
+def test_compiled_angle_rounds_make_the_numpy_swaps():
+    # The compiled rounds (criterion "angles") against the numpy rounds: the same faces and swap
+    # counts, with and without fixed edges and a veto hook.
+    from meshlab_holefill.geometry.topology import interior_edges
+
+    rng = np.random.default_rng(3)
+    for trial in range(60):
+        V, F = _bumpy_patch(rng, int(rng.integers(3, 12)))
+        E = interior_edges(F, len(V))[0]
+        fixed = E[rng.random(len(E)) < 0.1]
+        veto = rng.random() < 0.5
+
+        def allowed(V, F, A, B, replaced):  # deterministic in the swap, so both runs see the same veto
+            return (A.sum(axis=1) + B.sum(axis=1)) % 3 != 0 if veto else np.ones(len(A), bool)
+
+        got = relax_edges(V, F, fixed, allowed=allowed, criterion="angles")
+        want = relax_edges(V, F, fixed, allowed=allowed, criterion="angles", compiled=False)
+        np.testing.assert_array_equal(got[0], want[0])
+        assert got[1] == want[1]
+
+
+def test_compiled_rounds_defer_an_undecided_angle_sum_to_numpy():
+    # Edge (a, b) with opposite angles pi / 2 at c and pi / 2 + pi 1e-9 at d: their sum is the
+    # test's limit pi (1 + 1e-9) up to rounding, so the round runs in numpy.
+    from meshlab_holefill.geometry import _flip_kernels as FK
+
+    t = 1.0 / np.tan(np.pi / 4 + np.pi / 2 * 1e-9)
+    V = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, t, 0]], float)
+    F = np.array([[0, 1, 2], [1, 0, 3]])
+    assert FK.swap_candidates(V, F, np.zeros(0, np.int64))[0] == FK.UNSURE
+    for move in (0.0, 1e-6, -1e-6):  # and on either side of the limit, decided by the kernel
+        W = V + [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, move, 0]]
+        np.testing.assert_array_equal(relax_edges(W, F, criterion="angles")[0],
+                                      relax_edges(W, F, criterion="angles", compiled=False)[0])

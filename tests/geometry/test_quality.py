@@ -80,3 +80,22 @@ def test_unique_edges_equals_the_row_wise_unique_of_the_sorted_edges():
         got = unique_edges(F)
         assert got.dtype == np.int64 and got.shape == (len(np.unique(E, axis=0)), 2)
         np.testing.assert_array_equal(got, np.unique(E, axis=0))
+
+
+def test_compiled_quality_matches_the_numpy_reference_bit_for_bit():
+    from meshlab_holefill.geometry.quality import triangle_quality_numpy
+
+    rng = np.random.default_rng(2)
+    V = rng.normal(size=(300, 3)) * 10.0 ** rng.integers(-6, 6, (300, 1))
+    V[:30] = V[30:60]  # repeated points: degenerate faces
+    V[60:70] = np.linspace(0.0, 1.0, 10)[:, None] * [1.0, 2.0, 3.0]  # collinear points
+    for F in (rng.integers(0, 300, (5000, 3)), rng.integers(-300, 300, (500, 3)).astype(np.int32),
+              np.zeros((0, 3), np.int64), np.array([[60, 61, 62], [0, 30, 1]])):
+        got, want = triangle_quality(V, F), triangle_quality_numpy(V, F)
+        assert got.shape == want.shape and got.dtype == np.float64
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+
+
+def test_quality_rejects_an_index_out_of_range():
+    with pytest.raises(IndexError, match="out of bounds"):
+        triangle_quality(EQUILATERAL, np.array([[0, 1, 3]]))

@@ -20,3 +20,36 @@ def test_refinement_matches_the_boundary_density():
     assert 0.7 < lengths.mean() / h < 1.4
     # Splits and swaps alone do not move vertices: fair quality, not the best.
     assert triangle_quality(V, F2).mean() > 0.7
+
+
+def test_compiled_split_test_matches_the_numpy_code_bit_for_bit():
+    from meshlab_holefill.geometry import _refine_kernels as RK
+    from meshlab_holefill.geometry.refine import split_condition, split_condition_numpy
+
+    rng = np.random.default_rng(4)
+    for _ in range(50):
+        V = rng.normal(size=(40, 3)) * 10.0 ** rng.integers(-3, 4)
+        F = rng.integers(0, 40, (60, 3))
+        scale = rng.uniform(0.1, 2.0, 40) * np.abs(V).max()
+        alpha = float(rng.uniform(0.5, 3.0))
+        mask, C, sc, sure = RK.split_test(V, F, scale, alpha)
+        want = split_condition_numpy(V, F, scale, alpha)
+        got = split_condition(V, F, scale, alpha)
+        for x, y in zip(got, want):
+            np.testing.assert_array_equal(x, y)
+        if sure:
+            np.testing.assert_array_equal(mask, want[0])
+            np.testing.assert_array_equal(C.view(np.int64), want[1].view(np.int64))
+            np.testing.assert_array_equal(sc.view(np.int64), want[2].view(np.int64))
+
+
+def test_a_corner_angle_at_the_limit_is_left_to_numpy():
+    from meshlab_holefill.geometry import _refine_kernels as RK
+    from meshlab_holefill.geometry.refine import split_condition, split_condition_numpy
+
+    t = 5 * np.pi / 6  # a corner of exactly 150 degrees up to rounding
+    V = np.array([[0, 0, 0], [1, 0, 0], [np.cos(t), np.sin(t), 0]])
+    F = np.array([[0, 1, 2]])
+    assert not RK.split_test(V, F, np.full(3, 0.01), 1.4)[3]
+    for x, y in zip(split_condition(V, F, np.full(3, 0.01), 1.4), split_condition_numpy(V, F, np.full(3, 0.01), 1.4)):
+        np.testing.assert_array_equal(x, y)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...geometry.quality import cross_rows, triangle_quality, vertex_normals
-from ...geometry.topology import one_ring_matrix
+from ._bilateral_kernels import refuse_slivers
 
 __all__ = ["bilateral_filter"]
 
@@ -28,12 +28,43 @@ def _radius_pairs(V, movable, rho, fixed_points):
     return rows[keep], cols[keep], X
 
 
+def _ring_pairs(F, n):
+    """(rows, cols) of the 1-ring adjacency, ordered by row then column, once each: the entries
+    of ``one_ring_matrix(F, n).tocoo()`` (a canonical CSR matrix), without building it."""
+    F = np.asarray(F, np.int64)
+    i = np.concatenate([F[:, 0], F[:, 1], F[:, 2], F[:, 1], F[:, 2], F[:, 0]])
+    j = np.concatenate([F[:, 1], F[:, 2], F[:, 0], F[:, 0], F[:, 1], F[:, 2]])
+    keys = np.unique(i * n + j)
+    return keys // n, keys % n
+
+
+def _row_maxima(rows, values, n):
+    """Largest value per row (-inf for rows without values) for sorted ``rows``: np.maximum.at's
+    answer (maxima are exact, NaN propagates in both), by one reduceat."""
+    out = np.full(n, -np.inf)
+    if len(rows) == 0:
+        return out
+    starts = np.flatnonzero(np.concatenate([[True], rows[1:] != rows[:-1]]))
+    out[rows[starts]] = np.maximum.reduceat(values, starts)
+    return out
+
+
 def _refuse_slivers(V_old, V_new, F, moved, min_quality):
     """Undo the moves that would push an incident face below min(min_quality, its quality before).
 
     Moves are undone vertex by vertex around each offending face, a few passes until no face
-    offends (a face made of unmoved vertices keeps its quality, so this terminates).
+    offends (a face made of unmoved vertices keeps its quality, so this terminates). Compiled
+    (:func:`._bilateral_kernels.refuse_slivers`, the bits of :func:`_refuse_slivers_numpy`).
     """
+    F = np.ascontiguousarray(F, np.int64)
+    if len(F) and (F.min() < 0 or F.max() >= len(V_old)):
+        return _refuse_slivers_numpy(V_old, V_new, F, moved, min_quality)
+    return refuse_slivers(np.ascontiguousarray(V_old, np.float64), np.ascontiguousarray(V_new, np.float64), F,
+                          np.ascontiguousarray(moved, bool), float(min_quality))
+
+
+def _refuse_slivers_numpy(V_old, V_new, F, moved, min_quality):
+    """:func:`_refuse_slivers` in numpy (the reference of the compiled guard)."""
     q_old = triangle_quality(V_old, F)
     floor = np.minimum(q_old, min_quality)
     n_old = cross_rows(V_old[F[:, 1]] - V_old[F[:, 0]], V_old[F[:, 2]] - V_old[F[:, 0]])
@@ -95,8 +126,7 @@ def bilateral_filter(V, F, movable, sigma_c, sigma_s, iterations=3, *, neighbour
     sc_all = np.broadcast_to(np.asarray(sigma_c, np.float64), (n,))
     ss_all = np.broadcast_to(np.asarray(sigma_s, np.float64), (n,))
     if neighbourhood == "ring":
-        A = one_ring_matrix(F, n).tocoo()
-        rows, cols = A.row, A.col
+        rows, cols = _ring_pairs(F, n)
         keep = movable[rows]
         rows, cols = rows[keep], cols[keep]
     elif neighbourhood != "radius":
@@ -113,8 +143,7 @@ def bilateral_filter(V, F, movable, sigma_c, sigma_s, iterations=3, *, neighbour
         h = np.einsum("ij,ij->i", N[rows], D)
         # Work with log-weights so that a narrow closeness kernel does not underflow to 0/0.
         logw = -t2 / (2 * sc ** 2) - h ** 2 / (2 * ss ** 2)
-        shift = np.full(n, -np.inf)
-        np.maximum.at(shift, rows, logw)
+        shift = _row_maxima(rows, logw, n)
         w = np.exp(logw - shift[rows])
         num = np.bincount(rows, weights=w * h, minlength=n)
         den = np.bincount(rows, weights=w, minlength=n)

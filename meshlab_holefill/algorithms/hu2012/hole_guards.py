@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...geometry.intersections import faces_intersecting, intersecting_pairs
+from ._sector_kernels import sector_contains
 
 __all__ = ["sector_angle", "inside_hole_sector", "LoopSectors", "patch_crossings", "patch_guard", "swaps_crossing"]
 
@@ -72,7 +73,7 @@ class LoopSectors:
         u = np.roll(P, -1, axis=0) - P
         u -= np.einsum("ij,ij->i", u, N)[:, None] * N
         u /= np.maximum(np.linalg.norm(u, axis=1), 1e-300)[:, None]
-        self.points, self.u, self.w = P, u, np.cross(N, u)
+        self.points, self.u, self.w = np.ascontiguousarray(P), u, np.ascontiguousarray(np.cross(N, u))
         self.limit = self._angle(np.arange(len(P)), np.roll(P, 1, axis=0))
 
     def _angle(self, i, targets):
@@ -81,7 +82,23 @@ class LoopSectors:
                       2 * np.pi)
 
     def contains(self, i, targets, margin=1e-9):
-        """(s,) bool: does the segment from loop vertex i[j] to targets[j] start into the hole?"""
+        """(s,) bool: does the segment from loop vertex i[j] to targets[j] start into the hole?
+
+        Compiled (:func:`._sector_kernels.sector_contains`); an angle too close to a bound to
+        decide there is decided by :meth:`contains_numpy`, so the answer is always its answer.
+        """
+        i = np.ascontiguousarray(i, np.int64)
+        T = np.ascontiguousarray(np.atleast_2d(targets), np.float64)
+        if len(i) == 0 and T.size == 0:
+            return np.zeros(0, bool)
+        if T.shape == (len(i), 3) and len(i) and 0 <= i.min() and i.max() < len(self.points):
+            inside, sure = sector_contains(self.points, self.u, self.w, self.limit, i, T, float(margin))
+            if sure:
+                return inside
+        return self.contains_numpy(i, targets, margin)
+
+    def contains_numpy(self, i, targets, margin=1e-9):
+        """:meth:`contains` in numpy (the reference of the compiled test)."""
         i = np.asarray(i, np.int64)
         phi = self._angle(i, np.atleast_2d(targets))
         return (phi > margin) & (phi < self.limit[i] - margin)

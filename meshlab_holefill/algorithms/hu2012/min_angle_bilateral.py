@@ -59,7 +59,7 @@ from ...core.parameters import ParamSpec
 from .tangential_smoothing import tangential_smoothing
 from .min_angle_triangulation import min_angle_triangulation
 
-__all__ = ["fill", "PARAMS", "RINGS", "relaxation_guard", "embeds_in_projection"]
+__all__ = ["fill", "PARAMS", "RINGS", "WARM_UP", "warm_up", "relaxation_guard", "embeds_in_projection"]
 
 RINGS = 2
 
@@ -104,6 +104,32 @@ PARAMS = [
               "min(filter_guard, its quality before), or flip it, is undone; 0 turns the guard off.",
               minimum=0.0, maximum=1.0),
 ]
+
+
+_WARM = []  # set once the kernels are loaded in this process
+
+
+def warm_up():
+    """Load (or compile) the filter's numba kernels now, by filling a small hole with both option sets.
+
+    The kernels are compiled on first use and cached on disk; loading them takes a few tenths
+    of a second per process. The pipeline calls this (``WARM_UP``) before filling holes, so
+    that forked workers inherit the loaded kernels instead of each loading them within its
+    first hole's time.
+    """
+    if _WARM:
+        return
+    from ...core import examples
+    from ...core.holes import hole_context
+
+    V, F, loop = examples.bowl_with_hole()
+    ctx = hole_context(V, F, loop, rings=RINGS)
+    fill(ctx)
+    fill(ctx, fairing="thinplate", iterations=0, smoothing=1)
+    _WARM.append(True)
+
+
+WARM_UP = warm_up
 
 
 def relaxation_guard(ctx):
@@ -253,12 +279,29 @@ def embeds_in_projection(V, F, k, min_sine=1e-6):
     return bool(used.all() and np.all(np.abs(total - expected) < 1e-6))
 
 
+_CROSSES = []  # the last few (ctx, V bytes, F bytes, answer) of _crosses
+
+
 def _crosses(ctx, V, F):
     """Does the patch (V loop-first, F) intersect itself or the surrounding faces?
 
     The self-intersection query is skipped when :func:`embeds_in_projection` shows the
     patch is one-to-one over its mean plane (most patches; the query is the costly part).
+    The answers for the last few patches are kept: with the options the same patch is often
+    checked twice (after smoothing and at the end).
     """
+    V, F = np.asarray(V), np.asarray(F)
+    key = (V.dtype.str, V.shape, V.tobytes(), F.dtype.str, F.shape, F.tobytes())
+    for c, k, answer in _CROSSES:
+        if c is ctx and k == key:
+            return answer
+    answer = _crosses_uncached(ctx, V, F)
+    _CROSSES.insert(0, (ctx, key, answer))
+    del _CROSSES[4:]
+    return answer
+
+
+def _crosses_uncached(ctx, V, F):
     from ...geometry.intersections import intersecting_pairs
 
     if len(patch_crossings(ctx, V, F)):

@@ -13,6 +13,7 @@ import numpy as np
 
 from ...geometry.topology import edge_pair_set
 from ...errors import HoleFillError
+from . import _min_angle_kernels as K
 
 __all__ = ["boundary_angles", "normal_angle_threshold", "min_angle_triangulation"]
 
@@ -151,6 +152,28 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
     -------
     F : (k - 2, 3) int64  faces in loop indices, oriented like the loop
     """
+    if len(P) < 3:
+        raise HoleFillError("a hole needs at least 3 boundary vertices")
+    faces, status = _compiled_faces(P, normals, forbidden_edges)
+    if status == K.OK:
+        return faces
+    return min_angle_triangulation_python(P, normals, forbidden_edges)  # undecided comparison, or an error
+
+
+def _compiled_faces(P, normals, forbidden_edges):
+    """The compiled loop (:func:`._min_angle_kernels.min_angle_faces`) on the inputs of :class:`_Ears`."""
+    P = np.ascontiguousarray(P, np.float64)
+    N = np.ascontiguousarray(normals, np.float64)
+    k = len(P)
+    E = np.sort(np.asarray(forbidden_edges, np.int64).reshape(-1, 2), axis=1)
+    E = E[(E[:, 0] >= 0) & (E[:, 1] < k)]  # other pairs never match an ear's loop-index pair
+    keys = np.unique(E[:, 0] * k + E[:, 1])
+    area_tol = 1e-14 * float(np.ptp(P, axis=0).max()) ** 2
+    return K.min_angle_faces(P, N, float(np.cos(normal_angle_threshold(N))), keys, area_tol, 2.0)
+
+
+def min_angle_triangulation_python(P, normals, forbidden_edges=()):
+    """:func:`min_angle_triangulation` in Python (:class:`_Ears`), the reference of the compiled loop."""
     if len(P) < 3:
         raise HoleFillError("a hole needs at least 3 boundary vertices")
     ears = _Ears(P, normals, forbidden_edges)

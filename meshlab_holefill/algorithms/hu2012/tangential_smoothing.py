@@ -16,6 +16,7 @@ import numpy as np
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
+from ._smoothing_kernels import refuse_worse
 
 __all__ = ["bisect_obtuse", "collapse_poor", "tangential_smoothing"]
 
@@ -25,9 +26,18 @@ def _refuse_worse(V_old, V_new, F, moved):
 
     Jacobi-style: all moves are made, then every moved vertex whose incident faces' smallest
     quality 2r/R dropped (or one of whose faces flipped) goes back, until no such vertex is
-    left (undoing only restores faces, so this ends).
+    left (undoing only restores faces, so this ends). Compiled
+    (:func:`._smoothing_kernels.refuse_worse`, the bits of :func:`_refuse_worse_numpy`).
     """
+    F = np.ascontiguousarray(F, np.int64)
+    if len(F) and (F.min() < 0 or F.max() >= len(V_old)):
+        return _refuse_worse_numpy(V_old, V_new, F, moved)
+    return refuse_worse(np.ascontiguousarray(V_old, np.float64), np.ascontiguousarray(V_new, np.float64), F,
+                        np.ascontiguousarray(moved, bool))
 
+
+def _refuse_worse_numpy(V_old, V_new, F, moved):
+    """:func:`_refuse_worse` in numpy (the reference of the compiled guard)."""
     n = len(V_old)
     q_old = triangle_quality(V_old, F)
     worst_old = np.full(n, np.inf)
@@ -85,11 +95,13 @@ def bisect_obtuse(V, F, movable, fixed=None, attr=None, min_angle=2.0 * np.pi / 
     V = np.asarray(V, np.float64)
     F = np.asarray(F, np.int64)
     n = len(V)
+    q = triangle_quality(V, F)
+    if not np.any(q < max_quality):  # no candidate (the usual round): spare the edge table and angles
+        return V, F, movable, attr
     E, f1, c1, f2, c2 = interior_edges(F, n)
     if len(E) == 0:
         return V, F, movable, attr
     ang = corner_angles(V, F)
-    q = triangle_quality(V, F)
     o1, o2 = (c1 + 2) % 3, (c2 + 2) % 3
     bad1 = (q[f1] < max_quality) & (ang[f1, o1] > min_angle)
     bad2 = (q[f2] < max_quality) & (ang[f2, o2] > min_angle)

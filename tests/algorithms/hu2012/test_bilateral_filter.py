@@ -111,3 +111,37 @@ def test_bilateral_guard_refuses_a_move_that_flips_a_face_of_good_quality():
     guarded = bilateral_filter(V, F, movable, 1e3, 1e3, iterations=1, min_quality=0.5)
     assert np.all(np.einsum("ij,ij->i", cross(V), cross(guarded)) > 0)
     assert np.array_equal(guarded, V)  # the only move was the flipping one
+
+
+def test_compiled_sliver_guard_matches_the_numpy_code_bit_for_bit():
+    from meshlab_holefill.algorithms.hu2012.bilateral_filter import _refuse_slivers, _refuse_slivers_numpy
+    from conftest import grid
+
+    rng = np.random.default_rng(6)
+    for trial in range(40):
+        V, F = grid(int(rng.integers(3, 9)), int(rng.integers(3, 9)))
+        V = V + rng.normal(scale=0.05, size=V.shape)
+        moved = rng.random(len(V)) < 0.6
+        V_new = V + moved[:, None] * rng.normal(scale=10.0 ** rng.uniform(-3, 0), size=V.shape)
+        floor = float(rng.uniform(0.0, 1.0))
+        got = _refuse_slivers(V, V_new, F, moved, floor)
+        want = _refuse_slivers_numpy(V, V_new, F, moved, floor)
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+
+
+def test_ring_pairs_are_the_entries_of_the_one_ring_matrix():
+    from meshlab_holefill.algorithms.hu2012.bilateral_filter import _ring_pairs, _row_maxima
+    from meshlab_holefill.geometry.topology import one_ring_matrix
+
+    rng = np.random.default_rng(7)
+    for _ in range(30):
+        n = int(rng.integers(3, 40))
+        F = rng.integers(0, n, (int(rng.integers(1, 60)), 3))
+        A = one_ring_matrix(F, n).tocoo()
+        rows, cols = _ring_pairs(F, n)
+        np.testing.assert_array_equal(rows, A.row)
+        np.testing.assert_array_equal(cols, A.col)
+        values = rng.normal(size=len(rows))
+        expected = np.full(n, -np.inf)
+        np.maximum.at(expected, rows, values)
+        np.testing.assert_array_equal(_row_maxima(rows, values, n), expected)

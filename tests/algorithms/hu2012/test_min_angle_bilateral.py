@@ -576,3 +576,65 @@ def test_refuse_worse_undoes_exactly_the_moves_a_full_recompute_undoes():
         np.minimum.at(worst_old, F.ravel(), np.repeat(triangle_quality(V, F), 3))
         kept = moved & np.any(got != V, axis=1)
         assert np.all(worst[kept] >= worst_old[kept] - 1e-12)  # no kept move lowers its faces' minimum
+
+
+def test_compiled_sector_test_answers_as_the_numpy_code():
+    from meshlab_holefill.algorithms.hu2012.hole_guards import LoopSectors
+
+    rng = np.random.default_rng(8)
+    for _ in range(30):
+        k = int(rng.integers(3, 30))
+        t = np.sort(rng.uniform(0, 2 * np.pi, k))
+        P = np.stack([np.cos(t), np.sin(t), 0.2 * rng.normal(size=k)], axis=1)
+        N = np.array([0.0, 0.0, 1.0]) + 0.3 * rng.normal(size=(k, 3))
+        sectors = LoopSectors(P, N)
+        i = rng.integers(0, k, 200)
+        targets = np.concatenate([rng.normal(size=(190, 3)), P[rng.integers(0, k, 10)]])  # loop points too
+        np.testing.assert_array_equal(sectors.contains(i, targets), sectors.contains_numpy(i, targets))
+
+
+def test_a_direction_on_the_sector_bound_is_left_to_numpy():
+    from meshlab_holefill.algorithms.hu2012._sector_kernels import sector_contains
+    from meshlab_holefill.algorithms.hu2012.hole_guards import LoopSectors
+
+    P = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
+    sectors = LoopSectors(P, np.tile([0.0, 0.0, 1.0], (3, 1)))
+    i = np.array([0, 0])
+    targets = np.array([[2.0, 0.0, 0.0], [0.5, 0.5, 0.0]])  # along the next edge (angle 0), and inside
+    assert not sector_contains(sectors.points, sectors.u, sectors.w, sectors.limit, i, targets, 0.0)[1]
+    np.testing.assert_array_equal(sectors.contains(i, targets, margin=0.0), sectors.contains_numpy(i, targets, 0.0))
+    assert sectors.contains(i[1:], targets[1:]).tolist() == [True]
+
+
+def test_warm_up_loads_every_kernel_of_the_filter():
+    from numba.core.registry import CPUDispatcher
+
+    from meshlab_holefill.algorithms.hu2012 import _bilateral_kernels, _min_angle_kernels, _sector_kernels
+    from meshlab_holefill.algorithms.hu2012 import _smoothing_kernels, min_angle_bilateral
+    from meshlab_holefill.geometry import _flip_kernels, _quality_kernels, _refine_kernels
+
+    min_angle_bilateral.warm_up()
+    assert min_angle_bilateral.WARM_UP is min_angle_bilateral.warm_up
+    for module in (_bilateral_kernels, _min_angle_kernels, _sector_kernels, _smoothing_kernels, _flip_kernels,
+                   _refine_kernels):
+        for name in module.__all__:
+            kernel = getattr(module, name)
+            if isinstance(kernel, CPUDispatcher):
+                assert kernel.signatures, f"{module.__name__}.{name} not loaded"
+    assert _quality_kernels.triangle_quality_kernel.signatures
+
+
+def test_remembered_crossing_answers_are_those_of_the_check():
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import _crosses, _crosses_uncached
+    from meshlab_holefill.core import examples
+
+    V, F, loop = examples.bowl_with_hole()
+    ctx = hole_context(V, F, loop, rings=2)
+    patch = fill(ctx)
+    X = np.concatenate([ctx.points, patch.vertices])
+    pierced = X.copy()
+    pierced[ctx.size:] = X[ctx.size:][::-1] + [0.05, 0.0, 0.0]  # new vertices shuffled: the patch folds through itself
+    for _ in range(2):  # the second round answers from memory
+        assert _crosses(ctx, X, patch.faces) is False
+        assert _crosses(ctx, pierced, patch.faces) is True
+    assert _crosses_uncached(ctx, pierced, patch.faces) is True

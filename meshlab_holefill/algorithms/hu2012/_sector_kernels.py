@@ -1,0 +1,39 @@
+"""Compiled hole-sector test (numba): :meth:`.hole_guards.LoopSectors.contains` row by row.
+
+The angle of each direction about the vertex normal is computed with the numpy code's
+operations in its order (row dots in numpy's einsum order, the same floor modulo), except that
+``arctan2`` is libm's where the numpy code's is numpy's SIMD routine, which may differ in the
+last bits. The angle is only compared with the sector's bounds, so a comparison within
+``ANGLE_MARGIN`` of a bound (far more than that difference) makes the kernel answer
+``sure=False`` and the caller runs the numpy code. tests/algorithms/hu2012/test_min_angle_bilateral.py
+checks the kernel against it.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ...geometry._tri_kernels import _dot
+
+__all__ = ["sector_contains", "ANGLE_MARGIN"]
+
+ANGLE_MARGIN = 1e-12
+
+
+@njit(cache=True)
+def sector_contains(points, u, w, limit, index, targets, margin):
+    """(inside, sure): does the segment from loop vertex index[j] to targets[j] start into its hole sector?"""
+    s = index.shape[0]
+    inside = np.zeros(s, np.bool_)
+    two_pi = 2 * np.pi
+    for r in range(s):
+        i = index[r]
+        d = (targets[r, 0] - points[i, 0], targets[r, 1] - points[i, 1], targets[r, 2] - points[i, 2])
+        phi = math.atan2(_dot(d, (w[i, 0], w[i, 1], w[i, 2])), _dot(d, (u[i, 0], u[i, 1], u[i, 2]))) % two_pi
+        upper = limit[i] - margin
+        if not (abs(phi - margin) > ANGLE_MARGIN and abs(phi - upper) > ANGLE_MARGIN):  # NaN too
+            return inside, False
+        inside[r] = phi > margin and phi < upper
+    return inside, True

@@ -1,0 +1,264 @@
+"""Compiled rounds of :func:`.flips.relax_edges` (numba) for the unfolded-angle test.
+
+One round of the numpy code (interior edges, the swap test, the new-edge test, orientation,
+duplicate and fixed edges, then an independent set of the allowed swaps) is some sixty small
+array operations; on the few hundred edges of a patch their overhead is most of the
+refinement's time. :func:`swap_candidates` and :func:`apply_swaps` do the same round element
+by element: the same IEEE operations in the same order (row cross products, norms and einsum
+dots as in :mod:`._tri_kernels`), so every integer answer is the numpy code's, with one
+exception handled by deferring: the numpy code's ``arctan2`` is numpy's SIMD routine, which
+may differ from libm's in the last bits. The angle sums it feeds are only compared with
+pi (1 + 1e-9); when a sum lies within ``ANGLE_MARGIN`` (thousands of times that difference)
+of it, :func:`swap_candidates` answers ``UNSURE`` and the caller runs the round in numpy.
+tests/geometry/test_flips.py checks whole relaxations against the numpy rounds.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ._tri_kernels import _cross, _dot, _norm, _sub
+
+__all__ = ["swap_candidates", "apply_swaps", "NO_EDGES", "NO_FAILING", "CANDIDATES", "UNSURE", "ANGLE_MARGIN"]
+
+NO_EDGES, NO_FAILING, CANDIDATES, UNSURE = 0, 1, 2, 3
+ANGLE_MARGIN = 1e-12
+
+
+@njit(cache=True)
+def _row(V, i):
+    return (V[i, 0], V[i, 1], V[i, 2])
+
+
+@njit(cache=True)
+def _angle_parts(V, p, q, r):
+    """(|u x w|, u . w) of the angle at p of the triangle (p, q, r), as flips._angle_at computes them."""
+    P = _row(V, p)
+    u, w = _sub(_row(V, q), P), _sub(_row(V, r), P)
+    return _norm(_cross(u, w)), _dot(u, w)
+
+
+@njit(cache=True)
+def _angle_sum_exceeds(V, p1, q1, r1, p2, q2, r2):
+    """1 / 0 when angle(p1; q1, r1) + angle(p2; q2, r2) > pi (1 + 1e-9) clearly holds / fails, -1 if too close.
+
+    Most sums are far from the limit, and the sign of sin(alpha + beta) (no arctan2) tells
+    which side they are on: below -1e-6 the sum lies in (pi + 1e-6, 2 pi), above 1e-6 in
+    (1e-6, pi - 1e-6), both angles being in [0, pi]; its rounding error is of order 1e-15.
+    Other sums are computed by arctan2 as the numpy code does.
+    """
+    s1, c1 = _angle_parts(V, p1, q1, r1)
+    s2, c2 = _angle_parts(V, p2, q2, r2)
+    sine = s1 * c2 + c1 * s2
+    scale = math.sqrt(s1 * s1 + c1 * c1) * math.sqrt(s2 * s2 + c2 * c2)
+    if sine < -1e-6 * scale:
+        return 1
+    if sine > 1e-6 * scale:
+        return 0
+    s = math.atan2(s1, c1) + math.atan2(s2, c2)
+    limit = np.pi * (1 + 1e-9)
+    if not abs(s - limit) > ANGLE_MARGIN:  # NaN too: the numpy code's two tests treat it differently
+        return -1
+    return 1 if s > limit else 0
+
+
+@njit(cache=True)
+def _keeps_orientation(V, a, b, c, d):
+    """flips._keeps_orientation with normal_cos = 0 for one edge."""
+    A, B, C, D = _row(V, a), _row(V, b), _row(V, c), _row(V, d)
+    o1 = _cross(_sub(B, A), _sub(C, A))
+    o2 = _cross(_sub(A, B), _sub(D, B))
+    old = (o1[0] + o2[0], o1[1] + o2[1], o1[2] + o2[2])
+    n1 = _cross(_sub(D, A), _sub(C, A))
+    n2 = _cross(_sub(C, B), _sub(D, B))
+    return _dot(n1, old) > 0 and _dot(n2, old) > 0
+
+
+@njit(cache=True)
+def _contains(sorted_keys, key):
+    i = np.searchsorted(sorted_keys, key)
+    return i < sorted_keys.shape[0] and sorted_keys[i] == key
+
+
+@njit(cache=True)
+def _outgoing(F, n):
+    """Half-edges grouped by their first vertex: h = 3 f + j (F[f, j] -> F[f, (j + 1) % 3]) for
+    start[a] <= r < start[a + 1] in ascending h; ok=False when an index is out of range or a
+    directed edge repeats (the numpy code's order of such edges is its own)."""
+    m = F.shape[0]
+    start = np.zeros(n + 1, np.int64)
+    half = np.empty(3 * m, np.int64)
+    for f in range(m):
+        for j in range(3):
+            a = F[f, j]
+            if a < 0 or a >= n:
+                return start, half, False
+            start[a + 1] += 1
+    for a in range(n):
+        start[a + 1] += start[a]
+    fill = start[:-1].copy()
+    for h in range(3 * m):
+        a = F[h // 3, h % 3]
+        half[fill[a]] = h
+        fill[a] += 1
+    for a in range(n):
+        for r in range(start[a], start[a + 1]):
+            b = _head(F, half[r])
+            if b < 0 or b >= n:
+                return start, half, False
+            for t in range(start[a], r):
+                if _head(F, half[t]) == b:
+                    return start, half, False
+    return start, half, True
+
+
+@njit(cache=True)
+def _head(F, h):
+    return F[h // 3, (h % 3 + 1) % 3]
+
+
+@njit(cache=True)
+def _find(F, start, half, a, b):
+    """The half-edge a -> b, or -1."""
+    for r in range(start[a], start[a + 1]):
+        if _head(F, half[r]) == b:
+            return half[r]
+    return -1
+
+
+@njit(cache=True)
+def _interior_edges(F, n):
+    """topology.interior_edges: (he, tw) half-edge indices of each interior edge (he ascending),
+    the half-edge table, and ok=False when the numpy code must decide (see :func:`_outgoing`)."""
+    m = F.shape[0]
+    start, half, fine = _outgoing(F, n)
+    he = np.empty(3 * m, np.int64)
+    tw = np.empty(3 * m, np.int64)
+    if not fine:
+        return he[:0], tw[:0], start, half, False
+    e = 0
+    for h in range(3 * m):
+        a, b = F[h // 3, h % 3], _head(F, h)
+        if a < b:
+            t = _find(F, start, half, b, a)
+            if t >= 0:
+                he[e], tw[e] = h, t
+                e += 1
+    return he[:e], tw[:e], start, half, True
+
+
+@njit(cache=True)
+def swap_candidates(V, F, fixed):
+    """One round of relax_edges (criterion "angles", normal_cos 0) up to the ``allowed`` hook.
+
+    Parameters
+    ----------
+    V : (n, 3) float64, F : (m, 3) int64
+    fixed : (p,) int64 sorted unique keys min * n + max of the fixed edges
+
+    Returns
+    -------
+    status : NO_EDGES, NO_FAILING (the numpy code stops), CANDIDATES, or UNSURE (run numpy)
+    abcd : (e, 4) int64  each interior edge (a, b) and its opposite corners c (in f1), d (in f2)
+    f1f2 : (e, 2) int64  the faces holding a -> b and b -> a
+    ok : (e,) bool       edges to swap before the ``allowed`` hook
+    new_key : (e,) int64 min(c, d) * n + max(c, d)
+    """
+    n, m = V.shape[0], F.shape[0]
+    he, tw, start, half, fine = _interior_edges(F, n)
+    e = he.shape[0]
+    abcd = np.empty((e, 4), np.int64)
+    f1f2 = np.empty((e, 2), np.int64)
+    ok = np.zeros(e, np.bool_)
+    new_key = np.empty(e, np.int64)
+    if not fine:
+        return UNSURE, abcd, f1f2, ok, new_key
+    if e == 0:
+        return NO_EDGES, abcd, f1f2, ok, new_key
+    failing = 0
+    for i in range(e):
+        f1, c1, f2, c2 = he[i] // 3, he[i] % 3, tw[i] // 3, tw[i] % 3
+        a, b, c, d = F[f1, c1], F[f1, (c1 + 1) % 3], F[f1, (c1 + 2) % 3], F[f2, (c2 + 2) % 3]
+        abcd[i, 0], abcd[i, 1], abcd[i, 2], abcd[i, 3] = a, b, c, d
+        f1f2[i, 0], f1f2[i, 1] = f1, f2
+        new_key[i] = min(c, d) * n + max(c, d)
+        inside = _angle_sum_exceeds(V, c, a, b, d, a, b)
+        if inside < 0:
+            return UNSURE, abcd, f1f2, ok, new_key
+        if inside == 1:
+            failing += 1
+            passes = _angle_sum_exceeds(V, a, d, c, b, c, d)
+            if passes < 0:
+                return UNSURE, abcd, f1f2, ok, new_key
+            ok[i] = passes == 0 and _keeps_orientation(V, a, b, c, d) and c != d
+    if failing == 0:
+        return NO_FAILING, abcd, f1f2, ok, new_key
+    for i in range(e):
+        if ok[i]:
+            a, b, c, d = abcd[i, 0], abcd[i, 1], abcd[i, 2], abcd[i, 3]
+            old_key = min(a, b) * n + max(a, b)
+            exists = _find(F, start, half, c, d) >= 0 or _find(F, start, half, d, c) >= 0
+            ok[i] = not exists and not _contains(fixed, old_key) and not _contains(fixed, new_key[i])
+    return CANDIDATES, abcd, f1f2, ok, new_key
+
+
+@njit(cache=True)
+def apply_swaps(F, cand, abcd, f1f2, new_key):
+    """flips._independent_swaps (unscored: priority = edge index) and the swap of the chosen edges.
+
+    Up to four claiming passes; in each, a candidate wins when it has the highest index among
+    the remaining candidates at both its faces. Of chosen swaps making the same new edge the first
+    chosen is kept. F is changed in place; returns the number of swaps.
+    """
+    m = F.shape[0]
+    taken = np.zeros(m, np.bool_)
+    claim = np.empty(m, np.int64)
+    chosen = np.empty(cand.shape[0], np.int64)
+    count = 0
+    rest = cand.copy()
+    for _ in range(4):
+        keep = np.empty(rest.shape[0], np.int64)
+        r = 0
+        for x in rest:
+            if not taken[f1f2[x, 0]] and not taken[f1f2[x, 1]]:
+                keep[r] = x
+                r += 1
+        rest = keep[:r]
+        if r == 0:
+            break
+        for x in rest:
+            claim[f1f2[x, 0]] = -1
+            claim[f1f2[x, 1]] = -1
+        for x in rest:
+            claim[f1f2[x, 0]] = max(claim[f1f2[x, 0]], x)
+            claim[f1f2[x, 1]] = max(claim[f1f2[x, 1]], x)
+        won_start = count
+        for x in rest:
+            if claim[f1f2[x, 0]] == x and claim[f1f2[x, 1]] == x:
+                chosen[count] = x
+                count += 1
+        for i in range(won_start, count):
+            taken[f1f2[chosen[i], 0]] = True
+            taken[f1f2[chosen[i], 1]] = True
+    made = 0
+    seen = np.empty(count, np.int64)
+    for i in range(count):
+        x = chosen[i]
+        if _seen_before(seen, made, new_key[x]):
+            continue
+        seen[made] = new_key[x]
+        made += 1
+        a, b, c, d = abcd[x, 0], abcd[x, 1], abcd[x, 2], abcd[x, 3]
+        F[f1f2[x, 0], 0], F[f1f2[x, 0], 1], F[f1f2[x, 0], 2] = a, d, c
+        F[f1f2[x, 1], 0], F[f1f2[x, 1], 1], F[f1f2[x, 1], 2] = b, c, d
+    return made
+
+
+@njit(cache=True)
+def _seen_before(seen, count, key):
+    for i in range(count):
+        if seen[i] == key:
+            return True
+    return False

@@ -1,0 +1,61 @@
+"""Compiled per-triangle measures (numba), bit for bit the numpy expressions of :mod:`.quality`.
+
+The per-hole loops call :func:`quality.triangle_quality` thousands of times on a few faces;
+its numpy form spends nearly all of that in the overhead of some twenty small array
+operations. The kernel does, element by element, the same IEEE operations in the same order
+(no fastmath, no contraction to FMA; row sums and products of three left to right, as numpy's
+add.reduce and multiply.reduce do on rows of three), so it returns the same bits.
+tests/geometry/test_quality.py checks it against the numpy code.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["face_quality", "triangle_quality_kernel"]
+
+
+@njit(cache=True)
+def face_quality(V, i, j, k):
+    """2r/R of the face (i, j, k) of V, as triangle_quality computes it (valid indices)."""
+    p0x, p0y, p0z = V[i, 0], V[i, 1], V[i, 2]
+    p1x, p1y, p1z = V[j, 0], V[j, 1], V[j, 2]
+    p2x, p2y, p2z = V[k, 0], V[k, 1], V[k, 2]
+    ax, ay, az = p1x - p2x, p1y - p2y, p1z - p2z
+    bx, by, bz = p2x - p0x, p2y - p0y, p2z - p0z
+    cx, cy, cz = p0x - p1x, p0y - p1y, p0z - p1z
+    la = math.sqrt((ax * ax + ay * ay) + az * az)
+    lb = math.sqrt((bx * bx + by * by) + bz * bz)
+    lc = math.sqrt((cx * cx + cy * cy) + cz * cz)
+    ux, uy, uz = p1x - p0x, p1y - p0y, p1z - p0z
+    wx, wy, wz = p2x - p0x, p2y - p0y, p2z - p0z
+    nx = uy * wz - uz * wy
+    ny = uz * wx - ux * wz
+    nz = ux * wy - uy * wx
+    area = 0.5 * math.sqrt((nx * nx + ny * ny) + nz * nz)
+    denom = ((la + lb) + lc) * ((la * lb) * lc)
+    v = 0.0
+    if denom > 0:
+        v = 16.0 * (area * area) / denom
+    # np.clip(v, 0, 1): NaN passes through
+    if v < 0.0:
+        v = 0.0
+    elif v > 1.0:
+        v = 1.0
+    return v
+
+
+@njit(cache=True)
+def triangle_quality_kernel(V, F):
+    """(q, ok): Field's 2r/R of each face (V (n, 3) float64, F (m, 3) int64); ok is False when an
+    index is out of range (q is then meaningless and the caller uses numpy, which raises)."""
+    n, m = V.shape[0], F.shape[0]
+    q = np.zeros(m)
+    for f in range(m):
+        i, j, k = F[f, 0], F[f, 1], F[f, 2]
+        if i < -n or i >= n or j < -n or j >= n or k < -n or k >= n:
+            return q, False
+        q[f] = face_quality(V, i % n, j % n, k % n)
+    return q, True

@@ -1,0 +1,56 @@
+"""Compiled split test of the refinement (numba): :func:`.refine.split_condition` element by element.
+
+The same IEEE operations in the same order as the numpy code (means of three corners added
+left to right then divided by 3, row norms as in :mod:`._tri_kernels`), so centroids, scales
+and the distance tests are the same bits. The one exception is the largest-angle test: the
+numpy code's ``arctan2`` is numpy's SIMD routine, which may differ from libm's in the last
+bits, so a corner angle within ``ANGLE_MARGIN`` of 5 pi / 6 makes the kernel answer
+``sure=False`` and the caller runs the numpy code. tests/geometry/test_refine.py checks the
+kernel against it.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ._tri_kernels import _cross, _dot, _norm, _sub
+
+__all__ = ["split_test", "ANGLE_MARGIN"]
+
+ANGLE_MARGIN = 1e-12
+
+
+@njit(cache=True)
+def _corner_angle(V, p, q, r):
+    P = (V[p, 0], V[p, 1], V[p, 2])
+    u = _sub((V[q, 0], V[q, 1], V[q, 2]), P)
+    w = _sub((V[r, 0], V[r, 1], V[r, 2]), P)
+    return math.atan2(_norm(_cross(u, w)), _dot(u, w))
+
+
+@njit(cache=True)
+def split_test(V, F, scale, alpha):
+    """(mask, centroids, centroid_scale, sure) of split_condition for V (n, 3), F (m, 3) int64, scale (n,)."""
+    m = F.shape[0]
+    mask = np.zeros(m, np.bool_)
+    C = np.empty((m, 3))
+    sc = np.empty(m)
+    limit = 5.0 * np.pi / 6.0
+    for f in range(m):
+        i, j, k = F[f, 0], F[f, 1], F[f, 2]
+        for x in range(3):
+            C[f, x] = ((V[i, x] + V[j, x]) + V[k, x]) / 3
+        sc[f] = ((scale[i] + scale[j]) + scale[k]) / 3
+        split = True
+        for v in (i, j, k):
+            d = alpha * _norm((V[v, 0] - C[f, 0], V[v, 1] - C[f, 1], V[v, 2] - C[f, 2]))
+            split = split and d > sc[f] and d > scale[v]
+        for p, q, r in ((i, j, k), (j, k, i), (k, i, j)):
+            angle = _corner_angle(V, p, q, r)
+            if not abs(angle - limit) > ANGLE_MARGIN:  # NaN too
+                return mask, C, sc, False
+            split = split and angle < limit
+        mask[f] = split
+    return mask, C, sc, True
