@@ -22,7 +22,7 @@ Layers, each importing only those before it (a test walks every import and fails
 7. ``cli``: the ``meshlab-holefill`` command.
 """
 from ._version import __version__
-from .array_api import algorithm_names, fill_holes
+from .array_api import algorithm_names, compile_kernels, fill_holes
 from .core.holes import HoleContext, boundary_loops, hole_context
 from .core.parameters import Percentage
 from .core.patch import Patch
@@ -87,7 +87,7 @@ def batch(inputs, out, **options):
 __all__ = [
     "FILTERS", "FilterParameterError", "HoleContext", "HoleFillError", "MeshTopologyError", "MlxRunError",
     "MlxScriptError", "PYMESHLAB_ERROR", "Patch", "Percentage", "__version__", "algorithm_names", "apply_filter",
-    "batch", "boundary_loops", "clear_filter_history", "compare", "fill_holes", "filter_calls", "filter_history",
+    "batch", "boundary_loops", "clear_filter_history", "compare", "compile_kernels", "fill_holes", "filter_calls", "filter_history",
     "filter_list", "filter_script_xml", "hole_context", "print_filter_parameter_list", "read_filter_script",
     "run_filter_script", "save_filter_script",
 ]

@@ -9,7 +9,10 @@ from .core.parameters import resolve_params
 from .core.pipeline import COMMON_PARAMS, fill_mesh_holes
 from .errors import FilterParameterError
 
-__all__ = ["algorithm_names", "fill_holes"]
+__all__ = ["algorithm_names", "compile_kernels", "fill_holes"]
+
+#: The option sets :func:`compile_kernels` runs beyond each algorithm's defaults (their own kernels).
+COMPILE_OPTION_SETS = (("min_angle_bilateral", (("fairing", "thinplate"), ("iterations", 0), ("smoothing", 10))),)
 
 
 def algorithm_names():
@@ -109,3 +112,64 @@ def fill_holes(V, F, algorithm="min_angle_bilateral", *, selected_faces=None, **
                                      rings=module.RINGS, prepare=getattr(module, "PREPARE", None),
                                      warm_up=getattr(module, "WARM_UP", None))
     return filled.V, filled.F, result
+
+
+def _kernel_example():
+    """A wavy 25 x 25 grid with two holes (about 40 and 20 boundary edges): every filter's common paths."""
+    from .core.examples import bowl_with_hole
+
+    V, F, _ = bowl_with_hole(n=25, radius=0.45)
+    V[:, 2] += 0.05 * np.sin(4.0 * V[:, 0]) * np.cos(3.0 * V[:, 1])
+    corner = np.linalg.norm(V[F].mean(axis=1)[:, :2] - [0.7, 0.7], axis=1) > 0.15
+    return V, F[corner]
+
+
+def _compile_one(algorithm, params):
+    """Fill the example with one algorithm and option set; the process seconds it took (compiling included)."""
+    import time
+
+    start = time.process_time()
+    V, F = _kernel_example()
+    _, _, result = fill_holes(V, F, algorithm, workers=1, **dict(params))
+    if result["closed_holes"] == 0:
+        raise RuntimeError(f"{algorithm}: the kernel example closed no hole ({result['holes']})")
+    return time.process_time() - start
+
+
+def compile_kernels(processes=None):
+    """Compile (or load from numba's on-disk cache) every filter's kernels ahead of first use.
+
+    The filters' compiled kernels (numba, ``cache=True``) are compiled the first time they run
+    after an install or an update, which makes that first fill slow; later processes load them
+    from the cache. This runs each algorithm, and the option sets in ``COMPILE_OPTION_SETS``,
+    once on a small example mesh, in parallel processes, so that cost is paid here.
+
+    Parameters
+    ----------
+    processes : int, optional
+        Processes compiling at once (default: one per core, at most one per option set).
+
+    Returns
+    -------
+    dict
+        ``"algorithm"`` or ``"algorithm (option=value, ...)"`` -> process seconds it took.
+
+    Examples
+    --------
+    >>> import meshlab_holefill
+    >>> seconds = meshlab_holefill.compile_kernels(processes=1)  # doctest: +SKIP
+    >>> sorted(seconds)[0]  # doctest: +SKIP
+    'curve_unfolding'
+    """
+    import multiprocessing
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+
+    jobs = [(name, ()) for name in algorithm_names()] + list(COMPILE_OPTION_SETS)
+    processes = max(1, min(int(processes or os.cpu_count() or 1), len(jobs)))
+    labels = [name + (f" ({', '.join(f'{k}={v}' for k, v in params)})" if params else "") for name, params in jobs]
+    if processes == 1:
+        return {label: _compile_one(*job) for label, job in zip(labels, jobs)}
+    with ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = [pool.submit(_compile_one, *job) for job in jobs]
+        return {label: future.result() for label, future in zip(labels, futures)}

@@ -271,6 +271,11 @@ def build_parser():
     p = sub.add_parser("filters", help="list the filters with their parameters, defaults and help")
     p.add_argument("name", nargs="?")
     p.set_defaults(func=cmd_filters)
+    p = sub.add_parser("compile", help="compile the filters' kernels ahead of their first use (numba's cache; "
+                                       "once after an install or an update)")
+    p.add_argument("--processes", type=int, default=None, help="processes compiling at once (default: one per core)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no table")
+    p.set_defaults(func=cmd_compile)
     # Further subcommands (run, compare) register themselves here.
     for register in _SUBCOMMANDS:
         register(sub)
@@ -278,6 +283,18 @@ def build_parser():
 
 
 _SUBCOMMANDS = []
+
+
+def cmd_compile(args, extra):
+    from .array_api import compile_kernels
+
+    if args.processes is not None and args.processes < 1:
+        raise ValueError(f"--processes must be at least 1, got {args.processes}")
+    seconds = compile_kernels(args.processes)
+    if not args.quiet:
+        for label, value in seconds.items():
+            print(f"{label:<70} {value:7.1f} s")
+    return 0
 
 
 def cmd_run(args, extra):

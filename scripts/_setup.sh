@@ -14,6 +14,9 @@ if [ ! -f "$stamp" ]; then
     .venv/bin/python -m pip install --quiet -e ".[test,bench]"
     touch "$stamp"
 fi
+# The filters' numba kernels, compiled once into numba's on-disk cache (after an install or an
+# update of the sources; a few seconds when the cache is current).
+.venv/bin/meshlab-holefill compile --quiet
 # MeshLab 2020.09's meshlabserver (Debian package meshlab) and xvfb-run, for the tests that run
 # scripts through the real MeshLab: installed when running as root with apt-get and missing.
 if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1 \

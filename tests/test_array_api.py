@@ -82,3 +82,20 @@ def test_the_algorithms_warm_up_runs_once_before_any_hole_is_filled(holed_sphere
     calls.clear()
     meshlab_holefill.fill_holes(V, F, "lssvm_poisson", maxholesize=3)  # no hole to fill: nothing to load
     assert calls == []
+
+
+def test_compile_kernels_runs_every_algorithm_and_option_set():
+    seconds = meshlab_holefill.compile_kernels(processes=1)
+    assert set(seconds) == set(meshlab_holefill.algorithm_names()) | {
+        "min_angle_bilateral (fairing=thinplate, iterations=0, smoothing=10)"}
+    assert all(value >= 0.0 for value in seconds.values())
+
+
+def test_kernel_example_has_two_holes_every_filter_closes():
+    from meshlab_holefill.array_api import _kernel_example
+
+    V, F = _kernel_example()
+    assert len(meshlab_holefill.boundary_loops(F)) == 3  # the grid's border and two holes
+    for name in meshlab_holefill.algorithm_names():
+        _, _, result = meshlab_holefill.fill_holes(V, F, name, workers=1)
+        assert result["closed_holes"] == 2, (name, result["holes"])

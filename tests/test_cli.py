@@ -227,3 +227,15 @@ def test_run_exits_0_with_a_failed_hole_and_1_with_strict(tmp_path, capsys, monk
     assert main(["run", script, BUNNY, str(tmp_path / "o.ply")]) == 0
     assert "made to fail by the test" in capsys.readouterr().out
     assert main(["run", script, BUNNY, str(tmp_path / "o.ply"), "--strict"]) == 1
+
+
+def test_compile_rejects_a_bad_process_count(capsys):
+    assert main(["compile", "--processes", "0"]) == 2
+    assert "--processes must be at least 1" in capsys.readouterr().err
+
+
+def test_compile_lists_every_algorithm(capsys):
+    assert main(["compile", "--processes", "1"]) == 0
+    out = capsys.readouterr().out
+    for name in meshlab_holefill.algorithm_names():
+        assert name in out
