@@ -66,6 +66,16 @@ def _idw_weights(sources, targets):
     return w / w.sum(axis=1, keepdims=True)
 
 
+def _new_values(name, values):
+    """Interpolated attribute values as stored: colours on MeshLab's 8-bit grid, the rest as computed.
+
+    MeshLab keeps a colour channel as a byte and pymeshlab truncates c * 255, so an interpolated
+    white (0.9999999...) would be stored as 254; rounding to the nearest k / 255 stores what was
+    meant (k / 255 * 255 is k exactly in float64, for every byte k).
+    """
+    return np.round(values * 255.0) / 255.0 if name == "color" else values
+
+
 def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
     """Per-element attributes for the filled mesh: originals unchanged, new ones interpolated.
 
@@ -87,7 +97,7 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
         weights.append(_idw_weights(arrays.V[loop], targets) if len(targets) else np.zeros((0, len(loop))))
     vertex_attrs = {}
     for name, A in arrays.vertex_attrs.items():
-        parts = [A] + [W @ A[loop] for W, loop in zip(weights, loops)]
+        parts = [A] + [_new_values(name, W @ A[loop]) for W, loop in zip(weights, loops)]
         vertex_attrs[name] = np.concatenate(parts) if parts else A
     new_faces = F2[m:]
     # Hole of each new face: the loop or new vertex it touches.
@@ -104,7 +114,7 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
             face_attrs[name] = np.concatenate([A, np.zeros((len(new_faces), 1), A.dtype)])
             continue
         means = np.array([A[b].mean(axis=0) if len(b) else A.mean(axis=0) for b in border]).reshape(len(loops), -1)
-        face_attrs[name] = np.concatenate([A, means[face_owner]]) if len(new_faces) else A
+        face_attrs[name] = np.concatenate([A, _new_values(name, means[face_owner])]) if len(new_faces) else A
     wedge = None
     if arrays.wedge_texcoords is not None:
         W0 = arrays.wedge_texcoords.reshape(m, 3, 2)
@@ -142,7 +152,7 @@ def refine_mesh_arrays(arrays, refinement):
     t = np.asarray(refinement.edge_weights, np.float64)[:, None]
     parents = np.asarray(refinement.face_parents, np.int64)
     F2 = np.asarray(refinement.F, np.int64)
-    vertex_attrs = {name: np.concatenate([A, (1.0 - t) * A[E[:, 0]] + t * A[E[:, 1]]])
+    vertex_attrs = {name: np.concatenate([A, _new_values(name, (1.0 - t) * A[E[:, 0]] + t * A[E[:, 1]])])
                     for name, A in arrays.vertex_attrs.items()}
     face_attrs = {name: A[parents] for name, A in arrays.face_attrs.items()}
     wedge = None

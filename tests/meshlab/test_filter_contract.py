@@ -115,6 +115,21 @@ def test_vertex_colours_and_quality_are_interpolated_on_new_vertices():
     assert np.allclose(q[len(V):], new[:, 1], atol=0.15)  # quality ~ y, interpolated from the border
 
 
+@pytest.mark.parametrize("name", ["meshing_close_holes_min_angle_bilateral", "meshing_close_holes_lssvm_poisson"])
+def test_a_uniform_colour_stays_exactly_that_colour_on_new_elements(name):
+    # Interpolated white is 0.99999...; stored as a byte it must come back as 255, not 254.
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.4)
+    colour = np.array([1.0, 200 / 255, 7 / 255, 1.0])
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=F.astype(np.int32),
+                               v_color_matrix=np.tile(colour, (len(V), 1)), f_color_matrix=np.tile(colour, (len(F), 1))))
+    getattr(ms, name)()
+    m = ms.current_mesh()
+    assert m.vertex_number() > len(V)
+    assert np.array_equal(m.vertex_color_matrix(), np.tile(colour, (m.vertex_number(), 1)))
+    assert np.array_equal(m.face_color_matrix(), np.tile(colour, (m.face_number(), 1)))
+
+
 def test_new_faces_get_the_mean_quality_of_their_holes_border_faces():
     # A square hole in a grid with one triangle of its lower-left cell left in: that face holds
     # two loop edges and counts once.
