@@ -595,7 +595,9 @@ def is_outline(V, F, loop, incidence, face_areas_of=None):
     same connectivity as :func:`outline_ratios`), until either it is exhausted (then the
     ratio is exact) or its area exceeds the loop's vector area / OUTLINE_RATIO (then the loop
     is a hole). The work is bounded by about 1.3 times the hole's own area of surrounding
-    faces, so a hole in a 4M-face mesh costs what it costs in a small one.
+    faces, so a hole in a 4M-face mesh costs what it costs in a small one. The growth and
+    its areas run in one compiled call (:func:`_grown_area`): on face000.ply (45 loops) the
+    per-ring gathers and area arrays took 0.12 s of the filter's serial time.
 
     Parameters
     ----------
@@ -605,28 +607,63 @@ def is_outline(V, F, loop, incidence, face_areas_of=None):
     incidence : (n, m) sparse
         :func:`vertex_face_incidence` of (F, n).
     face_areas_of : callable, optional
-        ``face_areas_of(faces) -> (k,) float``; defaults to computing them from V and F.
+        ``face_areas_of(faces) -> (k,) float``: areas other than the triangles' own
+        (grown ring by ring in Python); by default they are computed from V and F.
 
     Returns
     -------
     bool
     """
-    from ..geometry.quality import face_areas
-
     ids = np.asarray(loop.vertices, np.int64)
     budget = vector_area(V[ids]) / OUTLINE_RATIO
-    areas_of = face_areas_of or (lambda faces: face_areas(V, F[faces]))
     frontier = np.unique(np.asarray(loop.border_faces, np.int64))
+    F = np.asarray(F)
+    if face_areas_of is None:
+        return _grown_area(incidence.indptr, incidence.indices, np.asarray(V, np.float64), F, frontier,
+                           budget) >= 0
     seen = np.zeros(len(F), bool)
     seen[frontier] = True
-    area = float(areas_of(frontier).sum())
-    F = np.asarray(F)
+    area = float(face_areas_of(frontier).sum())
     while area <= budget:
         frontier = _next_face_ring(incidence.indptr, incidence.indices, F, frontier, seen)
         if len(frontier) == 0:  # the whole component, and no larger than the budget
             return True
-        area += float(areas_of(frontier).sum())
+        area += float(face_areas_of(frontier).sum())
     return False
+
+
+@njit(cache=True)
+def _triangle_area(V, F, f):
+    """Area of face f: half the norm of (b - a) x (c - a), as :func:`..geometry.quality.face_areas`."""
+    a, b, c = F[f, 0], F[f, 1], F[f, 2]
+    ux, uy, uz = V[b, 0] - V[a, 0], V[b, 1] - V[a, 1], V[b, 2] - V[a, 2]
+    wx, wy, wz = V[c, 0] - V[a, 0], V[c, 1] - V[a, 1], V[c, 2] - V[a, 2]
+    nx, ny, nz = uy * wz - uz * wy, uz * wx - ux * wz, ux * wy - uy * wx
+    return 0.5 * np.sqrt(nx * nx + ny * ny + nz * nz)
+
+
+@njit(cache=True)
+def _grown_area(indptr, indices, V, F, start, budget):
+    """Area of the component of faces ``start`` (sorted, unique), or -1 once it exceeds ``budget``.
+
+    The growth of :func:`is_outline` in one call: rings of faces sharing a vertex with the
+    last ring (:func:`_next_face_ring`), their areas added ring by ring, stopping as soon as
+    the area is over the budget. Only the ``seen`` flags (one byte per face) are sized by the
+    mesh; the growth itself stays proportional to the faces grown.
+    """
+    seen = np.zeros(F.shape[0], np.bool_)
+    ring = start.copy()
+    area = 0.0
+    for f in ring:
+        seen[f] = True
+        area += _triangle_area(V, F, f)
+    while area <= budget:
+        ring = _next_face_ring(indptr, indices, F, ring, seen)
+        if len(ring) == 0:  # the whole component, and no larger than the budget
+            return area
+        for f in ring:
+            area += _triangle_area(V, F, f)
+    return -1.0
 
 
 @njit(cache=True)

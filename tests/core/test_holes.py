@@ -244,3 +244,41 @@ def test_outline_test_grows_the_same_rings_as_sparse_row_gathers():
         frontier = _next_face_ring(incidence.indptr, incidence.indices, F, frontier, seen)
         assert frontier.tolist() == expected.tolist()
         assert np.array_equal(seen, expected_seen)
+
+
+def _islands_and_holes():
+    """A grid with two holes, plus a lone triangle and a small square island beside it."""
+    V, F = grid(12, 12)
+    _, F, _ = cut_disks(V, F, [(0.3, 0.3, 0), (0.7, 0.6, 0)], 0.12)
+    Vi, Fi = grid(3, 3)
+    tri_V = np.array([[2.0, 0, 0], [2.2, 0, 0], [2.0, 0.2, 0]])
+    V2 = np.concatenate([V, Vi * 0.3 + [1.5, 0, 0.1], tri_V])
+    F2 = np.concatenate([F, Fi + len(V), np.array([[0, 1, 2]]) + len(V) + len(Vi)])
+    return V2, F2
+
+
+def test_compiled_outline_test_matches_the_ratio_and_the_ring_by_ring_growth():
+    from meshlab_holefill.core.holes import OUTLINE_RATIO, is_outline, outline_ratios
+    from meshlab_holefill.geometry.quality import face_areas
+
+    V, F = _islands_and_holes()
+    loops = boundary_loops(F)
+    incidence = vertex_face_incidence(F, len(V))
+    ratios = outline_ratios(V, F, loops)
+    compiled = [is_outline(V, F, loop, incidence) for loop in loops]
+    ring_by_ring = [is_outline(V, F, loop, incidence, face_areas_of=lambda f: face_areas(V, F[f])) for loop in loops]
+    assert compiled == ring_by_ring == (ratios >= OUTLINE_RATIO).tolist()
+    assert sum(compiled) == 3  # the grid's outer rim and both islands; the two holes are not outlines
+
+
+def test_grown_area_is_the_component_area_within_the_budget():
+    from meshlab_holefill.core.holes import _grown_area
+    from meshlab_holefill.geometry.quality import face_areas
+
+    V, F = _islands_and_holes()
+    incidence = vertex_face_incidence(F, len(V))
+    island = np.arange(len(F) - 9, len(F) - 1)  # the square island's eight faces
+    area = face_areas(V, F[island]).sum()
+    start = island[:1]
+    assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 2 * area) == pytest.approx(area, rel=1e-12)
+    assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 0.5 * area) == -1.0
