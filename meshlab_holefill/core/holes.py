@@ -614,13 +614,12 @@ def is_outline(V, F, loop, incidence, face_areas_of=None):
     -------
     bool
     """
+    if face_areas_of is None:
+        return outline_ratio(V, F, loop, incidence) is not None
     ids = np.asarray(loop.vertices, np.int64)
     budget = vector_area(V[ids]) / OUTLINE_RATIO
     frontier = np.unique(np.asarray(loop.border_faces, np.int64))
     F = np.asarray(F)
-    if face_areas_of is None:
-        return _grown_area(incidence.indptr, incidence.indices, np.asarray(V, np.float64), F, frontier,
-                           budget) >= 0
     seen = np.zeros(len(F), bool)
     seen[frontier] = True
     area = float(face_areas_of(frontier).sum())
@@ -630,6 +629,36 @@ def is_outline(V, F, loop, incidence, face_areas_of=None):
             return True
         area += float(face_areas_of(frontier).sum())
     return False
+
+
+def outline_ratio(V, F, loop, incidence):
+    """The :func:`outline_ratios` entry of a loop that outlines its component, else None.
+
+    Grown as in :func:`is_outline`, so it costs what the hole's surroundings cost, not the
+    mesh: the ratio of a loop whose component stays within the budget is exact (the whole
+    component's area), and a loop whose growth exceeds it is below OUTLINE_RATIO.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    F : (m, 3) int
+    loop : BoundaryLoop
+    incidence : (n, m) sparse
+        :func:`vertex_face_incidence` of (F, n).
+
+    Returns
+    -------
+    float or None
+        |vector area| / component area (inf for a component of zero area), or None for a hole.
+    """
+    ids = np.asarray(loop.vertices, np.int64)
+    enclosed = vector_area(V[ids])
+    start = np.unique(np.asarray(loop.border_faces, np.int64))
+    area = _grown_area(incidence.indptr, incidence.indices, np.asarray(V, np.float64), np.asarray(F), start,
+                       enclosed / OUTLINE_RATIO)
+    if area < 0:
+        return None
+    return enclosed / area if area > 0 else np.inf
 
 
 @njit(cache=True)
