@@ -675,21 +675,44 @@ def _triangle_area(V, F, f):
 def _grown_area(indptr, indices, V, F, start, budget):
     """Area of the component of faces ``start`` (sorted, unique), or -1 once it exceeds ``budget``.
 
-    The growth of :func:`is_outline` in one call: rings of faces sharing a vertex with the
-    last ring (:func:`_next_face_ring`), their areas added ring by ring, stopping as soon as
-    the area is over the budget. Only the ``seen`` flags (one byte per face) are sized by the
-    mesh; the growth itself stays proportional to the faces grown.
+    The growth of :func:`is_outline` in one call: the same rings as :func:`_next_face_ring`
+    (the unseen faces sharing a vertex with the last ring), their areas added ring by ring,
+    stopping as soon as the area is over the budget. Each vertex's incidence row is read
+    once, when a ring first reaches it (a vertex reached before had all its faces seen
+    then): on face000.ply's 166k-face outer outline about a sixth of the reads of gathering
+    every ring face's three rows. Only the ``seen`` flags (one byte per face and vertex)
+    are sized by the mesh.
     """
     seen = np.zeros(F.shape[0], np.bool_)
+    reached = np.zeros(V.shape[0], np.bool_)
     ring = start.copy()
     area = 0.0
     for f in ring:
         seen[f] = True
         area += _triangle_area(V, F, f)
+    grown = np.empty(16, np.int64)
     while area <= budget:
-        ring = _next_face_ring(indptr, indices, F, ring, seen)
-        if len(ring) == 0:  # the whole component, and no larger than the budget
+        count = 0
+        for f in ring:
+            for c in range(3):
+                v = F[f, c]
+                if reached[v]:
+                    continue
+                reached[v] = True
+                for p in range(indptr[v], indptr[v + 1]):
+                    g = indices[p]
+                    if seen[g]:
+                        continue
+                    seen[g] = True
+                    if count == len(grown):
+                        larger = np.empty(2 * len(grown), np.int64)
+                        larger[:count] = grown[:count]
+                        grown = larger
+                    grown[count] = g
+                    count += 1
+        if count == 0:  # the whole component, and no larger than the budget
             return area
+        ring = grown[:count].copy()
         for f in ring:
             area += _triangle_area(V, F, f)
     return -1.0
