@@ -435,6 +435,31 @@ class HoleContext:
         return (self.depth > 0) & (self.depth <= max_depth)
 
 
+def incident_faces(incidence, vertices):
+    """The faces holding at least one of ``vertices``, sorted and unique (of incidence's index type).
+
+    The union of the incidence rows, read straight from the CSR arrays: the same faces as
+    ``np.unique(incidence[vertices].indices)`` without building a sparse sub-matrix (scipy's
+    row selection was 40% of :func:`hole_context` on face000.ply).
+
+    Parameters
+    ----------
+    incidence : (n, m) scipy.sparse.csr_matrix
+        :func:`vertex_face_incidence`.
+    vertices : (k,) int
+
+    Returns
+    -------
+    (f,) int32 or int64
+    """
+    vertices = np.asarray(vertices, np.int64)
+    starts = incidence.indptr[vertices].astype(np.int64)
+    counts = incidence.indptr[vertices + 1] - starts
+    first = np.cumsum(counts) - counts  # where each row begins among the gathered entries
+    positions = np.repeat(starts - first, counts) + np.arange(int(counts.sum()))
+    return np.unique(incidence.indices[positions])
+
+
 def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     """Build the HoleContext of one boundary loop.
 
@@ -462,7 +487,7 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     frontier = loop_v
     face_sets = []
     for r in range(1, max(rings, 1) + 1):
-        fidx = np.unique(incidence[frontier].indices)
+        fidx = incident_faces(incidence, frontier)
         face_sets.append(fidx)
         ring_v = np.unique(F[fidx].ravel())
         new = np.asarray([v for v in ring_v.tolist() if v not in visited], np.int64)

@@ -282,3 +282,16 @@ def test_grown_area_is_the_component_area_within_the_budget():
     start = island[:1]
     assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 2 * area) == pytest.approx(area, rel=1e-12)
     assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 0.5 * area) == -1.0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_incident_faces_are_the_union_of_the_incidence_rows(seed):
+    from meshlab_holefill.core.holes import incident_faces
+
+    rng = np.random.default_rng(seed)
+    F = rng.integers(0, 40, (120, 3))
+    incidence = vertex_face_incidence(F, 42)  # vertices 40 and 41 hold no face
+    for vertices in (rng.choice(42, 7, replace=False), np.array([40, 41]), np.array([3]), np.arange(42)):
+        expected = np.unique(incidence[vertices].indices)
+        got = incident_faces(incidence, vertices)
+        assert got.dtype == expected.dtype and got.tolist() == expected.tolist()
