@@ -509,7 +509,9 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
 
     # Edge scale of loop vertices and forbidden chords, from the edges of local faces.
     E = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    E = np.unique(np.sort(E, axis=1), axis=0)
+    E = np.sort(E, axis=1)
+    keys = np.unique(E[:, 0] * len(verts) + E[:, 1])  # the rows' lexicographic order, without unique(axis=0)
+    E = np.stack([keys // len(verts), keys % len(verts)], axis=1)
     lengths = np.linalg.norm(verts[E[:, 0]] - verts[E[:, 1]], axis=1)
     sums = np.bincount(E.ravel(), weights=np.repeat(lengths, 2), minlength=len(verts))
     cnts = np.bincount(E.ravel(), minlength=len(verts))
