@@ -16,7 +16,7 @@ import scipy.sparse as sp
 from numba import njit
 
 from ..errors import MeshTopologyError
-from ..geometry.quality import vertex_normals
+from ..geometry.quality import cross_rows, vertex_normals
 
 
 @njit(cache=True)
@@ -611,7 +611,8 @@ def vector_area(points):
     float
     """
     P = np.asarray(points, np.float64)
-    return float(0.5 * np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)))
+    # cross_rows: np.cross's arithmetic (the same bits) without its axis handling, 0.3 ms a call here
+    return float(0.5 * np.linalg.norm(cross_rows(P, np.roll(P, -1, axis=0)).sum(axis=0)))
 
 
 def is_outline(V, F, loop, incidence, face_areas_of=None):

@@ -295,3 +295,14 @@ def test_incident_faces_are_the_union_of_the_incidence_rows(seed):
         expected = np.unique(incidence[vertices].indices)
         got = incident_faces(incidence, vertices)
         assert got.dtype == expected.dtype and got.tolist() == expected.tolist()
+
+
+def test_vector_area_has_np_cross_bits_and_is_exact_for_a_planar_square():
+    from meshlab_holefill.core.holes import vector_area
+
+    rng = np.random.default_rng(3)
+    for k in (3, 17, 400):
+        P = rng.normal(size=(k, 3)) * 10.0 ** rng.integers(-3, 4)
+        assert vector_area(P) == float(0.5 * np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)))
+    square = np.array([[0.0, 0, 1], [2, 0, 1], [2, 2, 1], [0, 2, 1]])
+    assert vector_area(square) == 4.0
