@@ -70,9 +70,13 @@ def _cell(x, origin, cell, dim):
 
 
 @njit(cache=True)
-def box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, dims):
+def box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, dims, gq, ga, in_q, in_a):
     """Local index pairs (iq, ja): boxes [lo_q, hi_q] and [lo_a, hi_a] overlap on every axis
     and the squared centroid distance is <= ub2[bin_q[iq], bin_a[ja]].
+
+    Pairs the narrow phase drops anyway are left out: with global face indices gi = gq[iq],
+    gj = ga[ja], a face with itself and, when both faces are in both sets (in_q, in_a by global
+    index), the mirrored pair gi > gj (for a patch against itself, half of all pairs).
 
     A uniform grid (cells of size `cell` from `origin`, dims (3,) cells per axis): the `against`
     boxes are listed in every cell they touch, and each query box tests the boxes listed in the
@@ -120,6 +124,9 @@ def box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, d
                         if seen[j] == i:
                             continue
                         seen[j] = i
+                        gi, gj = gq[i], ga[j]
+                        if gi == gj or (gi > gj and in_q[gj] and in_a[gi]):
+                            continue
                         if _pair_ok(i, j, lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2):
                             if n == out_i.shape[0]:
                                 out_i, out_j = _grow(out_i, n), _grow(out_j, n)

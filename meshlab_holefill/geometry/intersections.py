@@ -116,7 +116,7 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     in_a = np.zeros(len(F), bool)
     in_a[a] = True
 
-    iq, ja = _candidates(bq, ba, tol)
+    iq, ja = _candidates(bq, ba, tol, q, a, in_q, in_a)
     i, j = q[iq], a[ja]
     code, fy, fx = K.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
     hit = code == K.HIT
@@ -142,12 +142,13 @@ def faces_intersecting(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     return np.unique(np.concatenate([pairs[:, 0], flipped]))
 
 
-def _candidates(bounds_q, bounds_a, tol):
+def _candidates(bounds_q, bounds_a, tol, q, a, in_q, in_a):
     """Local index pairs (iq, ja) worth the narrow test: boxes overlap (query boxes grown by tol)
     and centroids lie within the sum of the faces' bounding-sphere radii plus tol.
 
     `bounds_q`, `bounds_a` are `_tri_kernels.face_bounds` of the two face sets (lo, hi, centroid,
-    radius). A single radius would be set by the largest face, so faces are binned by radius
+    radius), `q`, `a` their global face indices and `in_q`, `in_a` the sets' marks by global index
+    (self-pairs and mirrored pairs are left out, see `_tri_kernels.box_pairs`). A single radius would be set by the largest face, so faces are binned by radius
     (factors of 4) and each pair of bins is bounded by its largest radii (the bound the former
     dual-tree search on centroids used; the grid of `_tri_kernels.box_pairs` applies it pair by
     pair).
@@ -170,7 +171,7 @@ def _candidates(bounds_q, bounds_a, tol):
         cell *= 2
     dims = (np.floor(span / cell) + 1).astype(np.int64)
     return K.box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bq.ravel().astype(np.int64), ba.ravel().astype(np.int64),
-                       ub * ub, origin, cell, dims)
+                       ub * ub, origin, cell, dims, q, a, in_q, in_a)
 
 
 def _row_ranks(P):

@@ -131,7 +131,8 @@ def test_broad_phase_equals_kdtree_search(seed, n, m, spread, flat):
     tol = 1e-9 * 3
     blocks = list(R._candidates(Tq, Ta, tol))
     ref = {(int(x), int(y)) for b in blocks for x, y in zip(*b)}
-    iq, ja = I._candidates(_bounds(Tq), _bounds(Ta), tol)
+    none = np.zeros(n + m, bool)  # disjoint sets: no pair is a self or mirrored pair
+    iq, ja = I._candidates(_bounds(Tq), _bounds(Ta), tol, np.arange(n), np.arange(n, n + m), none, none)
     got = list(zip(iq.tolist(), ja.tolist()))
     assert len(got) == len(set(got))
     assert set(got) == ref
