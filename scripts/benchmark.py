@@ -17,7 +17,7 @@ bunny subdivided to about 50k, 200k, 800k and 3M faces, per-hole seconds against
 ``--update-readme`` replaces the README's Results section with this run's summary.
 
     .venv/bin/python scripts/benchmark.py [--filters a,b] [--out bench_out] [--seed 0] [--cases bunny.obj,sphere]
-                                          [--scaling] [--papers] [--refusals] [--update-readme]
+                                          [--scaling] [--papers] [--refusals] [--compile-cost] [--update-readme]
 """
 from __future__ import annotations
 
@@ -467,6 +467,34 @@ def refusal_times(filters=("meshing_close_holes_min_angle_bilateral", "meshing_c
     return f"{len(F):,} faces, one loop of {edges} edges", header, rows
 
 
+# ------------------------------------------------------------------------------ compile cost
+
+def compile_cost():
+    """Cold and warm ``meshlab-holefill compile``: numba's cache empty (a fresh install) and then current.
+
+    Runs the command in a subprocess with ``NUMBA_CACHE_DIR`` pointing at an empty temporary folder,
+    twice; each filter's process seconds come from the command's table, the wall seconds from here.
+    """
+    import subprocess
+    import tempfile
+
+    rows, columns = {}, []
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        for run in ("cold (empty cache)", "warm (cache current)"):
+            t = time.perf_counter()
+            out = subprocess.run([sys.executable, "-m", "meshlab_holefill.cli", "compile"], env=env, check=True,
+                                 capture_output=True, text=True).stdout
+            columns.append((run, time.perf_counter() - t))
+            for line in out.splitlines():
+                label, seconds = line.rsplit(None, 2)[0].strip(), float(line.rsplit(None, 2)[1])
+                rows.setdefault(label, []).append(seconds)
+    header = ["filter"] + [f"{run}: process s" for run, _ in columns]
+    table = [[f"`{label}`"] + [f"{x:.1f}" for x in values] for label, values in rows.items()]
+    table.append(["whole command, wall s (one process per core)"] + [f"{wall:.1f}" for _, wall in columns])
+    return header, table
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--filters", default=DEFAULT_FILTERS,
@@ -491,6 +519,8 @@ def main(argv=None):
     ap.add_argument("--batch", action="store_true",
                     help="also batch throughput (files per minute) with 1 and 2 dask workers, and the speed-up")
     ap.add_argument("--workers", action="store_true", help="also face000.ply with workers=1 and 2")
+    ap.add_argument("--compile-cost", action="store_true",
+                    help="also the one-time cost of compiling the kernels (cold, empty numba cache) and the warm load")
     ap.add_argument("--refusals", action="store_true",
                     help="also the time each filter takes to refuse a loop that outlines its whole mesh")
     ap.add_argument("--batch-files", type=int, default=24, help="files in the batch throughput run (default 24)")
@@ -540,6 +570,11 @@ def main(argv=None):
     if args.workers:
         text += ("\n**Holes on all cores** (face000.ply, whole run of each filter in one process, `workers=1` "
                  "then `workers=2`):\n\n" + markdown_table(*workers_speedup()) + "\n")
+    if args.compile_cost:
+        text += ("\n**Compiling the kernels** (`meshlab-holefill compile` with an empty numba cache, as after an "
+                 "install, then again with the cache current; each filter's process seconds, compiling included, "
+                 "one process per core, filters taken in the table's order; a kernel two filters share is compiled by "
+                 "the first that needs it):\n\n" + markdown_table(*compile_cost()) + "\n")
     if args.refusals:
         what, header, rows = refusal_times()
         text += (f"\n**Refused loops** (a spherical cap, {what}: the rim outlines the whole mesh, so the "
