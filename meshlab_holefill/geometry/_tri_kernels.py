@@ -23,12 +23,37 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["box_pairs", "narrow_codes", "NO", "HIT", "FOLD"]
+__all__ = ["face_bounds", "box_pairs", "narrow_codes", "NO", "HIT", "FOLD"]
 
 NO, HIT, FOLD = 0, 1, 2  # narrow_codes: no contact, contact, shared edge whose fold angle decides
 
 
 # ---------------------------------------------------------------- broad phase
+
+@njit(cache=True)
+def face_bounds(V, F, faces):
+    """Per face of `faces`: box corners lo, hi (n, 3), centroid c (n, 3) and bounding-sphere radius
+    r (n,) about c, read from V and F directly.
+
+    The values of T.min(1), T.max(1), T.mean(1) and np.linalg.norm(T - c[:, None], axis=2).max(1)
+    for T = V[F[faces]], bit for bit (the mean adds the corners left to right, then divides by 3),
+    without the (n, 3, 3) array and the numpy temporaries, which cost more than the grid search
+    on the few-thousand-face sets of the crossing checks.
+    """
+    n = faces.shape[0]
+    lo, hi, c = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+    r = np.empty(n)
+    for p in range(n):
+        f = faces[p]
+        A, B, C = _row(V, F, f, 0), _row(V, F, f, 1), _row(V, F, f, 2)
+        for k in range(3):
+            lo[p, k] = _npmin(_npmin(A[k], B[k]), C[k])
+            hi[p, k] = _npmax(_npmax(A[k], B[k]), C[k])
+            c[p, k] = ((A[k] + B[k]) + C[k]) / 3.0
+        m = (c[p, 0], c[p, 1], c[p, 2])
+        r[p] = _npmax(_npmax(_norm(_sub(A, m)), _norm(_sub(B, m))), _norm(_sub(C, m)))
+    return lo, hi, c, r
+
 
 @njit(cache=True)
 def _grow(buf, n):
@@ -45,9 +70,13 @@ def _cell(x, origin, cell, dim):
 
 
 @njit(cache=True)
-def box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, dims):
+def box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, dims, gq, ga, in_q, in_a):
     """Local index pairs (iq, ja): boxes [lo_q, hi_q] and [lo_a, hi_a] overlap on every axis
     and the squared centroid distance is <= ub2[bin_q[iq], bin_a[ja]].
+
+    Pairs the narrow phase drops anyway are left out: with global face indices gi = gq[iq],
+    gj = ga[ja], a face with itself and, when both faces are in both sets (in_q, in_a by global
+    index), the mirrored pair gi > gj (for a patch against itself, half of all pairs).
 
     A uniform grid (cells of size `cell` from `origin`, dims (3,) cells per axis): the `against`
     boxes are listed in every cell they touch, and each query box tests the boxes listed in the
@@ -95,6 +124,9 @@ def box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, d
                         if seen[j] == i:
                             continue
                         seen[j] = i
+                        gi, gj = gq[i], ga[j]
+                        if gi == gj or (gi > gj and in_q[gj] and in_a[gi]):
+                            continue
                         if _pair_ok(i, j, lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2):
                             if n == out_i.shape[0]:
                                 out_i, out_j = _grow(out_i, n), _grow(out_j, n)
@@ -230,17 +262,65 @@ def _step(c0, c1, ok, t0, t1):
 
 
 @njit(cache=True)
-def _edges_meet(S0, S1, S2, T0, T1, T2, nt, shs, degs, degt, one, S, tol):
-    """intersections._edges_meet for one pair: some edge of triangle S0S1S2 meets T0T1T2."""
+def _clip_frame(T0, T1, T2, nt):
+    """The target's clipping directions, as intersections._clip computes them for every edge:
+    edge normals in the plane ms and corner bisectors us, 18 numbers as a flat tuple."""
+    m0, m1, m2 = (_unit(_cross(nt, _sub(T1, T0))), _unit(_cross(nt, _sub(T2, T1))),
+                  _unit(_cross(nt, _sub(T0, T2))))
+    u0 = _unit(_add(_unit(_sub(T1, T0)), _unit(_sub(T2, T0))))
+    u1 = _unit(_add(_unit(_sub(T2, T1)), _unit(_sub(T0, T1))))
+    u2 = _unit(_add(_unit(_sub(T0, T2)), _unit(_sub(T1, T2))))
+    return m0 + m1 + m2 + u0 + u1 + u2
+
+
+@njit(cache=True)
+def _face_normals(V, F, I, J, tol):
+    """Per face met in the pairs (I, J): unit normal and degeneracy, computed once per face
+    instead of once per pair (a face of a patch tested against itself is in ~20 pairs).
+
+    Returns slot (len(F),) int64 (-1 for faces in no pair), N (s, 3), deg (s,) bool.
+    """
+    slot = np.full(F.shape[0], -1, np.int64)
+    s = 0
+    for p in range(I.shape[0]):
+        for f in (I[p], J[p]):
+            if slot[f] < 0:
+                slot[f] = s
+                s += 1
+    N, deg = np.empty((s, 3)), np.empty(s, np.bool_)
+    for f in range(F.shape[0]):
+        t = slot[f]
+        if t >= 0:
+            n, deg[t] = _unit_normal(_row(V, F, f, 0), _row(V, F, f, 1), _row(V, F, f, 2), tol)
+            N[t, 0], N[t, 1], N[t, 2] = n
+    return slot, N, deg
+
+
+@njit(cache=True)
+def _ensure_frame(frame, done, t, T0, T1, T2, nt):
+    """Fill row t of `frame` with the clipping frame of T0T1T2 on its first use."""
+    if not done[t]:
+        fr = _clip_frame(T0, T1, T2, nt)
+        for k in range(18):
+            frame[t, k] = fr[k]
+        done[t] = True
+
+
+@njit(cache=True)
+def _frame_row(frame, t, k):
+    return (frame[t, 3 * k], frame[t, 3 * k + 1], frame[t, 3 * k + 2])
+
+
+@njit(cache=True)
+def _edges_meet(S0, S1, S2, T0, T1, T2, nt, frame, ft, shs, degs, degt, one, S, tol):
+    """intersections._edges_meet for one pair: some edge of triangle S0S1S2 meets T0T1T2
+    (whose clipping frame is row ft of `frame`)."""
     if degt:
         return False
     Ts = (S0, S1, S2)
     Tt = (T0, T1, T2)
-    # the target's clipping directions, as _clip computes them for every edge (same values)
-    ms = (_unit(_cross(nt, _sub(T1, T0))), _unit(_cross(nt, _sub(T2, T1))), _unit(_cross(nt, _sub(T0, T2))))
-    us = (_unit(_add(_unit(_sub(T1, T0)), _unit(_sub(T2, T0)))),
-          _unit(_add(_unit(_sub(T2, T1)), _unit(_sub(T0, T1)))),
-          _unit(_add(_unit(_sub(T0, T2)), _unit(_sub(T1, T2)))))
+    ms = (_frame_row(frame, ft, 0), _frame_row(frame, ft, 1), _frame_row(frame, ft, 2))
+    us = (_frame_row(frame, ft, 3), _frame_row(frame, ft, 4), _frame_row(frame, ft, 5))
     for k in range(3):
         incident = shs[k] or shs[(k + 1) % 3]
         if one and incident and not degs:
@@ -279,6 +359,9 @@ def narrow_codes(V, F, canon, I, J, in_q, in_a, tol):
     code = np.zeros(k, np.int8)
     fy = np.zeros(k)
     fx = np.zeros(k)
+    slot, N, DEG = _face_normals(V, F, I, J, tol)
+    frame = np.empty((N.shape[0], 18))  # clipping frames, computed when a pair first needs one
+    done = np.zeros(N.shape[0], np.bool_)
     for p in range(k):
         i, j = I[p], J[p]
         # (i, j) and (j, i) are both generated when both faces are in both sets
@@ -286,8 +369,9 @@ def narrow_codes(V, F, canon, I, J, in_q, in_a, tol):
             continue
         A0, A1, A2 = _row(V, F, i, 0), _row(V, F, i, 1), _row(V, F, i, 2)
         B0, B1, B2 = _row(V, F, j, 0), _row(V, F, j, 1), _row(V, F, j, 2)
-        n1, deg1 = _unit_normal(A0, A1, A2, tol)
-        n2, deg2 = _unit_normal(B0, B1, B2, tol)
+        si, sj = slot[i], slot[j]
+        n1, deg1 = (N[si, 0], N[si, 1], N[si, 2]), DEG[si]
+        n2, deg2 = (N[sj, 0], N[sj, 1], N[sj, 2]), DEG[sj]
         if _beyond(A0, n1, deg1, B0, B1, B2, tol) or _beyond(B0, n2, deg2, A0, A1, A2, tol):
             continue
         C1 = (canon[F[i, 0]], canon[F[i, 1]], canon[F[i, 2]])
@@ -321,7 +405,11 @@ def narrow_codes(V, F, canon, I, J, in_q, in_a, tol):
             one = nsh == 1
             s = 0 if sh1[0] else (1 if sh1[1] else (2 if sh1[2] else 0))  # argmax of sh1
             S = A0 if s == 0 else (A1 if s == 1 else A2)
-            if (_edges_meet(A0, A1, A2, B0, B1, B2, n2, sh1, deg1, deg2, one, S, tol)
-                    or _edges_meet(B0, B1, B2, A0, A1, A2, n1, sh2, deg2, deg1, one, S, tol)):
+            if not deg2:
+                _ensure_frame(frame, done, sj, B0, B1, B2, n2)
+            if not deg1:
+                _ensure_frame(frame, done, si, A0, A1, A2, n1)
+            if (_edges_meet(A0, A1, A2, B0, B1, B2, n2, frame, sj, sh1, deg1, deg2, one, S, tol)
+                    or _edges_meet(B0, B1, B2, A0, A1, A2, n1, frame, si, sh2, deg2, deg1, one, S, tol)):
                 code[p] = HIT
     return code, fy, fx

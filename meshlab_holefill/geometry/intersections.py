@@ -87,18 +87,21 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     if len(q) == 0 or len(a) == 0:
         return empty
 
+    # boxes, centroids and radii of all faces in one compiled pass (no (n, 3, 3) arrays)
+    bq, ba = K.face_bounds(V, F, q), K.face_bounds(V, F, a)
     if tol is None:
-        P = V[_used_vertices(F, np.concatenate([q, a]), len(V))]
-        diag = np.linalg.norm(P.max(0) - P.min(0))
-        tol = 1e-9 * diag + 1e-13 * np.abs(P).max()
+        # the box of the used vertices is the box of their faces' boxes
+        P_lo = np.minimum(bq[0].min(0), ba[0].min(0))
+        P_hi = np.maximum(bq[1].max(0), ba[1].max(0))
+        diag = np.linalg.norm(P_hi - P_lo)
+        tol = 1e-9 * diag + 1e-13 * max(np.abs(P_lo).max(), np.abs(P_hi).max())
     tol = float(tol)
     # Faces of `against` outside the query faces' common box (grown by tol) meet none of them;
     # dropping them first spares the candidate search and the welding that work (a few new
     # triangles tested against a whole ring of faces).
-    Tq, Ta = V[F[q]], V[F[a]]
-    lo, hi = Tq.min(axis=(0, 1)) - tol, Tq.max(axis=(0, 1)) + tol
-    inside = np.all(Ta.max(axis=1) >= lo, axis=1) & np.all(Ta.min(axis=1) <= hi, axis=1)
-    a, Ta = a[inside], Ta[inside]
+    lo, hi = bq[0].min(0) - tol, bq[1].max(0) + tol
+    inside = np.all(ba[1] >= lo, axis=1) & np.all(ba[0] <= hi, axis=1)
+    a, ba = a[inside], tuple(x[inside] for x in ba)
     if len(a) == 0:
         return empty
     used = _used_vertices(F, np.concatenate([q, a]), len(V))
@@ -113,7 +116,7 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     in_a = np.zeros(len(F), bool)
     in_a[a] = True
 
-    iq, ja = _candidates(Tq, Ta, tol)
+    iq, ja = _candidates(bq, ba, tol, q, a, in_q, in_a)
     i, j = q[iq], a[ja]
     code, fy, fx = K.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
     hit = code == K.HIT
@@ -139,17 +142,18 @@ def faces_intersecting(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     return np.unique(np.concatenate([pairs[:, 0], flipped]))
 
 
-def _candidates(Tq, Ta, tol):
+def _candidates(bounds_q, bounds_a, tol, q, a, in_q, in_a):
     """Local index pairs (iq, ja) worth the narrow test: boxes overlap (query boxes grown by tol)
     and centroids lie within the sum of the faces' bounding-sphere radii plus tol.
 
-    A single radius would be set by the largest face, so faces are binned by radius (factors of
-    4) and each pair of bins is bounded by its largest radii (the bound the former dual-tree
-    search on centroids used; the grid of `_tri_kernels.box_pairs` applies it pair by pair).
+    `bounds_q`, `bounds_a` are `_tri_kernels.face_bounds` of the two face sets (lo, hi, centroid,
+    radius), `q`, `a` their global face indices and `in_q`, `in_a` the sets' marks by global index
+    (self-pairs and mirrored pairs are left out, see `_tri_kernels.box_pairs`). A single radius would be set by the largest face, so faces are binned by radius
+    (factors of 4) and each pair of bins is bounded by its largest radii (the bound the former
+    dual-tree search on centroids used; the grid of `_tri_kernels.box_pairs` applies it pair by
+    pair).
     """
-    cq, ca = Tq.mean(1), Ta.mean(1)
-    rq = np.linalg.norm(Tq - cq[:, None], axis=2).max(1)
-    ra = np.linalg.norm(Ta - ca[:, None], axis=2).max(1)
+    (lo_q, hi_q, cq, rq), (lo_a, hi_a, ca, ra) = bounds_q, bounds_a
     top = max(rq.max(), ra.max(), np.finfo(float).tiny)
     bin_q, bin_a = (np.clip(np.floor(np.log(np.maximum(r, 1e-300) / top) / np.log(4)), -15, 0)
                     for r in (rq, ra))
@@ -158,8 +162,7 @@ def _candidates(Tq, Ta, tol):
     rq_max = np.array([rq[bin_q == b].max() for b in uq])
     ra_max = np.array([ra[bin_a == b].max() for b in ua])
     ub = rq_max[:, None] + ra_max[None, :] + tol
-    lo_q, hi_q = Tq.min(1) - tol, Tq.max(1) + tol
-    lo_a, hi_a = Ta.min(1), Ta.max(1)
+    lo_q, hi_q = lo_q - tol, hi_q + tol
     # grid cells about the size of a typical face box, doubled while far more cells than faces
     origin = lo_a.min(0)
     span = hi_a.max(0) - origin
@@ -168,7 +171,7 @@ def _candidates(Tq, Ta, tol):
         cell *= 2
     dims = (np.floor(span / cell) + 1).astype(np.int64)
     return K.box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bq.ravel().astype(np.int64), ba.ravel().astype(np.int64),
-                       ub * ub, origin, cell, dims)
+                       ub * ub, origin, cell, dims, q, a, in_q, in_a)
 
 
 def _row_ranks(P):

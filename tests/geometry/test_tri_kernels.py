@@ -131,10 +131,32 @@ def test_broad_phase_equals_kdtree_search(seed, n, m, spread, flat):
     tol = 1e-9 * 3
     blocks = list(R._candidates(Tq, Ta, tol))
     ref = {(int(x), int(y)) for b in blocks for x, y in zip(*b)}
-    iq, ja = I._candidates(Tq, Ta, tol)
+    none = np.zeros(n + m, bool)  # disjoint sets: no pair is a self or mirrored pair
+    iq, ja = I._candidates(_bounds(Tq), _bounds(Ta), tol, np.arange(n), np.arange(n, n + m), none, none)
     got = list(zip(iq.tolist(), ja.tolist()))
     assert len(got) == len(set(got))
     assert set(got) == ref
+
+
+def _bounds(T):
+    """K.face_bounds of the triangles T (n, 3, 3), as a soup of their own vertices."""
+    return K.face_bounds(T.reshape(-1, 3), np.arange(3 * len(T)).reshape(-1, 3), np.arange(len(T)))
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), offset=st.sampled_from([0.0, 1e3, -7.0]))
+def test_face_bounds_equal_numpy(seed, offset):
+    """Boxes, centroids and radii as the numpy expressions on V[F[faces]] compute them."""
+    rng = np.random.default_rng(seed)
+    V = rng.normal(size=(60, 3)) * np.exp(3 * rng.normal(size=(60, 1))) + offset
+    V[:10] *= rng.integers(0, 2, (10, 3))  # zeros, repeated coordinates
+    F = rng.integers(0, 60, (200, 3))
+    faces = rng.integers(0, 200, 150)
+    T = V[F[faces]]
+    c = T.mean(1)
+    ref = (T.min(1), T.max(1), c, np.linalg.norm(T - c[:, None], axis=2).max(1))
+    for got, want in zip(K.face_bounds(V, F, faces), ref):
+        assert got.shape == want.shape and np.array_equal(got, want)
 
 
 def test_real_patch_queries_equal_numpy():
