@@ -615,7 +615,7 @@ def vector_area(points):
     return float(0.5 * np.linalg.norm(cross_rows(P, np.roll(P, -1, axis=0)).sum(axis=0)))
 
 
-def is_outline(V, F, loop, incidence, face_areas_of=None):
+def is_outline(V, F, loop, incidence):
     """Whether a loop outlines its whole connected component: :func:`outline_ratios` >= OUTLINE_RATIO.
 
     The same answer as the ratio, without labelling the whole mesh: the component is grown
@@ -634,29 +634,12 @@ def is_outline(V, F, loop, incidence, face_areas_of=None):
     loop : BoundaryLoop
     incidence : (n, m) sparse
         :func:`vertex_face_incidence` of (F, n).
-    face_areas_of : callable, optional
-        ``face_areas_of(faces) -> (k,) float``: areas other than the triangles' own
-        (grown ring by ring in Python); by default they are computed from V and F.
 
     Returns
     -------
     bool
     """
-    if face_areas_of is None:
-        return outline_ratio(V, F, loop, incidence) is not None
-    ids = np.asarray(loop.vertices, np.int64)
-    budget = vector_area(V[ids]) / OUTLINE_RATIO
-    frontier = np.unique(np.asarray(loop.border_faces, np.int64))
-    F = np.asarray(F)
-    seen = np.zeros(len(F), bool)
-    seen[frontier] = True
-    area = float(face_areas_of(frontier).sum())
-    while area <= budget:
-        frontier = _next_face_ring(incidence.indptr, incidence.indices, F, frontier, seen)
-        if len(frontier) == 0:  # the whole component, and no larger than the budget
-            return True
-        area += float(face_areas_of(frontier).sum())
-    return False
+    return outline_ratio(V, F, loop, incidence) is not None
 
 
 def outline_ratio(V, F, loop, incidence):
@@ -703,7 +686,7 @@ def _triangle_area(V, F, f):
 def _grown_area(indptr, indices, V, F, start, budget):
     """Area of the component of faces ``start`` (sorted, unique), or -1 once it exceeds ``budget``.
 
-    The growth of :func:`is_outline` in one call: the same rings as :func:`_next_face_ring`
+    The growth of :func:`is_outline` in one call: the same rings as gathering the incidence rows of a ring's vertices
     (the unseen faces sharing a vertex with the last ring), their areas added ring by ring,
     stopping as soon as the area is over the budget. Each vertex's incidence row is read
     once, when a ring first reaches it (a vertex reached before had all its faces seen
@@ -744,32 +727,6 @@ def _grown_area(indptr, indices, V, F, start, budget):
         for f in ring:
             area += _triangle_area(V, F, f)
     return -1.0
-
-
-@njit(cache=True)
-def _next_face_ring(indptr, indices, F, frontier, seen):
-    """The faces sharing a vertex with a face of ``frontier`` and not yet ``seen``, sorted; marks them seen.
-
-    One ring of the face growth of :func:`is_outline`, compiled: the same faces as gathering
-    the incidence rows of the frontier's vertices and keeping the unseen ones, without the
-    per-ring sparse row selection and two sorts (a 10 ms loop per hole on face000.ply).
-    """
-    out = np.empty(16, np.int64)
-    count = 0
-    for f in frontier:
-        for c in range(3):
-            v = F[f, c]
-            for p in range(indptr[v], indptr[v + 1]):
-                g = indices[p]
-                if not seen[g]:
-                    seen[g] = True
-                    if count == len(out):
-                        grown = np.empty(2 * len(out), np.int64)
-                        grown[:count] = out[:count]
-                        out = grown
-                    out[count] = g
-                    count += 1
-    return np.sort(out[:count])
 
 
 def hole_measures(V, loop):

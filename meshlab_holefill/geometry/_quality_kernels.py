@@ -14,7 +14,16 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["face_quality", "triangle_quality_kernel"]
+__all__ = ["face_cross", "face_quality", "triangle_quality_kernel"]
+
+
+@njit(cache=True)
+def face_cross(V, F, f):
+    """(b - a) x (c - a) of face f = (a, b, c) of V, as ``cross_rows`` computes it (valid index)."""
+    i, j, k = F[f, 0], F[f, 1], F[f, 2]
+    u0, u1, u2 = V[j, 0] - V[i, 0], V[j, 1] - V[i, 1], V[j, 2] - V[i, 2]
+    w0, w1, w2 = V[k, 0] - V[i, 0], V[k, 1] - V[i, 1], V[k, 2] - V[i, 2]
+    return (u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0)
 
 
 @njit(cache=True)

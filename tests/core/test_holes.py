@@ -227,23 +227,24 @@ def test_vertex_face_incidence_lists_each_face_once_per_vertex_in_order(seed, n_
     assert set(incidence.data.tolist()) <= {1}
 
 
-def test_outline_test_grows_the_same_rings_as_sparse_row_gathers():
-    from meshlab_holefill.core.holes import _next_face_ring
+def _is_outline_ring_by_ring(V, F, loop, incidence):
+    """The outline test grown one ring of faces at a time by sparse row gathers (the reference)."""
+    from meshlab_holefill.core.holes import OUTLINE_RATIO, vector_area
+    from meshlab_holefill.geometry.quality import face_areas
 
-    V, F = grid(12, 12)
-    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.2)
-    incidence = vertex_face_incidence(F, len(V))
-    frontier = np.array([0, 5, 17])
+    budget = vector_area(V[np.asarray(loop.vertices)]) / OUTLINE_RATIO
+    frontier = np.unique(np.asarray(loop.border_faces, np.int64))
     seen = np.zeros(len(F), bool)
     seen[frontier] = True
-    expected_seen = seen.copy()
-    for _ in range(4):
+    area = face_areas(V, F[frontier]).sum()
+    while area <= budget:
         near = incidence[np.unique(F[frontier])].indices
-        expected = np.unique(near[~expected_seen[near]])
-        expected_seen[expected] = True
-        frontier = _next_face_ring(incidence.indptr, incidence.indices, F, frontier, seen)
-        assert frontier.tolist() == expected.tolist()
-        assert np.array_equal(seen, expected_seen)
+        frontier = np.unique(near[~seen[near]])
+        if len(frontier) == 0:
+            return True
+        seen[frontier] = True
+        area += face_areas(V, F[frontier]).sum()
+    return False
 
 
 def _islands_and_holes():
@@ -259,14 +260,13 @@ def _islands_and_holes():
 
 def test_compiled_outline_test_matches_the_ratio_and_the_ring_by_ring_growth():
     from meshlab_holefill.core.holes import OUTLINE_RATIO, is_outline, outline_ratios
-    from meshlab_holefill.geometry.quality import face_areas
 
     V, F = _islands_and_holes()
     loops = boundary_loops(F)
     incidence = vertex_face_incidence(F, len(V))
     ratios = outline_ratios(V, F, loops)
     compiled = [is_outline(V, F, loop, incidence) for loop in loops]
-    ring_by_ring = [is_outline(V, F, loop, incidence, face_areas_of=lambda f: face_areas(V, F[f])) for loop in loops]
+    ring_by_ring = [_is_outline_ring_by_ring(V, F, loop, incidence) for loop in loops]
     assert compiled == ring_by_ring == (ratios >= OUTLINE_RATIO).tolist()
     assert sum(compiled) == 3  # the grid's outer rim and both islands; the two holes are not outlines
 

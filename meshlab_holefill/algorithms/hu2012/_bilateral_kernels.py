@@ -10,18 +10,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...geometry._quality_kernels import face_quality
+from ...geometry._quality_kernels import face_cross, face_quality
 from ...geometry._tri_kernels import _dot
 
 __all__ = ["refuse_slivers"]
-
-
-@njit(cache=True)
-def _cross_of_face(V, F, f):
-    i, j, k = F[f, 0], F[f, 1], F[f, 2]
-    u0, u1, u2 = V[j, 0] - V[i, 0], V[j, 1] - V[i, 1], V[j, 2] - V[i, 2]
-    w0, w1, w2 = V[k, 0] - V[i, 0], V[k, 1] - V[i, 1], V[k, 2] - V[i, 2]
-    return (u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0)
 
 
 @njit(cache=True)
@@ -34,7 +26,7 @@ def refuse_slivers(V_old, V_new, F, moved, min_quality):
     for f in range(m):
         q = face_quality(V_old, F[f, 0], F[f, 1], F[f, 2])
         floor[f] = q if q < min_quality or q != q else min_quality  # np.minimum (NaN wins)
-        n_old[f, 0], n_old[f, 1], n_old[f, 2] = _cross_of_face(V_old, F, f)
+        n_old[f, 0], n_old[f, 1], n_old[f, 2] = face_cross(V_old, F, f)
     V = V_new.copy()
     moved = moved.copy()
     back = np.zeros(n, np.bool_)
@@ -45,7 +37,7 @@ def refuse_slivers(V_old, V_new, F, moved, min_quality):
             i, j, k = F[f, 0], F[f, 1], F[f, 2]
             if not (moved[i] or moved[j] or moved[k]):
                 continue
-            c = _cross_of_face(V, F, f)
+            c = face_cross(V, F, f)
             bad = face_quality(V, i, j, k) < floor[f] * (1 - 1e-12) or \
                 _dot((n_old[f, 0], n_old[f, 1], n_old[f, 2]), c) <= 0
             if bad:

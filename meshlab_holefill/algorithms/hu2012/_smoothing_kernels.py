@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...geometry._quality_kernels import face_quality
+from ...geometry._quality_kernels import face_cross, face_quality
 from ...geometry._tri_kernels import _dot
 
 __all__ = ["refuse_worse"]
@@ -27,16 +27,8 @@ def _minimum(a, b):
 
 
 @njit(cache=True)
-def _cross_of_face(V, F, f):
-    i, j, k = F[f, 0], F[f, 1], F[f, 2]
-    u0, u1, u2 = V[j, 0] - V[i, 0], V[j, 1] - V[i, 1], V[j, 2] - V[i, 2]
-    w0, w1, w2 = V[k, 0] - V[i, 0], V[k, 1] - V[i, 1], V[k, 2] - V[i, 2]
-    return (u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0)
-
-
-@njit(cache=True)
 def _quality_or_flipped(V, F, f, n_old):
-    c = _cross_of_face(V, F, f)
+    c = face_cross(V, F, f)
     if _dot((n_old[f, 0], n_old[f, 1], n_old[f, 2]), c) <= 0:
         return -1.0
     return face_quality(V, F[f, 0], F[f, 1], F[f, 2])
@@ -55,7 +47,7 @@ def refuse_worse(V_old, V_new, F, moved):
         q = face_quality(V_old, F[f, 0], F[f, 1], F[f, 2])
         for c in range(3):
             worst_old[F[f, c]] = _minimum(worst_old[F[f, c]], q)
-        n_old[f, 0], n_old[f, 1], n_old[f, 2] = _cross_of_face(V_old, F, f)
+        n_old[f, 0], n_old[f, 1], n_old[f, 2] = face_cross(V_old, F, f)
     V = V_new.copy()
     moved = moved.copy()
     q = np.empty(m)
