@@ -13,7 +13,16 @@ from numba import njit
 from ...geometry._quality_kernels import face_cross, face_quality
 from ...geometry._tri_kernels import _dot
 
-__all__ = ["refuse_slivers"]
+__all__ = ["refuse_slivers", "undo_moves"]
+
+
+@njit(cache=True)
+def undo_moves(V, V_old, moved, back):
+    """Put the vertices marked ``back`` where they were in V_old and mark them unmoved (in place)."""
+    for v in range(len(back)):
+        if back[v]:
+            V[v, 0], V[v, 1], V[v, 2] = V_old[v, 0], V_old[v, 1], V_old[v, 2]
+            moved[v] = False
 
 
 @njit(cache=True)
@@ -47,8 +56,5 @@ def refuse_slivers(V_old, V_new, F, moved, min_quality):
                         back[v] = True
         if not anything:
             break
-        for v in range(n):
-            if back[v]:
-                V[v, 0], V[v, 1], V[v, 2] = V_old[v, 0], V_old[v, 1], V_old[v, 2]
-                moved[v] = False
+        undo_moves(V, V_old, moved, back)
     return V

@@ -14,6 +14,7 @@ from numba import njit
 
 from ...geometry._quality_kernels import face_cross, face_quality
 from ...geometry._tri_kernels import _dot
+from ._bilateral_kernels import undo_moves
 
 __all__ = ["refuse_worse"]
 
@@ -65,10 +66,7 @@ def refuse_worse(V_old, V_new, F, moved):
             anything = anything or back[v]
         if not anything:
             break
-        for v in range(n):
-            if back[v]:
-                V[v, 0], V[v, 1], V[v, 2] = V_old[v, 0], V_old[v, 1], V_old[v, 2]
-                moved[v] = False
+        undo_moves(V, V_old, moved, back)
         for f in range(m):
             if back[F[f, 0]] or back[F[f, 1]] or back[F[f, 2]]:
                 q[f] = _quality_or_flipped(V, F, f, n_old)
