@@ -13,7 +13,7 @@ from numba import njit
 from ...geometry._quality_kernels import face_cross, face_quality
 from ...geometry._tri_kernels import _dot
 
-__all__ = ["refuse_slivers", "undo_moves"]
+__all__ = ["refuse_slivers"]  # undo_moves is a helper of the compiled guards, compiled into them
 
 
 @njit(cache=True)

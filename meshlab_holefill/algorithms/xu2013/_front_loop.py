@@ -416,6 +416,15 @@ def _release_blocked_near(st, pr, f0, f1):
 
 
 @njit(cache=True)
+def _kill_run(st, x, count):
+    """Kill ``count`` nodes of a front, from node x on along ``nnext`` (a cycle too short to keep)."""
+    for _ in range(count):
+        nx = st.nnext[x]
+        _kill_node(st, x)
+        x = nx
+
+
+@njit(cache=True)
 def _split(st, w, u):
     """Split the front through nodes w and u of one vertex into two cycles; drop cycles of <= 2 nodes.
 
@@ -437,11 +446,7 @@ def _split(st, w, u):
         short, short_len, long_start = u, lb, w
     long_len = fsize[label] - short_len
     if short_len <= 2:
-        x = short
-        for _ in range(short_len):
-            nx = nnext[x]
-            _kill_node(st, x)
-            x = nx
+        _kill_run(st, short, short_len)
     else:
         new_label = C[NEXT_LABEL]
         C[NEXT_LABEL] += 1
@@ -452,11 +457,7 @@ def _split(st, w, u):
         fsize[new_label] = short_len
     fsize[label] = long_len
     if long_len <= 2:
-        x = long_start
-        for _ in range(long_len):
-            nx = nnext[x]
-            _kill_node(st, x)
-            x = nx
+        _kill_run(st, long_start, long_len)
         fsize[label] = 0
     return w, u, wn, un
 
