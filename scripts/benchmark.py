@@ -12,7 +12,9 @@ overlapping parts cross) have their own holes; bunny_212k (the bunny Loop-subdiv
 (``pymeshfix``) run as anchors when installed. The report (tables, charts, one picture per hole) goes to ``OUT/suite``.
 
 ``--scaling`` adds the scaling run: the same holes (same centres, same boundary sizes) in the
-bunny subdivided to about 50k, 200k, 800k and 3M faces, per-hole seconds against mesh size.
+bunny subdivided to about 50k, 200k, 800k and 3M faces, per-hole seconds against mesh size; at the
+largest size the min-angle filter and MeshLab's Close Holes run ``--scaling-repeats`` times,
+alternating, and the ratio of their median whole runs is reported.
 ``--papers`` adds the "papers vs. ours" table (Brunton, Hu, Xu, Xie & Zou Table 1).
 ``--update-readme`` replaces the README's Results section with this run's summary.
 
@@ -95,13 +97,15 @@ SCALING_SIZES = ("small", "medium", "large")
 SPEED_CASE_SIZES = ("medium", "large", "irregular")  # targets 60, 150, 250 boundary edges
 
 
-def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALING_SIZES, first_level=0):
+def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALING_SIZES, first_level=0, repeats=1):
     """The same holes in the bunny at about 50k, 200k, 800k and 3M faces (Loop subdivision).
 
     The holes are grown from the same centres with the same boundary-size targets at every
     level, so each filter faces holes of the same boundary complexity in ever larger meshes.
     ``sizes`` are cut_holes.SIZE_CLASSES keys (all holes compact); levels before
-    ``first_level`` are subdivided but not run (the speed case runs level 1 only).
+    ``first_level`` are subdivided but not run (the speed case runs level 1 only). With
+    ``repeats`` > 1 the largest level's min-angle run and MeshLab's Close Holes (all holes) run
+    that many times in all, alternating (:func:`whole_run_ratio`).
 
     Returns
     -------
@@ -137,10 +141,43 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALIN
                          "hole_edges": [h.boundary_edges for h in prepared.holes],
                          "hole_seconds": per_hole if len(per_hole) == len(hole_rows) else None,
                          "cut_seconds": cut_seconds})
+        if level == levels - 1 and repeats > 1:
+            _repeat_whole_runs(rows, prepared, fillers, repeats, timeout)
         print(f"# scaling: {len(prepared.F0)} faces done", file=sys.stderr)
     if out:
         scaling_plot(rows, os.path.join(out, "scaling.png"))
     return rows
+
+
+WHOLE_RUN_PAIR = ("meshing_close_holes_min_angle_bilateral", f"{BASELINE} (all holes)")
+
+
+def _repeat_whole_runs(rows, prepared, fillers, repeats, timeout):
+    """Run the min-angle filter and MeshLab's Close Holes (all holes) again on ``prepared``, alternating;
+    each one's whole-run seconds are added to its row as ``repeat_seconds`` (the first run included)."""
+    pair = [f for f in fillers if (f.filter == WHOLE_RUN_PAIR[0] and not f.params) or f.label == WHOLE_RUN_PAIR[1]]
+    level_rows = {r["filler"]: r for r in rows if r["faces"] == len(prepared.F0)}
+    for f in pair:
+        level_rows[f.label]["repeat_seconds"] = [level_rows[f.label]["run_seconds"]]
+    for _ in range(repeats - 1):
+        for f in pair:
+            result = run_comparison(None, cases=[prepared], filters=[f], timeout=timeout, full_metrics=False)
+            level_rows[f.label]["repeat_seconds"].append(result.runs[0]["seconds"])
+
+
+def whole_run_ratio(rows):
+    """The largest level's whole-run ratio, min-angle over MeshLab's Close Holes (all holes), from the
+    medians of the repeated runs: one sentence for README Results, or None without repeats."""
+    top = max((r["faces"] for r in rows), default=None)
+    timed = {r["filler"]: r["repeat_seconds"] for r in rows if r["faces"] == top and "repeat_seconds" in r}
+    if len(timed) != 2:
+        return None
+    ours, meshlab = (float(np.median(timed[label])) for label in WHOLE_RUN_PAIR)
+    runs = ", ".join(f"{t:.2f}" for t in timed[WHOLE_RUN_PAIR[0]])
+    theirs = ", ".join(f"{t:.2f}" for t in timed[WHOLE_RUN_PAIR[1]])
+    return (f"At {top:,} faces the min-angle whole run takes {ours:.2f} s and MeshLab's Close Holes (all holes) "
+            f"{meshlab:.2f} s, medians of {len(timed[WHOLE_RUN_PAIR[0]])} alternating runs ({runs} s against "
+            f"{theirs} s): {ours / meshlab:.2f}x.")
 
 
 def scaling_plot(rows, path):
@@ -511,6 +548,9 @@ def main(argv=None):
     ap.add_argument("--scaling", action="store_true", help="also the scaling run (50k..3M faces)")
     ap.add_argument("--no-suite", action="store_true", help="skip the standard suite (e.g. only --scaling)")
     ap.add_argument("--scaling-levels", type=int, default=4)
+    ap.add_argument("--scaling-repeats", type=int, default=3,
+                    help="runs of the min-angle filter and MeshLab's Close Holes (all holes) at the largest scaling "
+                         "level, alternating; their medians give the whole-run ratio (default 3)")
     ap.add_argument("--papers", action="store_true", help="also the papers-vs-ours table")
     ap.add_argument("--speed-case", action="store_true",
                     help="also the speed case: holes of ~50/200/250 edges in a ~200k-face mesh")
@@ -551,7 +591,8 @@ def main(argv=None):
     # timing runs: each filter once, with its defaults (variants only change accuracy)
     plain = [f for f in fillers if not f.params or f.filter == BASELINE]
     if args.scaling:
-        rows = scaling_run(plain, args.seed, args.scaling_levels, max(args.timeout, 180.0), args.out)
+        rows = scaling_run(plain, args.seed, args.scaling_levels, max(args.timeout, 180.0), args.out,
+                           repeats=args.scaling_repeats)
         with open(os.path.join(args.out, "scaling.json"), "w") as fh:
             json.dump(rows, fh, indent=1)
         text += ("\n**Scaling** (the same three holes, ~20/60/150 boundary edges, in the bunny subdivided; "
@@ -559,6 +600,9 @@ def main(argv=None):
                  "time, `workers` = one per core, so the sum can exceed the whole run; 'rest' is then negative), the "
                  "rest is the O(n) boundary search, mesh transfer and merge; 'peak MB' is the worker's peak resident memory while it builds the "
                  "MeshSet and runs the filter, above its memory before):\n\n" + markdown_table(*scaling_table(rows)) + f"\n\nPlot: `{args.out}/scaling.png`.\n")
+        ratio = whole_run_ratio(rows)
+        if ratio:
+            text += "\n" + ratio + "\n"
     if args.speed_case:
         rows = scaling_run(plain, args.seed, 2, max(args.timeout, 180.0), None, SPEED_CASE_SIZES, first_level=1)
         with open(os.path.join(args.out, "speed_case.json"), "w") as fh:
