@@ -1,4 +1,4 @@
-"""Compiled rounds of :func:`.flips.relax_edges` (numba) for the unfolded-angle test.
+"""Compiled rounds of :func:`.flips.relax_edges` (numba) for the circumsphere and unfolded-angle tests.
 
 One round of the numpy code (interior edges, the swap test, the new-edge test, orientation,
 duplicate and fixed edges, then an independent set of the allowed swaps) is some sixty small
@@ -62,6 +62,50 @@ def _angle_sum_exceeds(V, p1, q1, r1, p2, q2, r2):
     if not abs(s - limit) > ANGLE_MARGIN:  # NaN too: the numpy code's two tests treat it differently
         return -1
     return 1 if s > limit else 0
+
+
+@njit(cache=True)
+def _circumsphere(V, p, q, r):
+    """flips.circumcenters of the triangle (p, q, r) for one row: (centre, radius), inf for a degenerate one."""
+    A = _row(V, p)
+    u, w = _sub(_row(V, q), A), _sub(_row(V, r), A)
+    uxw = _cross(u, w)
+    denom = 2.0 * _dot(uxw, uxw)
+    uu, ww = _dot(u, u), _dot(w, w)
+    num = _cross((uu * w[0] - ww * u[0], uu * w[1] - ww * u[1], uu * w[2] - ww * u[2]), uxw)
+    if not denom > 0:
+        return A, np.inf
+    offset = (num[0] / denom, num[1] / denom, num[2] / denom)
+    return (A[0] + offset[0], A[1] + offset[1], A[2] + offset[2]), _norm(offset)
+
+
+@njit(cache=True)
+def _inside_sphere(V, p, q, r, x):
+    """flips' circumsphere test: x strictly inside the circumsphere of (p, q, r) (relative margin 1e-9)."""
+    centre, radius = _circumsphere(V, p, q, r)
+    return _norm(_sub(_row(V, x), centre)) < radius * (1 - 1e-9)
+
+
+@njit(cache=True)
+def _outside_sphere(V, p, q, r, x):
+    """The new-edge test's side: x not inside the circumsphere of (p, q, r) (False for NaN, as in numpy)."""
+    centre, radius = _circumsphere(V, p, q, r)
+    return _norm(_sub(_row(V, x), centre)) >= radius * (1 - 1e-9)
+
+
+@njit(cache=True)
+def _swap_tests(V, a, b, c, d, sphere):
+    """(edge fails the test, new edge passes it) for edge (a, b) with opposite corners c, d:
+    1 / 0 each, -1 when an angle sum is too close to decide (the circumsphere tests always decide)."""
+    if sphere:
+        if not (_inside_sphere(V, a, b, c, d) or _inside_sphere(V, b, a, d, c)):
+            return 0, 0
+        return 1, 1 if _outside_sphere(V, a, d, c, b) and _outside_sphere(V, b, c, d, a) else 0
+    inside = _angle_sum_exceeds(V, c, a, b, d, a, b)
+    if inside != 1:
+        return inside, 0
+    passes = _angle_sum_exceeds(V, a, d, c, b, c, d)
+    return 1, -1 if passes < 0 else 1 - passes
 
 
 @njit(cache=True)
@@ -150,13 +194,15 @@ def _interior_edges(F, n):
 
 
 @njit(cache=True)
-def swap_candidates(V, F, fixed):
-    """One round of relax_edges (criterion "angles", normal_cos 0) up to the ``allowed`` hook.
+def swap_candidates(V, F, fixed, sphere):
+    """One round of relax_edges (criterion "angles", or "sphere" if ``sphere``; normal_cos 0) up to
+    the ``allowed`` hook.
 
     Parameters
     ----------
     V : (n, 3) float64, F : (m, 3) int64
     fixed : (p,) int64 sorted unique keys min * n + max of the fixed edges
+    sphere : bool  the circumsphere test instead of the unfolded-angle test
 
     Returns
     -------
@@ -184,15 +230,12 @@ def swap_candidates(V, F, fixed):
         abcd[i, 0], abcd[i, 1], abcd[i, 2], abcd[i, 3] = a, b, c, d
         f1f2[i, 0], f1f2[i, 1] = f1, f2
         new_key[i] = min(c, d) * n + max(c, d)
-        inside = _angle_sum_exceeds(V, c, a, b, d, a, b)
-        if inside < 0:
+        inside, passes = _swap_tests(V, a, b, c, d, sphere)
+        if inside < 0 or passes < 0:
             return UNSURE, abcd, f1f2, ok, new_key
         if inside == 1:
             failing += 1
-            passes = _angle_sum_exceeds(V, a, d, c, b, c, d)
-            if passes < 0:
-                return UNSURE, abcd, f1f2, ok, new_key
-            ok[i] = passes == 0 and _keeps_orientation(V, a, b, c, d) and c != d
+            ok[i] = passes == 1 and _keeps_orientation(V, a, b, c, d) and c != d
     if failing == 0:
         return NO_FAILING, abcd, f1f2, ok, new_key
     for i in range(e):

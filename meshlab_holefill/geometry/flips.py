@@ -117,8 +117,8 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         degrees or more, which keeps the shape of a bent quad). None skips the test, for a
         scorer that judges folds itself.
     compiled : bool
-        With ``criterion="angles"`` and ``normal_cos=0``, run the rounds compiled
-        (:mod:`._flip_kernels`, the same swaps as the numpy rounds); False runs numpy only.
+        With ``criterion="sphere"`` or ``"angles"`` and ``normal_cos=0``, run the rounds
+        compiled (:mod:`._flip_kernels`, the same swaps as the numpy rounds); False runs numpy only.
 
     Returns
     -------
@@ -130,7 +130,7 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
     n = len(V)
     fixed = np.unique(undirected_keys(() if fixed_edges is None else fixed_edges, n))
     scorer = min_angle_scores if criterion == "min_angle" else criterion if callable(criterion) else None
-    if compiled and isinstance(criterion, str) and criterion == "angles" and normal_cos == 0.0:
+    if compiled and isinstance(criterion, str) and criterion in ("angles", "sphere") and normal_cos == 0.0:
         V = np.ascontiguousarray(V, np.float64)
         return _relax_compiled(V, F, fixed, max_rounds, allowed, criterion)
     return _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer)
@@ -140,7 +140,7 @@ def _relax_compiled(V, F, fixed, max_rounds, allowed, criterion):
     """The rounds of :func:`relax_edges` by :mod:`._flip_kernels`; a round they cannot decide runs in numpy."""
     total = 0
     for _ in range(max_rounds):
-        status, abcd, f1f2, ok, new_key = K.swap_candidates(V, F, fixed)
+        status, abcd, f1f2, ok, new_key = K.swap_candidates(V, F, fixed, criterion == "sphere")
         if status == K.UNSURE:
             F, swaps, more = _relax_numpy(V, F, fixed, 1, allowed, criterion, 0.0, None, rounds_left=True)
             total += swaps

@@ -216,9 +216,10 @@ def _bumpy_patch(rng, nx=9):
     return V, F
 
 
-def test_compiled_angle_rounds_make_the_numpy_swaps():
-    # The compiled rounds (criterion "angles") against the numpy rounds: the same faces and swap
-    # counts, with and without fixed edges and a veto hook.
+@pytest.mark.parametrize("criterion", ["angles", "sphere"])
+def test_compiled_rounds_make_the_numpy_swaps(criterion):
+    # The compiled rounds against the numpy rounds: the same faces and swap counts, with and
+    # without fixed edges and a veto hook.
     from meshlab_holefill.geometry.topology import interior_edges
 
     rng = np.random.default_rng(3)
@@ -231,8 +232,8 @@ def test_compiled_angle_rounds_make_the_numpy_swaps():
         def allowed(V, F, A, B, replaced):  # deterministic in the swap, so both runs see the same veto
             return (A.sum(axis=1) + B.sum(axis=1)) % 3 != 0 if veto else np.ones(len(A), bool)
 
-        got = relax_edges(V, F, fixed, allowed=allowed, criterion="angles")
-        want = relax_edges(V, F, fixed, allowed=allowed, criterion="angles", compiled=False)
+        got = relax_edges(V, F, fixed, allowed=allowed, criterion=criterion)
+        want = relax_edges(V, F, fixed, allowed=allowed, criterion=criterion, compiled=False)
         np.testing.assert_array_equal(got[0], want[0])
         assert got[1] == want[1]
 
@@ -245,8 +246,23 @@ def test_compiled_rounds_defer_an_undecided_angle_sum_to_numpy():
     t = 1.0 / np.tan(np.pi / 4 + np.pi / 2 * 1e-9)
     V = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, t, 0]], float)
     F = np.array([[0, 1, 2], [1, 0, 3]])
-    assert FK.swap_candidates(V, F, np.zeros(0, np.int64))[0] == FK.UNSURE
+    assert FK.swap_candidates(V, F, np.zeros(0, np.int64), False)[0] == FK.UNSURE
     for move in (0.0, 1e-6, -1e-6):  # and on either side of the limit, decided by the kernel
         W = V + [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, move, 0]]
         np.testing.assert_array_equal(relax_edges(W, F, criterion="angles")[0],
                                       relax_edges(W, F, criterion="angles", compiled=False)[0])
+
+
+@pytest.mark.parametrize("poison", [None, np.nan, np.inf])
+def test_compiled_circumsphere_rounds_on_degenerate_triangles(poison):
+    # A zero-area triangle (infinite circumradius), a nearly flat one, and optionally a corner
+    # at NaN or infinity: the compiled rounds still make the numpy rounds' swaps.
+    V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 1, 0], [1, -1e-300, 0], [0.5, 0.5, 0]], float)
+    F = np.array([[0, 1, 3], [1, 2, 3], [0, 4, 1], [1, 4, 2], [0, 3, 5]])
+    if poison is not None:
+        V[5] = poison
+    got = relax_edges(V, F, criterion="sphere")
+    with np.errstate(invalid="ignore", over="ignore"):  # the numpy rounds warn on the poisoned corner
+        want = relax_edges(V, F, criterion="sphere", compiled=False)
+    np.testing.assert_array_equal(got[0], want[0])
+    assert got[1] == want[1]

@@ -205,3 +205,12 @@ def test_warm_up_loads_every_kernel_the_front_calls():
     warm_up()
     for name in ("initial_state", "run_front"):
         assert len(getattr(_front_loop, name).signatures) >= 1, name
+
+
+def test_the_filter_warm_up_also_loads_the_edge_relaxation_rounds():
+    from meshlab_holefill.algorithms.xu2013 import _front_loop, lssvm_poisson
+    from meshlab_holefill.geometry import _flip_kernels
+
+    lssvm_poisson.WARM_UP()
+    assert _front_loop.run_front.signatures
+    assert _flip_kernels.swap_candidates.signatures and _flip_kernels.apply_swaps.signatures
