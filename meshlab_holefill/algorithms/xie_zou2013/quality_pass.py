@@ -31,6 +31,7 @@ import numpy as np
 
 from ...geometry.quality import cross_rows, face_normals, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set
+from ._quality_pass_kernels import star_candidate_scores
 from .optimisation import compact_vertices
 
 __all__ = ["raise_min_quality"]
@@ -165,21 +166,16 @@ class _Patch:
         k = self.k
         border_edges = any(np.any((T[:, c] < k) & (T[:, (c + 1) % 3] == (T[:, c] + 1) % k)) for c in range(3))
 
+        # The corner of each triangle that moves (a triangle holds the vertex once; -1: not at all).
+        corner = np.where(mask.any(axis=1), np.argmax(mask, axis=1), -1)
+        P_c, ref_c, nv_c = np.ascontiguousarray(P, np.float64), np.ascontiguousarray(ref, np.float64), \
+            np.ascontiguousarray(nv, np.float64)
+
         def score(X):
-            Q = np.repeat(P[None], len(X), axis=0)
-            Q[:, mask] = X[:, None, :]
-            q, c = _quality(Q)
-            ln = np.linalg.norm(c, axis=2)
-            ok = np.all(ln > 0, axis=1)
-            N = c / np.maximum(ln, 1e-300)[..., None]
-            ok &= np.all(np.einsum("cij,ij->ci", N, ref) > TURN_COS, axis=1)
-            ok &= np.all(N @ nv > TURN_COS, axis=1)
-            qmin = q.min(axis=1)
-            ok &= qmin >= floor_min - GAIN
-            energy = (1.0 / np.maximum(q, 1e-12)).mean(axis=1)
-            # 'min': the minimum up to the floor, then (tie-break) the energy.
-            val = energy if objective == "energy" else -np.minimum(qmin, self.floor) + 1e-3 * energy
-            val = np.where(ok, val, np.inf)
+            # The numpy steps of this score, compiled in their order (see _quality_pass_kernels).
+            val, qmin, N = star_candidate_scores(P_c, corner, np.ascontiguousarray(X, np.float64), ref_c, nv_c,
+                                                 float(floor_min), float(self.floor), GAIN, TURN_COS,
+                                                 objective == "energy")
             if self.border is not None and border_edges:
                 # Only the best candidate matters: test it, the next if it fails, ...
                 for j in np.argsort(val):
