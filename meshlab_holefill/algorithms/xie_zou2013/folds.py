@@ -12,7 +12,7 @@ import numpy as np
 
 from ...geometry.flips import relax_edges
 from ...geometry.intersections import faces_intersecting
-from ...geometry.quality import face_normals
+from ...geometry.quality import cross_rows, face_normals
 from ...geometry.topology import edge_pair_set, interior_edges
 from .optimisation import adjacency
 
@@ -70,7 +70,7 @@ def loop_triangulation(P, border_normals, forbidden_edges=(), max_size=60, block
     def tri_normal(i, m, j):
         key = (i, m, j)
         if key not in normal:
-            n = np.cross(P[m] - P[i], P[j] - P[i])
+            n = cross_rows(P[m] - P[i], P[j] - P[i])  # np.cross's arithmetic, without its overhead
             length = np.linalg.norm(n)
             normal[key] = (n / length if length > 0 else n, 0.5 * length)
         return normal[key]

@@ -116,7 +116,7 @@ def remove_valence_three(V, F, n_fixed, forbidden_edges=()):
         if any(tuple(sorted((tri[i], tri[(i + 1) % 3]))) in forbidden for i in range(3)):
             continue
         old = face_normals(V, F[ring], normalize=False).sum(axis=0)
-        new = np.cross(V[tri[1]] - V[tri[0]], V[tri[2]] - V[tri[0]])
+        new = cross_rows(V[tri[1]] - V[tri[0]], V[tri[2]] - V[tri[0]])
         if new @ old <= 0.5 * np.linalg.norm(new) * np.linalg.norm(old):
             continue
         alive[ring] = False
@@ -405,7 +405,7 @@ def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5,
                 c = int(np.flatnonzero(t == v)[0])
                 a, b = V[t[(c + 1) % 3]], V[t[(c + 2) % 3]]
                 mid, e = 0.5 * (a + b), b - a
-                side = np.cross(nv, e)  # in the tangent plane, perpendicular to the edge
+                side = cross_rows(nv, e)  # in the tangent plane, perpendicular to the edge
                 side /= max(np.linalg.norm(side), 1e-300)
                 goals.append(mid + side * (np.sqrt(3.0) / 2.0) * np.linalg.norm(e))
             best, best_q = None, current

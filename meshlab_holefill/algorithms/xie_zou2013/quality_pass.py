@@ -39,6 +39,7 @@ __all__ = ["raise_min_quality"]
 TURN_COS = 0.5  # a changed triangle may turn by less than 60 degrees
 BORDER_COS = np.cos(np.radians(150.0))  # and bend less than 150 degrees against the mesh across a loop edge
 GAIN = 1e-6
+_X_AXIS, _Y_AXIS = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
 
 
 def _quality(P):
@@ -155,11 +156,11 @@ class _Patch:
         -------
         x : (3,) best position found, value : its objective (lower is better), qmin : its min quality
         """
-        t1 = np.cross(nv, [1.0, 0.0, 0.0])
+        t1 = cross_rows(nv, _X_AXIS)
         if np.linalg.norm(t1) < 0.5:
-            t1 = np.cross(nv, [0.0, 1.0, 0.0])
+            t1 = cross_rows(nv, _Y_AXIS)
         t1 /= np.linalg.norm(t1)
-        t2 = np.cross(nv, t1)
+        t2 = cross_rows(nv, t1)
         ang = np.arange(8) * (np.pi / 4)
         D = np.cos(ang)[:, None] * t1 + np.sin(ang)[:, None] * t2
 
