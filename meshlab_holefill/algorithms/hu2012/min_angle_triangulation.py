@@ -7,6 +7,7 @@ same triangulation.
 """
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -137,7 +138,8 @@ def min_angle_triangulation(P, normals, forbidden_edges=()):
     already exists in the mesh (``forbidden_edges``) or its area is zero; ears whose new
     edge leaves v1 or v2 outside the hole (:func:`inside_hole_sector`, about the vertex
     normal) or whose triangle holds another boundary vertex (:func:`_ear_holds_a_vertex`)
-    are cut only when no other ear is left.
+    are cut only when no other ear is left. Where this greedy order leaves no valid ear, the
+    ear order is searched by backtracking (:func:`_search_ears`; the paper leaves this case open).
 
     After a cut only the ears within two positions of the removed vertex change, so each
     step costs O(1) updates plus one arg-min over the remaining vertices.
@@ -172,8 +174,29 @@ def _compiled_faces(P, normals, forbidden_edges):
     return K.min_angle_faces(P, N, float(np.cos(normal_angle_threshold(N))), keys, area_tol, 2.0)
 
 
+STUCK_CUTS_PER_VERTEX = 20  # the search after a stuck greedy run cuts at most this many ears per loop vertex
+
+
 def min_angle_triangulation_python(P, normals, forbidden_edges=()):
-    """:func:`min_angle_triangulation` in Python (:class:`_Ears`), the reference of the compiled loop."""
+    """:func:`min_angle_triangulation` in Python (:class:`_Ears`), the reference of the compiled loop.
+
+    When the greedy order leaves no valid ear (or a last triangle on a mesh edge), the
+    triangulation is searched by backtracking (:func:`_search_ears`).
+    """
+    try:
+        return greedy_ear_faces(P, normals, forbidden_edges)
+    except HoleFillError as stuck:
+        if len(P) < 3:
+            raise
+        faces = _search_ears(_Ears(P, normals, forbidden_edges), STUCK_CUTS_PER_VERTEX * len(P))
+        if faces is None:
+            raise stuck
+        return np.asarray(faces, np.int64)
+
+
+def greedy_ear_faces(P, normals, forbidden_edges=()):
+    """Steps 1-3 of Sec. III.B exactly (:class:`_Ears`), the reference of the compiled loop: raises
+    HoleFillError where the greedy order leaves no valid ear."""
     if len(P) < 3:
         raise HoleFillError("a hole needs at least 3 boundary vertices")
     ears = _Ears(P, normals, forbidden_edges)
@@ -182,6 +205,40 @@ def min_angle_triangulation_python(P, normals, forbidden_edges=()):
         faces.append(ears.cut(ears.pick()))
     faces.append(ears.last_triangle())
     return np.asarray(faces, np.int64)
+
+
+def _search_ears(ears, budget):
+    """The first ear order, depth first in :meth:`_Ears.ranked` order, that closes the loop with
+    triangles of non-zero area; None when there is none within ``budget`` cuts.
+
+    Not in the paper, which does not say what to do when no ear is left. The greedy order can
+    cut a loop down to vertices on one line: at the corner of a CAD part's box, where the
+    border runs straight along two creases into the corner, the last ears are all flat or
+    would duplicate a mesh edge, while cutting a few ears in another order closes the hole.
+    The search starts with the greedy order (each step's first-ranked ear) and changes the
+    latest steps first. Only loops the greedy order cannot close get here: every other
+    triangulation is the paper's.
+    """
+    stack = [(ears, [], ears.ranked())]  # one entry per cut made: the state, the faces so far, the ears left to try
+    while stack:
+        ears, faces, untried = stack[-1]
+        if int(ears.active.sum()) == 3:
+            stack.pop()
+            try:
+                last = ears.last_triangle()
+            except HoleFillError:
+                continue
+            if ears.has_area(last):
+                return faces + [last]
+            continue
+        v = next(untried, None)
+        if v is None or budget <= 0:
+            stack.pop()
+            continue
+        budget -= 1
+        child = ears.copy()
+        stack.append((child, faces + [child.cut(v)], child.ranked()))
+    return None
 
 
 class _Ears:
@@ -248,6 +305,35 @@ class _Ears:
         if len(candidates) == 0:
             raise HoleFillError("no valid ear left in the minimum-angle triangulation")
         return int(candidates[np.argmin(self.angle[candidates])])
+
+    def has_area(self, face):
+        """Whether the triangle ``face`` (loop indices) has more than the ears' zero-area tolerance."""
+        a, b, c = (self.P[i] for i in face)
+        n = np.array(_cross3(b - a, c - a))
+        return math.sqrt(n @ n) > self.area_tol
+
+    def ranked(self):
+        """Every ear :meth:`pick` could take, in its order of preference (the first is its choice), lazily."""
+        seen = set()
+        for tier in (self.active & self.cuttable & self.normals_agree, self.active & self.cuttable):
+            candidates = np.flatnonzero(tier)
+            for v in candidates[np.argsort(self.angle[candidates], kind="stable")].tolist():
+                if v not in seen and self.proper(v):
+                    seen.add(v)
+                    yield v
+        candidates = np.flatnonzero(self.active & self.cuttable)
+        for v in candidates[np.argsort(self.angle[candidates], kind="stable")].tolist():
+            if v not in seen:
+                seen.add(v)
+                yield v
+
+    def copy(self):
+        """An independent copy of the loop's state (the search's backtracking point)."""
+        other = copy.copy(self)
+        other.prv, other.nxt, other.verdict = list(self.prv), list(self.nxt), dict(self.verdict)
+        for name in ("active", "angle", "cuttable", "normals_agree"):
+            setattr(other, name, getattr(self, name).copy())
+        return other
 
     def cut(self, v):
         """Add the ear triangle (v1, v, v2), remove v from the loop, re-evaluate the ears it changes."""

@@ -638,3 +638,46 @@ def test_remembered_crossing_answers_are_those_of_the_check():
         assert _crosses(ctx, X, patch.faces) is False
         assert _crosses(ctx, pierced, patch.faces) is True
     assert _crosses_uncached(ctx, pierced, patch.faces) is True
+
+
+# A hole's border at the corner of a subdivided box (pymeshlab's cube, midpoint-subdivided 4 times):
+# it runs straight along two creases into the corner (0), whose two border neighbours already
+# share a face of the mesh (the forbidden edge (1, 14)).
+BOX_CORNER = np.array([[-0.5, -0.5, -0.5], [-0.4375, -0.5, -0.5], [-0.375, -0.5, -0.5], [-0.375, -0.5, -0.4375],
+                       [-0.375, -0.5, -0.375], [-0.375, -0.5, -0.3125], [-0.4375, -0.5, -0.25],
+                       [-0.5, -0.5, -0.1875], [-0.5, -0.4375, -0.25], [-0.5, -0.375, -0.3125],
+                       [-0.5, -0.3125, -0.375], [-0.5, -0.3125, -0.4375], [-0.5, -0.3125, -0.5],
+                       [-0.5, -0.375, -0.5], [-0.5, -0.4375, -0.5]])
+_S, _C, _H = 0.31622776601683794, 0.9486832980505138, 0.7071067811865475
+BOX_CORNER_NORMALS = np.array([[0, 0, -1], [0, 0, -1], [0, -_S, -_C], [0, -1, 0], [0, -1, 0], [0, -1, 0], [0, -1, 0],
+                               [-_H, -_H, 0], [-1, 0, 0], [-1, 0, 0], [-1, 0, 0], [-1, 0, 0], [-_S, 0, -_C],
+                               [0, 0, -1], [0, 0, -1]], float)
+
+
+def test_a_loop_the_greedy_ear_order_cannot_close_is_closed_by_the_search():
+    import importlib
+
+    from meshlab_holefill.errors import HoleFillError
+
+    module = importlib.import_module("meshlab_holefill.algorithms.hu2012.min_angle_triangulation")
+    with pytest.raises(HoleFillError, match="no valid ear left"):  # the paper's greedy order alone
+        module.greedy_ear_faces(BOX_CORNER, BOX_CORNER_NORMALS, [[1, 14]])
+    for faces in (min_angle_triangulation(BOX_CORNER, BOX_CORNER_NORMALS, [[1, 14]]),
+                  module.min_angle_triangulation_python(BOX_CORNER, BOX_CORNER_NORMALS, [[1, 14]])):
+        assert faces.shape == (len(BOX_CORNER) - 2, 3)
+        P = BOX_CORNER
+        assert np.linalg.norm(np.cross(P[faces[:, 1]] - P[faces[:, 0]], P[faces[:, 2]] - P[faces[:, 0]]), axis=1).min() > 1e-3
+        directed = {(int(a), int(b)) for f in faces for a, b in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
+        assert len(directed) == 3 * len(faces)  # no edge used twice in one direction: oriented
+        k = len(P)
+        assert all((i, (i + 1) % k) in directed for i in range(k))  # every border edge, with the loop's orientation
+        assert (1, 14) not in directed and (14, 1) not in directed
+
+
+def test_a_loop_that_cannot_be_closed_still_raises():
+    from meshlab_holefill.algorithms.hu2012.min_angle_triangulation import min_angle_triangulation_python
+    from meshlab_holefill.errors import HoleFillError
+
+    collinear = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], float)
+    with pytest.raises(HoleFillError, match="no valid ear left"):
+        min_angle_triangulation_python(collinear, np.tile(UP, (4, 1)))
