@@ -12,8 +12,8 @@ from numba import njit
 from ..geometry.intersections import faces_intersecting, intersecting_pairs
 from .holes import nonmanifold_edges
 
-__all__ = ["clashing_patches", "crossing_patches", "face_boxes_near", "patch_box", "patch_intersections",
-           "withdraw"]
+__all__ = ["clashing_patches", "crossing_patches", "face_boxes_near", "load_face_boxes_kernel", "patch_box",
+           "patch_intersections", "withdraw"]
 
 
 def face_boxes_near(V, F, boxes):
@@ -45,6 +45,18 @@ def face_boxes_near(V, F, boxes):
     corners = V[F[near]]
     lo, hi = corners.min(axis=1), corners.max(axis=1)
     return near, lo, hi
+
+
+def load_face_boxes_kernel(F):
+    """Load the compiled box query (:func:`face_boxes_near`) for faces of F's integer type, in this process.
+
+    Patches are checked against the mesh by the worker processes that filled them; loaded
+    before the workers fork, the kernel is not loaded again by each worker within its first
+    hole's time (about 0.05 s each). A non-contiguous F is left to the workers.
+    """
+    F = np.asarray(F)
+    if F.ndim == 2 and F.flags.c_contiguous:
+        face_boxes_near(np.zeros((3, 3)), np.arange(3, dtype=F.dtype).reshape(1, 3), np.zeros((1, 2, 3)))
 
 
 @njit(cache=True)

@@ -18,7 +18,8 @@ import numpy as np
 from dataclasses import dataclass
 
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
-from .crossings import clashing_patches, crossing_patches, face_boxes_near, patch_box, patch_intersections
+from .crossings import (clashing_patches, crossing_patches, face_boxes_near, load_face_boxes_kernel, patch_box,
+                        patch_intersections)
 from .parallel import FILL_ERRORS, fill_contexts, reason_of
 from .holes import (boundary_loops, edge_summary, hole_context, hole_measures, is_outline, outline_ratio,
                     vertex_face_incidence)
@@ -283,6 +284,8 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
         progress(refill[position], len(refill))
 
     check = (lambda ctx, patch: _mesh_crossings(V, F, ctx, patch)) if params["selfintersection"] else None
+    if check is not None and params["workers"] != 1 and len(refill) > 1:
+        load_face_boxes_kernel(F)  # the workers run the check: they inherit the loaded kernel
     outcomes = fill_contexts(fill, [contexts[i] for i in refill], fill_kwargs, workers=params["workers"],
                              timelimit=params["timelimit"], progress=filled_one if progress else None, check=check)
     checked = {}  # hole -> (mesh faces crossed, seconds) where a worker checked its own patch

@@ -44,3 +44,24 @@ def test_faces_near_boxes_are_those_whose_own_box_meets_one_of_them(seed, int32)
     assert near.tolist() == np.flatnonzero(meets).tolist()
     np.testing.assert_array_equal(face_lo, box_lo[near])
     np.testing.assert_array_equal(face_hi, box_hi[near])
+
+
+def test_the_box_query_is_loaded_for_the_mesh_face_type_before_workers_fork(monkeypatch):
+    from meshlab_holefill import fill_holes
+    from meshlab_holefill.core import pipeline
+
+    from conftest import meshset_from_arrays, sphere_with_holes
+
+    V, F, _ = sphere_with_holes()
+    loaded = []
+    real = pipeline.load_face_boxes_kernel
+    monkeypatch.setattr(pipeline, "load_face_boxes_kernel", lambda faces: loaded.append(faces.dtype) or real(faces))
+    ms = meshset_from_arrays(V, F)  # pymeshlab hands the pipeline int32 faces
+    ms.meshing_close_holes_min_angle_bilateral(workers=2)
+    fill_holes(V, F, "min_angle_bilateral", workers=2)  # the array door: int64 faces
+    assert loaded == [np.dtype(np.int32), np.dtype(np.int64)]
+    fill_holes(V, F, "min_angle_bilateral", workers=1)  # filled in this process: nothing to load for workers
+    assert len(loaded) == 2
+    from meshlab_holefill.core.crossings import _faces_meeting_boxes
+
+    assert any(sig[1].dtype.name == "int32" and sig[1].layout == "C" for sig in _faces_meeting_boxes.signatures)
