@@ -204,7 +204,8 @@ def _rehashed(keys, vals, live_factor):
             while new_keys[j] != EMPTY:
                 j = (j + 1) & mask
             new_keys[j] = keys[i]
-            new_vals[j] = vals[i]
+            for c in range(vals.shape[1]):  # a loop, not a row setitem (cheaper to compile)
+                new_vals[j, c] = vals[i, c]
     return new_keys, new_vals, live
 
 
@@ -252,8 +253,19 @@ def _grown(a, n):
     while size <= n:
         size *= 2
     b = np.empty((size,) + a.shape[1:], a.dtype)
-    b[:a.shape[0]] = a
+    # Element loops over flat views, not a slice assignment: the broadcasting setitem costs
+    # seconds of compile time per array type, a loop almost nothing.
+    flat_a, flat_b = a.reshape(-1), b.reshape(-1)
+    for i in range(flat_a.shape[0]):
+        flat_b[i] = flat_a[i]
     return b
+
+
+@njit(cache=True)
+def _copy_rows(dst, src):
+    """``dst[:len(src)] = src`` for (n, 3) arrays, as a loop (cheaper to compile than the slice setitem)."""
+    for i in range(src.shape[0]):
+        dst[i, 0], dst[i, 1], dst[i, 2] = src[i, 0], src[i, 1], src[i, 2]
 
 
 @njit(cache=True)
@@ -269,7 +281,8 @@ def _with_room(st):
         return st
     nh = C[N_HEAP] + C[N_BLOCKED] + 32
     fsize = _grown(st.fsize, C[NEXT_LABEL] + 2)
-    fsize[st.fsize.shape[0]:] = 0
+    for i in range(st.fsize.shape[0], fsize.shape[0]):
+        fsize[i] = 0
     ekeys, fkeys, fvals = st.ekeys, st.fkeys, st.fvals
     if 2 * (C[E_USED] + 16) >= ekeys.shape[0]:
         ekeys, _, C[E_USED] = _rehashed(ekeys, np.empty((ekeys.shape[0], 0)), 4)
@@ -516,7 +529,8 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
         st.fsize[label] = 0
         return
     dirty = np.empty(n_seq + 2 + 4 * n_seq, np.int64)
-    dirty[:n_seq + 2] = chain
+    for t in range(n_seq + 2):
+        dirty[t] = chain[t]
     n_dirty = n_seq + 2
     # A merged vertex is now twice on its front: split the front there.
     for t in range(1, n_seq + 1):
@@ -525,7 +539,7 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
             continue
         other = _node_on_front(st, st.nvert[w], st.nfront[w], w)
         if other >= 0:
-            dirty[n_dirty:n_dirty + 4] = _split(st, w, other)
+            dirty[n_dirty], dirty[n_dirty + 1], dirty[n_dirty + 2], dirty[n_dirty + 3] = _split(st, w, other)
             n_dirty += 4
     for t in range(n_dirty):
         x = dirty[t]
@@ -843,24 +857,23 @@ def initial_state(points, normals, S, forbidden, border_faces, OV, pr):
             if slot >= 0 and a < k and b < k:
                 fvals[slot, 0], fvals[slot, 1], fvals[slot, 2] = _face_unit_normal(OV, f[0], f[1], f[2])
     P = np.empty((cap_v, 3))
-    P[:k] = points
+    _copy_rows(P, points)
     N = np.empty((cap_v, 3))
-    N[:k] = normals
+    _copy_rows(N, normals)
     Sv = np.empty(cap_v)
-    Sv[:k] = S
+    for i in range(k):
+        Sv[i] = S[i]
     vhead = np.full(cap_v, -1, np.int64)
-    vhead[:k] = np.arange(k)
     nvert = np.empty(cap_n, np.int64)
-    nvert[:k] = np.arange(k)
     nprev = np.empty(cap_n, np.int64)
     nnext = np.empty(cap_n, np.int64)
     for i in range(k):
         nprev[i], nnext[i] = (i - 1) % k, (i + 1) % k
     nfront = np.zeros(cap_n, np.int64)
     nalive = np.zeros(cap_n, np.bool_)
-    nalive[:k] = True
     alive = np.empty(cap_n, np.int64)
-    alive[:k] = np.arange(k)
+    for i in range(k):
+        vhead[i], nvert[i], nalive[i], alive[i] = i, i, True, i
     fsize = np.zeros(16, np.int64)
     fsize[0] = k
     C[N_VERT], C[N_NODES], C[N_ALIVE], C[NEXT_LABEL] = k, k, k, 1
