@@ -24,7 +24,6 @@ alternating, and the ratio of their median whole runs is reported.
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import os
 import sys
@@ -34,7 +33,7 @@ import numpy as np
 import pymeshlab
 
 import meshlab_holefill
-from meshlab_holefill import FILTERS
+from meshlab_holefill.meshlab import load_filter_kernels
 from meshlab_holefill.evaluation.analytic import ANALYTIC_SURFACES, analytic_area, analytic_distance, analytic_mesh
 from meshlab_holefill.evaluation.comparison import BASELINE, MeshCase, parse_fillers, prepare_case, run_comparison
 from meshlab_holefill.evaluation.creased import CREASED_CASES, creased_case
@@ -449,7 +448,7 @@ def workers_speedup(filters=("meshing_close_holes_min_angle_bilateral", "meshing
     """
     rows = []
     for name in filters:
-        getattr(importlib.import_module(FILTERS[name].extra["module"]), "WARM_UP", lambda: None)()
+        load_filter_kernels(name)
         seconds, meshes = {c: [] for c in counts}, []
         for _ in range(repeats):
             for workers in counts:

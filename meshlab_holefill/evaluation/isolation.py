@@ -21,7 +21,7 @@ import numpy as np
 
 from ..meshlab import register_all
 from ..meshlab.mesh_files import mesh_arrays, meshset_from_arrays
-from ..meshlab.registration import apply_filter, parse_text_value
+from ..meshlab.registration import apply_filter, load_filter_kernels, parse_text_value
 
 __all__ = ["IsolatedRunner", "check_not_bootstrapping", "execute_task", "json_safe", "peak_memory_since",
            "process_memory_mb", "reset_peak_memory", "worker_main"]
@@ -108,7 +108,9 @@ def execute_task(task):
     V0, F0 = task["V"], task["F"]
     if task["kind"] == "anchor":
         return _execute_anchor(task)
-    _load_kernels(task["filter"])
+    # Like the worker's imports, the kernels' one-time loading is paid before the clock starts, so a
+    # filter's seconds do not depend on whether an earlier task here ran it (--compile-cost measures it).
+    load_filter_kernels(task["filter"])
     start_mb = reset_peak_memory()
     ms = meshset_from_arrays(V0, F0, task.get("label", "mesh"))
     t0 = time.perf_counter()
@@ -129,21 +131,6 @@ def execute_task(task):
     else:
         reply.update(V=V1, F=F1)
     return reply
-
-
-def _load_kernels(filter_name):
-    """Load one of our filters' compiled kernels in this worker (once; nothing for MeshLab's filters).
-
-    Like the worker's imports, the kernels' one-time loading is paid before the clock starts,
-    so a filter's seconds do not depend on whether an earlier task in this worker ran it;
-    the loading itself is measured by ``scripts/benchmark.py --compile-cost``.
-    """
-    from ..meshlab import FILTERS
-
-    spec = FILTERS.get(filter_name)
-    warm_up = getattr(importlib.import_module(spec.extra["module"]), "WARM_UP", None) if spec else None
-    if warm_up is not None:
-        warm_up()
 
 
 def _execute_anchor(task):

@@ -80,17 +80,11 @@ def _circumsphere(V, p, q, r):
 
 
 @njit(cache=True)
-def _inside_sphere(V, p, q, r, x):
-    """flips' circumsphere test: x strictly inside the circumsphere of (p, q, r) (relative margin 1e-9)."""
+def _sphere_distance(V, p, q, r, x):
+    """(|x - centre|, radius (1 - 1e-9)) for the circumsphere of (p, q, r): flips' tests compare the two
+    (strictly inside: ``<``; the new-edge test's outside: ``>=``; both False for NaN, as in numpy)."""
     centre, radius = _circumsphere(V, p, q, r)
-    return _norm(_sub(_row(V, x), centre)) < radius * (1 - 1e-9)
-
-
-@njit(cache=True)
-def _outside_sphere(V, p, q, r, x):
-    """The new-edge test's side: x not inside the circumsphere of (p, q, r) (False for NaN, as in numpy)."""
-    centre, radius = _circumsphere(V, p, q, r)
-    return _norm(_sub(_row(V, x), centre)) >= radius * (1 - 1e-9)
+    return _norm(_sub(_row(V, x), centre)), radius * (1 - 1e-9)
 
 
 @njit(cache=True)
@@ -98,9 +92,13 @@ def _swap_tests(V, a, b, c, d, sphere):
     """(edge fails the test, new edge passes it) for edge (a, b) with opposite corners c, d:
     1 / 0 each, -1 when an angle sum is too close to decide (the circumsphere tests always decide)."""
     if sphere:
-        if not (_inside_sphere(V, a, b, c, d) or _inside_sphere(V, b, a, d, c)):
+        d1, r1 = _sphere_distance(V, a, b, c, d)
+        d2, r2 = _sphere_distance(V, b, a, d, c)
+        if not (d1 < r1 or d2 < r2):
             return 0, 0
-        return 1, 1 if _outside_sphere(V, a, d, c, b) and _outside_sphere(V, b, c, d, a) else 0
+        d3, r3 = _sphere_distance(V, a, d, c, b)
+        d4, r4 = _sphere_distance(V, b, c, d, a)
+        return 1, 1 if d3 >= r3 and d4 >= r4 else 0
     inside = _angle_sum_exceeds(V, c, a, b, d, a, b)
     if inside != 1:
         return inside, 0

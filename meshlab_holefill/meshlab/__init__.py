@@ -4,10 +4,10 @@ Registration of the filters as ``pymeshlab.MeshSet`` methods, MeshSet <-> array 
 pymeshlab's by-name doors extended to our filters, and MeshLab ``.mlx`` scripts (``mlx/``).
 """
 from .registration import (FILTERS, apply_filter, clear_filter_history, filter_calls, filter_history, filter_list,
-                           print_filter_parameter_list)
+                           load_filter_kernels, print_filter_parameter_list)
 
 __all__ = ["FILTERS", "apply_filter", "clear_filter_history", "filter_calls", "filter_history", "filter_list",
-           "print_filter_parameter_list", "register_all"]
+           "load_filter_kernels", "print_filter_parameter_list", "register_all"]
 
 
 def register_all():

@@ -6,6 +6,7 @@ the command line, and the MeshLab ``.mlx`` names.
 """
 from __future__ import annotations
 
+import importlib
 import weakref
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -129,6 +130,20 @@ def register(spec: FilterSpec):
 def filter_list():
     """Names of the filters this package adds (sorted)."""
     return sorted(FILTERS)
+
+
+def load_filter_kernels(name):
+    """Load the compiled kernels of our filter ``name`` in this process (its algorithm's ``WARM_UP``).
+
+    They are compiled on first use and cached on disk; loading them takes a few tenths of a
+    second per process. Does nothing for MeshLab's own filters and for algorithms without kernels.
+    """
+    spec = FILTERS.get(name)
+    if spec is None or "module" not in spec.extra:
+        return
+    warm_up = getattr(importlib.import_module(spec.extra["module"]), "WARM_UP", None)
+    if warm_up is not None:
+        warm_up()
 
 
 def is_builtin_filter(name):

@@ -183,11 +183,11 @@ def min_angle_triangulation_python(P, normals, forbidden_edges=()):
     When the greedy order leaves no valid ear (or a last triangle on a mesh edge), the
     triangulation is searched by backtracking (:func:`_search_ears`).
     """
+    if len(P) < 3:
+        raise HoleFillError("a hole needs at least 3 boundary vertices")
     try:
         return greedy_ear_faces(P, normals, forbidden_edges)
     except HoleFillError as stuck:
-        if len(P) < 3:
-            raise
         faces = _search_ears(_Ears(P, normals, forbidden_edges), STUCK_CUTS_PER_VERTEX * len(P))
         if faces is None:
             raise stuck

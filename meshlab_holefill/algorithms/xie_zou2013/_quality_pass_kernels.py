@@ -83,7 +83,7 @@ def star_candidate_scores(P, corner, X, ref, nv, floor_min, floor, gain, turn_co
             N[ci, f, 0], N[ci, f, 1], N[ci, f, 2] = n0, n1, n2
             ok = ok and n0 * ref[f, 0] + n1 * ref[f, 1] + n2 * ref[f, 2] > turn_cos
             ok = ok and n0 * nv[0] + n1 * nv[1] + n2 * nv[2] > turn_cos
-            if q < mn or q != q:
+            if q < mn or q != q:  # numpy's min: a NaN, once met, is the minimum
                 mn = q if mn == mn else mn
             inv[f] = 1.0 / max(q, 1e-12)
         qmin[ci] = mn
