@@ -1,0 +1,76 @@
+"""Curve unfolding's compiled and direct constructions against the numpy / scipy code they replace (same bits)."""
+
+import numpy as np
+import pytest
+
+from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
+from meshlab_holefill.algorithms.brunton2009 import embedding as emb
+from meshlab_holefill.core import examples
+from meshlab_holefill.core.holes import boundary_loops, hole_context
+
+from conftest import sphere_with_holes
+
+
+def _joint_system_inputs(ctx, interior_faces, interior):
+    k, n_ctx = ctx.size, len(ctx.vertices)
+    faces = np.where(interior_faces < k, interior_faces, interior_faces - k + n_ctx)
+    X = np.concatenate([ctx.vertices, interior])
+    joint = np.concatenate([ctx.faces, faces])
+    free = np.arange(len(X)) >= n_ctx
+    free = np.flatnonzero(free)
+    is_free = np.zeros(len(X), bool)
+    is_free[free] = True
+    star = joint[is_free[joint].any(axis=1)]
+    frames = emb.tangent_frames(emb.vertex_normals(X, star)[free])
+    return star, X, free, frames
+
+
+def _filled_patches():
+    """Hole contexts with their default patches: the bowl's round hole and two holes cut in a sphere."""
+    V, F, loop = examples.bowl_with_hole()
+    contexts = [hole_context(V, F, loop, rings=cu.RINGS)]
+    V, F, _ = sphere_with_holes()
+    contexts += [hole_context(V, F, loop, rings=cu.RINGS) for loop in boundary_loops(F)]
+    return [(ctx, cu.fill(ctx)) for ctx in contexts]
+
+
+def _same_sparse(A, B):
+    A, B = A.tocsc(), B.tocsc()
+    return (A.shape == B.shape and np.array_equal(A.indptr, B.indptr) and np.array_equal(A.indices, B.indices)
+            and np.array_equal(A.data, B.data))
+
+
+@pytest.mark.parametrize("subset", ["all", "half", "shuffled"])
+def test_tangential_system_direct_equals_scipy_construction(subset):
+    # The compiled structure (free_umbrella) with numpy's values gives the matrix and the umbrellas
+    # of scipy's general construction to the last bit: the same arrays go to SuperLU.
+    rng = np.random.default_rng(0)
+    checked = 0
+    for ctx, patch in _filled_patches():
+        if len(patch.vertices) == 0:
+            continue
+        star, X, free, frames = _joint_system_inputs(ctx, patch.faces, patch.vertices)
+        if subset != "all":  # a part of the vertices free, in any order, with any frames
+            free = free[::2] if subset == "half" else rng.permutation(free)
+            frames = tuple(rng.standard_normal((len(free), 3)) for _ in range(2))
+            is_free = np.zeros(len(X), bool)
+            is_free[free] = True
+            star = star[is_free[star].any(axis=1)]
+        A, U = emb.tangential_system(star, X, free, frames)
+        A_ref, U_ref = emb.tangential_system(star, X, free, frames, direct=False)
+        assert _same_sparse(A, A_ref)
+        assert np.array_equal(U, U_ref)
+        Wf = emb.umbrella_operator(star, len(X))[free]
+        assert np.allclose(U, Wf @ X)
+        checked += 1
+    assert checked >= 2
+
+
+def test_tangential_system_takes_the_general_construction_for_degenerate_faces():
+    X = np.random.default_rng(1).standard_normal((5, 3))
+    star = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4], [4, 4, 1]])
+    free = np.array([4])
+    frames = emb.tangent_frames(np.array([[0.0, 0.0, 1.0]]))
+    A, U = emb.tangential_system(star, X, free, frames)
+    A_ref, U_ref = emb.tangential_system(star, X, free, frames, direct=False)
+    assert _same_sparse(A, A_ref) and np.array_equal(U, U_ref)
