@@ -74,3 +74,35 @@ def test_tangential_system_takes_the_general_construction_for_degenerate_faces()
     A, U = emb.tangential_system(star, X, free, frames)
     A_ref, U_ref = emb.tangential_system(star, X, free, frames, direct=False)
     assert _same_sparse(A, A_ref) and np.array_equal(U, U_ref)
+
+
+def _running_best(start, rounds, base, count):
+    """The swaps' rule as a running best: a round is kept when it scores above the best so far and
+    crosses no more than the input (the reference of ``_best_round``)."""
+    best = (start, "input")
+    for sc, r in rounds:
+        if sc > best[0] and count(r) <= base:
+            best = (sc, r)
+    return best[1]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_best_swap_round_is_the_running_best(seed):
+    # Scores with ties and crossing counts drawn at random: the best-first search keeps the
+    # round the running best keeps, and counts fewer patches.
+    rng = np.random.default_rng(seed)
+    start = (0.2, 0.5)
+    rounds = [((float(rng.choice([0.1, 0.3, 0.4])), float(rng.choice([0.5, 0.6]))), r) for r in range(4)]
+    crossing = {r: int(rng.integers(0, 3)) for r in range(4)}
+    base = int(rng.integers(0, 3))
+    counted = []
+
+    def count(interior, F):
+        counted.append(interior)
+        return base if interior == "input" else crossing[interior]
+
+    better = [(sc, r, r, np.zeros((0, 3), np.int64), r + 1) for sc, r in rounds if sc > start]
+    kept, _, swaps = cu._best_round(None, better, "input", None, None, count)
+    assert kept == _running_best(start, rounds, base, lambda r: crossing[r])
+    assert swaps == (0 if kept == "input" else kept + 1)
+    assert len(counted) <= len(better) + 1
