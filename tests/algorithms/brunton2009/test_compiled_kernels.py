@@ -106,3 +106,41 @@ def test_best_swap_round_is_the_running_best(seed):
     assert kept == _running_best(start, rounds, base, lambda r: crossing[r])
     assert swaps == (0 if kept == "input" else kept + 1)
     assert len(counted) <= len(better) + 1
+
+
+def _random_loops(count, seed=0):
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        m = int(rng.integers(4, 40))
+        t = np.sort(rng.uniform(0.0, 2.0 * np.pi, m))
+        radius = rng.uniform(0.3, 1.0, m)  # star-shaped, sometimes self-crossing once tilted out of plane
+        yield np.stack([radius * np.cos(t), radius * np.sin(t), rng.normal(0.0, rng.uniform(0.01, 1.0), m)], axis=1)
+
+
+def test_stage_test_equals_projection_and_simplicity_test():
+    # The annealing's stage test against the functions it stands for: the same projection to the
+    # bit and the same answer, for simple and self-crossing projections and clearances near d_MD.
+    from meshlab_holefill.algorithms.brunton2009 import unfolding as unf
+    from meshlab_holefill.geometry.segments import min_segment_distance, nonadjacent_mask
+
+    answers = set()
+    for P in _random_loops(300):
+        Q = unf.project_to_best_plane(P)[0]
+        assert np.array_equal(unf._plane_coordinates(P), Q)
+        h = float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean())
+        d_md = min_segment_distance(Q)
+        for eps in (1e-5 * h, d_md * (1 - 1e-12), d_md, 1.5 * d_md):
+            expected = unf.linear_motion_is_simple(Q, eps, 4.0 * h) if eps < 4.0 * h else None
+            if expected is None:
+                continue
+            assert unf._projection_is_simple(P, nonadjacent_mask(len(P)), eps, 4.0 * h) == expected
+            answers.add(expected)
+    assert answers == {True, False}
+
+
+def test_keeps_clearance_fails_on_nan():
+    from meshlab_holefill.algorithms.brunton2009._anneal_kernels import keeps_clearance
+    from meshlab_holefill.geometry.segments import nonadjacent_mask
+
+    Q = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [np.nan, 1.0]])
+    assert not keeps_clearance(Q, np.roll(Q, -1, axis=0), nonadjacent_mask(4), 4.0, 1e-5)
