@@ -105,7 +105,10 @@ def energy_rows(F, n, free, order, anchors=False):
     W = umbrella_operator(F, n)
     rows = np.flatnonzero(free)
     if anchors:
-        touching = np.asarray(abs(W[:, rows]).sum(axis=1)).ravel() > 0
+        # Rows with a stored entry in a free column (U stores no zeros): the column slice's
+        # absolute row sums > 0, without the slice.
+        touching = np.zeros(n, bool)
+        touching[np.repeat(np.arange(n), np.diff(W.indptr))[np.asarray(free, bool)[W.indices]]] = True
         rows = np.concatenate([rows, np.flatnonzero(touching & ~np.asarray(free, bool))])
     R = W[rows]
     if order == 2:
