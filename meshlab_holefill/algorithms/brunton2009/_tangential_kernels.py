@@ -6,9 +6,9 @@ indexing stores them: entries in decreasing column order, values 1 / d and (1 / 
 CSC layout of the 2 x 2 block matrix over the free vertices (entries sorted by column, then
 row, as scipy's COO to CSC conversion leaves them). The values that need the tangent frames stay
 numpy's (:func:`.embedding.tangential_system`), so the matrix SuperLU factorises is the same to the
-last bit; the scipy construction spent more time in its general sparse machinery (an operator over
-every vertex of the surroundings, fancy indexing, sorting conversions) than SuperLU in the
-factorisation on the benchmark's small and medium holes.
+last bit. Measured on the 219 systems of the benchmark's 45 cut holes (process time): scipy's
+construction (an operator over every vertex of the surroundings, fancy indexing, a COO to CSC
+conversion) 0.39 s against 0.53 s for their factorisations; this one 0.14 s.
 """
 from __future__ import annotations
 
