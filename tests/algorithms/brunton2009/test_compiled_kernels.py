@@ -144,3 +144,23 @@ def test_keeps_clearance_fails_on_nan():
 
     Q = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [np.nan, 1.0]])
     assert not keeps_clearance(Q, np.roll(Q, -1, axis=0), nonadjacent_mask(4), 4.0, 1e-5)
+
+
+def test_area_rows_are_the_rows_touching_a_free_vertex():
+    # E_AREA's anchor rows, found from U's structure: the fixed vertices whose umbrella has a
+    # non-zero weight on a free vertex (the column slice's absolute row sums), free rows first.
+    for ctx, patch in _filled_patches():
+        if len(patch.vertices) == 0:
+            continue
+        star, X, free, _ = _joint_system_inputs(ctx, patch.faces, patch.vertices)
+        k, n_ctx = ctx.size, len(ctx.vertices)
+        joint = np.concatenate([ctx.faces, np.where(patch.faces < k, patch.faces, patch.faces - k + n_ctx)])
+        is_free = np.zeros(len(X), bool)
+        is_free[free] = True
+        W = emb.umbrella_operator(joint, len(X))
+        touching = np.asarray(abs(W[:, free]).sum(axis=1)).ravel() > 0
+        rows = np.concatenate([free, np.flatnonzero(touching & ~is_free)])
+        R = emb.energy_rows(joint, len(X), is_free, order=1, anchors=True)
+        expected = W[rows].tocsr()
+        assert R.shape == expected.shape and np.array_equal(R.toarray(), expected.toarray())
+        assert len(rows) > len(free)  # the loop's rows are there
