@@ -160,10 +160,11 @@ def apply_moves(P, N, T, D, J, q, normals, angles, acc, mask, near, eps):
 def keeps_clearance(Q, R, allowed, near, eps):
     """Whether every allowed pair of segments [Q_i, R_i], [Q_j, R_j] is more than ``eps`` apart.
 
-    ``segment_distance_rows(Q, R, Q, R, allowed, near).min() > eps`` (``near`` > ``eps``), the stage
-    test of the annealing, stopping at the first pair within ``eps``: a pair whose bound exceeds
-    ``near`` is farther than ``eps``, the others get the same exact distance as there (both orders
-    of a pair, as the full matrix has them). A NaN distance fails, as the minimum's comparison does.
+    ``segment_distance_rows(Q, R, Q, R, allowed, near).min() > eps`` (``near`` > ``eps``): the
+    clearance d_MD > epsilon of Sec. 3.1 on the projected loop, the annealing's stage test,
+    stopping at the first pair within ``eps``. A pair whose bound exceeds ``near`` is farther than
+    ``eps``; the others get the same exact distance as there (both orders of a pair, as the full
+    matrix has them). A NaN distance fails, as the minimum's comparison does.
     """
     m = Q.shape[0]
     c = 0.5 * (Q + R)
