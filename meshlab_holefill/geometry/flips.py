@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _flip_kernels as K
-from .quality import corner_angles, cross_rows, face_normals
+from .quality import cross_rows, face_normals
 from .topology import interior_edges, undirected_keys
 
 __all__ = ["circumcenters", "folds", "min_angle_scores", "relax_edges"]
@@ -61,9 +61,11 @@ def min_angle_scores(V, old1, old2, new1, new2):
     -------
     old, new : (s,) float64  smallest angle (radians) of each pair
     """
-    old = np.minimum(corner_angles(V, old1).min(axis=1), corner_angles(V, old2).min(axis=1))
-    new = np.minimum(corner_angles(V, new1).min(axis=1), corner_angles(V, new2).min(axis=1))
-    return old, new
+    # The corner angles of quality.corner_angles, their arctan2 arguments compiled (same bits).
+    faces = np.stack([old1, old2, new1, new2]).astype(np.int64, copy=False)
+    sines, cosines = K.pair_angle_parts(np.ascontiguousarray(V, np.float64), faces)
+    smallest = np.arctan2(sines, cosines).min(axis=2)
+    return np.minimum(smallest[0], smallest[1]), np.minimum(smallest[2], smallest[3])
 
 
 def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion="sphere", normal_cos=0.0, *,
