@@ -169,7 +169,7 @@ def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer
     more = False
     for _ in range(max_rounds):
         more = False
-        E, f1, c1, f2, c2 = interior_edges(F, n)
+        E, f1, c1, f2, c2 = _interior_edges(F, n)
         if len(E) == 0:
             break
         c = F[f1, (c1 + 2) % 3]
@@ -205,6 +205,16 @@ def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer
         total += len(chosen)
         more = True
     return (F, total, more) if rounds_left else (F, total)
+
+
+def _interior_edges(F, n):
+    """topology.interior_edges of an int64 face array by the compiled half-edge table (the same edges in
+    the same order, :func:`._flip_kernels._interior_edges`); by numpy where the kernel leaves it to it."""
+    he, tw, _, _, ok = K._interior_edges(F, n)
+    if not ok:
+        return interior_edges(F, n)
+    f1, c1 = he // 3, he % 3
+    return np.stack([F[f1, c1], F[f1, (c1 + 1) % 3]], axis=1), f1, c1, tw // 3, tw % 3
 
 
 def _in_sorted(x, table):

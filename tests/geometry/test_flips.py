@@ -295,3 +295,23 @@ def test_compiled_min_angle_scores_equal_the_corner_angles_bit_for_bit(poison):
             assert np.array_equal(np.signbit(g), np.signbit(w))
     empty = np.zeros((0, 3), np.int64)
     assert [len(x) for x in min_angle_scores(V, empty, empty, empty, empty)] == [0, 0]
+
+
+def test_compiled_interior_edges_equal_the_topology_edges():
+    # The relaxation's interior edges from the compiled half-edge table: the edges, faces and
+    # corners of topology.interior_edges in its order, also where a directed edge repeats or an
+    # index is out of range (then numpy answers).
+    from meshlab_holefill.geometry.flips import _interior_edges
+
+    rng = np.random.default_rng(9)
+    for trial in range(60):
+        V, F = _bumpy_patch(rng, int(rng.integers(3, 12)))
+        F = F[rng.permutation(len(F))].astype(np.int64)
+        if trial % 4 == 1:
+            F = np.concatenate([F, F[:2]])  # repeated faces: repeated directed edges
+        if trial % 4 == 2:
+            F = F[: int(rng.integers(0, len(F) + 1))]
+        n = len(V) if trial % 4 != 3 else int(F.max())  # the last index out of range
+        got, want = _interior_edges(np.ascontiguousarray(F), n), interior_edges(F, n)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
