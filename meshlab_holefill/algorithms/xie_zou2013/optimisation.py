@@ -410,12 +410,12 @@ def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5,
                 goals.append(mid + side * (np.sqrt(3.0) / 2.0) * np.linalg.norm(e))
             best, best_q = None, current
             old_normals = face_normals(V, tri)
+            W = V.copy()  # V with v moved to the candidate (only W[v] changes between candidates)
             for goal in goals:
                 d = goal - V[v]
                 d -= (d @ nv) * nv  # tangential: keep the shape
                 for s in steps:
                     p = V[v] + s * d
-                    W = V.copy()
                     W[v] = p
                     qn = triangle_quality(W, tri).min()
                     if qn <= best_q + 1e-6:
