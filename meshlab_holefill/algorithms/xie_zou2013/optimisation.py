@@ -245,9 +245,10 @@ def _turns_faces(V, F, a, b, newpos, n):
 def _joins_forbidden(A, survivor, victim, candidates, n_fixed, forbidden):
     """Mask of the ``candidates`` whose collapse onto the loop would join a forbidden pair of loop vertices."""
     bad = np.zeros(len(survivor), bool)
+    indptr, indices = A.indptr, A.indices  # row v's neighbours, as A[v].indices gives them (without its slicing cost)
     for t in candidates:
         s, vct = int(survivor[t]), int(victim[t])
-        nbrs = A[vct].indices
+        nbrs = indices[indptr[vct]:indptr[vct + 1]]
         if any(tuple(sorted((s, int(x)))) in forbidden for x in nbrs if x < n_fixed and x != s):
             bad[t] = True
     return bad
