@@ -21,7 +21,8 @@ from numba import njit
 
 from ._tri_kernels import _cross, _dot, _norm, _sub
 
-__all__ = ["swap_candidates", "apply_swaps", "pair_angle_parts", "NO_EDGES", "NO_FAILING", "CANDIDATES", "UNSURE", "ANGLE_MARGIN"]
+# The kernels of the compiled rounds (pair_angle_parts serves flips.min_angle_scores, the scored rounds).
+__all__ = ["swap_candidates", "apply_swaps", "NO_EDGES", "NO_FAILING", "CANDIDATES", "UNSURE", "ANGLE_MARGIN"]
 
 NO_EDGES, NO_FAILING, CANDIDATES, UNSURE = 0, 1, 2, 3
 ANGLE_MARGIN = 1e-12
