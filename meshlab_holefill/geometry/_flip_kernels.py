@@ -21,6 +21,7 @@ from numba import njit
 
 from ._tri_kernels import _cross, _dot, _norm, _sub
 
+# The kernels of the compiled rounds (pair_angle_parts serves flips.min_angle_scores, the scored rounds).
 __all__ = ["swap_candidates", "apply_swaps", "NO_EDGES", "NO_FAILING", "CANDIDATES", "UNSURE", "ANGLE_MARGIN"]
 
 NO_EDGES, NO_FAILING, CANDIDATES, UNSURE = 0, 1, 2, 3
@@ -303,3 +304,27 @@ def _seen_before(seen, count, key):
         if seen[i] == key:
             return True
     return False
+
+
+@njit(cache=True)
+def pair_angle_parts(V, faces):
+    """(|u x w|, u . w) of every corner of the faces ``faces`` (t, s, 3), as quality.corner_angles computes them.
+
+    Corner k of a face (i0, i1, i2) is the angle at F[k] between u = V[F[k + 1]] - V[F[k]] and
+    w = V[F[k + 2]] - V[F[k]] (indices mod 3): the arguments of corner_angles' arctan2, bit for
+    bit (row cross product, norm and einsum dot of :mod:`._tri_kernels`). The arctan2 stays
+    numpy's (see the module docstring), applied to the returned arrays.
+
+    Returns
+    -------
+    sines, cosines : (t, s, 3) float64
+    """
+    t, s, _ = faces.shape
+    sines = np.empty((t, s, 3))
+    cosines = np.empty((t, s, 3))
+    for a in range(t):
+        for i in range(s):
+            for k in range(3):
+                sines[a, i, k], cosines[a, i, k] = _angle_parts(V, faces[a, i, k], faces[a, i, (k + 1) % 3],
+                                                                faces[a, i, (k + 2) % 3])
+    return sines, cosines

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _flip_kernels as K
-from .quality import corner_angles, cross_rows, face_normals
+from .quality import cross_rows, face_normals
 from .topology import interior_edges, undirected_keys
 
 __all__ = ["circumcenters", "folds", "min_angle_scores", "relax_edges"]
@@ -61,9 +61,11 @@ def min_angle_scores(V, old1, old2, new1, new2):
     -------
     old, new : (s,) float64  smallest angle (radians) of each pair
     """
-    old = np.minimum(corner_angles(V, old1).min(axis=1), corner_angles(V, old2).min(axis=1))
-    new = np.minimum(corner_angles(V, new1).min(axis=1), corner_angles(V, new2).min(axis=1))
-    return old, new
+    # The corner angles of quality.corner_angles, their arctan2 arguments compiled (same bits).
+    faces = np.stack([old1, old2, new1, new2]).astype(np.int64, copy=False)
+    sines, cosines = K.pair_angle_parts(np.ascontiguousarray(V, np.float64), faces)
+    smallest = np.arctan2(sines, cosines).min(axis=2)
+    return np.minimum(smallest[0], smallest[1]), np.minimum(smallest[2], smallest[3])
 
 
 def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion="sphere", normal_cos=0.0, *,
@@ -167,7 +169,7 @@ def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer
     more = False
     for _ in range(max_rounds):
         more = False
-        E, f1, c1, f2, c2 = interior_edges(F, n)
+        E, f1, c1, f2, c2 = _interior_edges(F, n)
         if len(E) == 0:
             break
         c = F[f1, (c1 + 2) % 3]
@@ -203,6 +205,16 @@ def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer
         total += len(chosen)
         more = True
     return (F, total, more) if rounds_left else (F, total)
+
+
+def _interior_edges(F, n):
+    """topology.interior_edges of an int64 face array by the compiled half-edge table (the same edges in
+    the same order, :func:`._flip_kernels._interior_edges`); by numpy where the kernel leaves it to it."""
+    he, tw, _, _, ok = K._interior_edges(F, n)
+    if not ok:
+        return interior_edges(F, n)
+    f1, c1 = he // 3, he % 3
+    return np.stack([F[f1, c1], F[f1, (c1 + 1) % 3]], axis=1), f1, c1, tw // 3, tw % 3
 
 
 def _in_sorted(x, table):

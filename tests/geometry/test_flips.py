@@ -266,3 +266,52 @@ def test_compiled_circumsphere_rounds_on_degenerate_triangles(poison):
         want = relax_edges(V, F, criterion="sphere", compiled=False)
     np.testing.assert_array_equal(got[0], want[0])
     assert got[1] == want[1]
+
+
+def _min_angle_scores_numpy(V, old1, old2, new1, new2):
+    """The scorer's numpy form (quality.corner_angles per face pair), the oracle of the compiled corners."""
+    old = np.minimum(corner_angles(V, old1).min(axis=1), corner_angles(V, old2).min(axis=1))
+    new = np.minimum(corner_angles(V, new1).min(axis=1), corner_angles(V, new2).min(axis=1))
+    return old, new
+
+
+@pytest.mark.parametrize("poison", [None, np.nan, np.inf])
+def test_compiled_min_angle_scores_equal_the_corner_angles_bit_for_bit(poison):
+    # Random bumpy patches (with degenerate and repeated-vertex faces mixed in): the scores of
+    # every interior edge's pair and swapped pair equal the numpy corner angles exactly.
+    rng = np.random.default_rng(5)
+    for trial in range(40):
+        V, F = _bumpy_patch(rng, int(rng.integers(3, 12)))
+        if poison is not None:
+            V[rng.integers(len(V))] = poison
+        E, f1, c1, f2, c2 = interior_edges(F, len(V))
+        c, d = F[f1, (c1 + 2) % 3], F[f2, (c2 + 2) % 3]
+        new1, new2 = np.stack([E[:, 0], d, c], axis=1), np.stack([E[:, 1], c, d], axis=1)
+        new2[::5] = new2[::5, [0, 0, 1]]  # zero-length edges
+        got = min_angle_scores(V, F[f1], F[f2], new1, new2)
+        want = _min_angle_scores_numpy(V, F[f1], F[f2], new1, new2)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
+            assert np.array_equal(np.signbit(g), np.signbit(w))
+    empty = np.zeros((0, 3), np.int64)
+    assert [len(x) for x in min_angle_scores(V, empty, empty, empty, empty)] == [0, 0]
+
+
+def test_compiled_interior_edges_equal_the_topology_edges():
+    # The relaxation's interior edges from the compiled half-edge table: the edges, faces and
+    # corners of topology.interior_edges in its order, also where a directed edge repeats or an
+    # index is out of range (then numpy answers).
+    from meshlab_holefill.geometry.flips import _interior_edges
+
+    rng = np.random.default_rng(9)
+    for trial in range(60):
+        V, F = _bumpy_patch(rng, int(rng.integers(3, 12)))
+        F = F[rng.permutation(len(F))].astype(np.int64)
+        if trial % 4 == 1:
+            F = np.concatenate([F, F[:2]])  # repeated faces: repeated directed edges
+        if trial % 4 == 2:
+            F = F[: int(rng.integers(0, len(F) + 1))]
+        n = len(V) if trial % 4 != 3 else int(F.max())  # the last index out of range
+        got, want = _interior_edges(np.ascontiguousarray(F), n), interior_edges(F, n)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)

@@ -14,6 +14,7 @@ from ...geometry.flips import relax_edges
 from ...geometry.intersections import faces_intersecting
 from ...geometry.quality import cross_rows, face_normals
 from ...geometry.topology import edge_pair_set, interior_edges
+from ._fold_kernels import pair_agreements
 from .optimisation import adjacency
 
 __all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_folds", "unfold_by_swaps",
@@ -163,37 +164,6 @@ def local_folds(V, F, border_normals=None, max_angle=FOLD_ANGLE):
     return bad
 
 
-def _border_agreement(F, N, border_normals):
-    """Smallest dot of each face normal with the mesh normals across its loop edges (1 if none), (m,)."""
-    out = np.ones(len(F))
-    if border_normals is None or len(F) == 0:
-        return out
-    k = len(border_normals)
-    for c in range(3):
-        u, v = F[:, c], F[:, (c + 1) % 3]
-        on = (u < k) & (v == (u + 1) % k)
-        out[on] = np.minimum(out[on], np.einsum("ij,ij->i", N[on], border_normals[u[on]]))
-    return out
-
-
-def _pair_agreement(V, A, B, border_normals):
-    """Fold agreement of the face pairs A[i], B[i] and whether both faces are non-degenerate.
-
-    The agreement is the smallest dot product among the pair's unit normals and, for a face on
-    a loop edge, the mesh normal across it (:func:`_border_agreement`).
-
-    Returns
-    -------
-    agreement : (s,) float64
-    proper : (s,) bool
-    """
-    NA, NB = face_normals(V, A), face_normals(V, B)
-    agreement = np.minimum(np.einsum("ij,ij->i", NA, NB),
-                           np.minimum(_border_agreement(A, NA, border_normals),
-                                      _border_agreement(B, NB, border_normals)))
-    return agreement, np.any(NA != 0, axis=1) & np.any(NB != 0, axis=1)
-
-
 def unfold_by_swaps(V, F, forbidden_edges=(), border_normals=None, max_rounds=20):
     """Repair folds by edge swaps (reading of Sec. 4.6's "handle fold-overs").
 
@@ -211,9 +181,13 @@ def unfold_by_swaps(V, F, forbidden_edges=(), border_normals=None, max_rounds=20
     F : (m, 3) int64
     swaps : int
     """
+    across = np.zeros((0, 3)) if border_normals is None else np.ascontiguousarray(border_normals, np.float64)
+
     def agreement_gain(V, old1, old2, new1, new2):
-        old, _ = _pair_agreement(V, old1, old2, border_normals)
-        new, proper = _pair_agreement(V, new1, new2, border_normals)
+        # _pair_agreement of both pairs, compiled (same bits, _fold_kernels).
+        faces = np.stack([old1, old2, new1, new2]).astype(np.int64, copy=False)
+        agreement, proper = pair_agreements(np.ascontiguousarray(V, np.float64), faces, across)
+        old, new, proper = agreement[0], agreement[1], proper[1]
         # Only folds (negative agreement) are swapped, the worst first.
         return old, np.where((old < 0.0) & proper, new, -np.inf), -old
 

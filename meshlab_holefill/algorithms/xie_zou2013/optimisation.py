@@ -245,9 +245,10 @@ def _turns_faces(V, F, a, b, newpos, n):
 def _joins_forbidden(A, survivor, victim, candidates, n_fixed, forbidden):
     """Mask of the ``candidates`` whose collapse onto the loop would join a forbidden pair of loop vertices."""
     bad = np.zeros(len(survivor), bool)
+    indptr, indices = A.indptr, A.indices  # row v's neighbours, as A[v].indices gives them (without its slicing cost)
     for t in candidates:
         s, vct = int(survivor[t]), int(victim[t])
-        nbrs = A[vct].indices
+        nbrs = indices[indptr[vct]:indptr[vct + 1]]
         if any(tuple(sorted((s, int(x)))) in forbidden for x in nbrs if x < n_fixed and x != s):
             bad[t] = True
     return bad
@@ -410,12 +411,12 @@ def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5,
                 goals.append(mid + side * (np.sqrt(3.0) / 2.0) * np.linalg.norm(e))
             best, best_q = None, current
             old_normals = face_normals(V, tri)
+            W = V.copy()  # V with v moved to the candidate (only W[v] changes between candidates)
             for goal in goals:
                 d = goal - V[v]
                 d -= (d @ nv) * nv  # tangential: keep the shape
                 for s in steps:
                     p = V[v] + s * d
-                    W = V.copy()
                     W[v] = p
                     qn = triangle_quality(W, tri).min()
                     if qn <= best_q + 1e-6:

@@ -347,9 +347,9 @@ def split_forbidden_edges(V, F, forbidden_edges):
     V = np.array(V, np.float64)
     F = np.array(F, np.int64)
     n = len(V)
-    keys = set((np.minimum(fb[:, 0], fb[:, 1]) * n + np.maximum(fb[:, 0], fb[:, 1])).tolist())
+    keys = np.minimum(fb[:, 0], fb[:, 1]) * n + np.maximum(fb[:, 0], fb[:, 1])
     E, f1, c1, f2, c2 = interior_edges(F, n)
-    hit = [i for i, (a, b) in enumerate(E.tolist()) if min(a, b) * n + max(a, b) in keys]
+    hit = np.flatnonzero(np.isin(np.minimum(E[:, 0], E[:, 1]) * n + np.maximum(E[:, 0], E[:, 1]), keys)).tolist()
     new_faces = []
     for i in hit:
         a, b = E[i]

@@ -1231,3 +1231,21 @@ def test_base_point_pairs_are_found_once_per_pairing(cube_edge_hole):
         assert np.array_equal(got[2], pairs) and got[3] == info and np.array_equal(got[0], tangent)
         assert hpde_sections.base_point_pairs(base, normals, split, np.radians(12))[2] is got[2]
     assert hpde_sections.base_point_pairs(base, normals.copy(), None, np.radians(12))[2] is not got[2]
+
+
+def test_warm_up_loads_every_kernel_a_fill_calls():
+    # The kernels of the DE generation, the Sec. 4.7 steps, the swaps and the quality pass: a
+    # worker that warmed up loads none of them within a hole's time.
+    from meshlab_holefill.algorithms.xie_zou2013 import _de_kernels, _optimisation_kernels, _quality_pass_kernels
+    from meshlab_holefill.algorithms.xie_zou2013 import _smoothing_kernels, differential_evolution
+    from meshlab_holefill.geometry import _flip_kernels, _quality_kernels
+
+    differential_evolution.warm_up()
+    assert differential_evolution.WARM_UP is differential_evolution.warm_up
+    kernels = [_de_kernels.trial_turning_terms, _de_kernels.select_variation, _de_kernels.reflect_gather_terms,
+               _de_kernels.renew_variation, _de_kernels.masked_row_sums, _de_kernels.turning_terms,
+               _optimisation_kernels.edge_adjacency, _optimisation_kernels.faces_around_edges,
+               _optimisation_kernels.independent_link_edges, _quality_pass_kernels.star_candidate_scores,
+               _smoothing_kernels.umbrella_passes, _flip_kernels.pair_angle_parts,
+               _quality_kernels.triangle_quality_kernel]
+    assert all(kernel.signatures for kernel in kernels), [k.__name__ for k in kernels if not k.signatures]

@@ -1,0 +1,59 @@
+"""The compiled fold agreement (_fold_kernels) against the numpy code it replaces, bit for bit."""
+import numpy as np
+import pytest
+
+from meshlab_holefill.algorithms.xie_zou2013._fold_kernels import pair_agreements
+from meshlab_holefill.geometry.quality import face_normals
+
+
+def _border_agreement(F, N, border_normals):
+    """Smallest dot of each face normal with the mesh normals across its loop edges (1 if none), (m,)."""
+    out = np.ones(len(F))
+    if border_normals is None or len(F) == 0:
+        return out
+    k = len(border_normals)
+    for c in range(3):
+        u, v = F[:, c], F[:, (c + 1) % 3]
+        on = (u < k) & (v == (u + 1) % k)
+        out[on] = np.minimum(out[on], np.einsum("ij,ij->i", N[on], border_normals[u[on]]))
+    return out
+
+
+def _pair_agreement(V, A, B, border_normals):
+    """The numpy oracle: fold agreement of the face pairs A[i], B[i] and whether both are non-degenerate."""
+    NA, NB = face_normals(V, A), face_normals(V, B)
+    agreement = np.minimum(np.einsum("ij,ij->i", NA, NB),
+                           np.minimum(_border_agreement(A, NA, border_normals),
+                                      _border_agreement(B, NB, border_normals)))
+    return agreement, np.any(NA != 0, axis=1) & np.any(NB != 0, axis=1)
+
+
+def _faces(rng, n, k, s):
+    """s random faces on n vertices, a third of them on a loop edge (i, i + 1 mod k), some degenerate."""
+    F = rng.integers(0, n, size=(s, 3))
+    on_loop = rng.random(s) < 0.35
+    i = rng.integers(0, k, size=s)
+    F[on_loop, 0], F[on_loop, 1] = i[on_loop], (i[on_loop] + 1) % k
+    F[::7, 2] = F[::7, 0]  # repeated vertex: zero normal
+    return np.roll(F, rng.integers(0, 3), axis=1)
+
+
+@pytest.mark.parametrize("poison", [None, np.nan, np.inf])
+def test_pair_agreements_equal_the_numpy_agreement_bit_for_bit(poison):
+    rng = np.random.default_rng(11)
+    for trial in range(50):
+        n, k, s = 14, int(rng.integers(3, 9)), int(rng.integers(0, 40))
+        V = rng.normal(size=(n, 3))
+        V[rng.integers(n)] = V[rng.integers(n)]  # coincident vertices
+        if poison is not None:
+            V[rng.integers(n)] = poison
+        border = rng.normal(size=(k, 3))
+        border /= np.linalg.norm(border, axis=1, keepdims=True)
+        faces = np.stack([_faces(rng, n, k, s) for _ in range(4)])
+        for normals, given in ((border, border), (None, np.zeros((0, 3)))):
+            agreement, proper = pair_agreements(V, faces, given)
+            for t in range(2):
+                want_a, want_p = _pair_agreement(V, faces[2 * t], faces[2 * t + 1], normals)
+                np.testing.assert_array_equal(agreement[t], want_a)
+                np.testing.assert_array_equal(proper[t], want_p)
+
