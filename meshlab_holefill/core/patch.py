@@ -7,6 +7,7 @@ import numpy as np
 
 from ..errors import HoleFillError
 from ..geometry.quality import face_areas
+from .sets import isin_ints, unique_ints
 
 
 @dataclass
@@ -78,16 +79,16 @@ def validate_patch(patch, loop_points, forbidden_edges=(), area_tol=None):
         raise HoleFillError("patch has a degenerate (zero-area) face")
     directed = np.concatenate([Fp[:, [0, 1]], Fp[:, [1, 2]], Fp[:, [2, 0]]])
     dkeys = directed[:, 0] * n + directed[:, 1]
-    if len(np.unique(dkeys)) != len(dkeys):
+    if len(unique_ints(dkeys)) != len(dkeys):
         raise HoleFillError("patch uses a directed edge twice (non-manifold edge or inconsistent orientation)")
     reverse = directed[:, 1] * n + directed[:, 0]
-    has_twin = np.isin(dkeys, reverse)
+    has_twin = isin_ints(dkeys, reverse)
     open_edges = directed[~has_twin]
     loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
     open_keys = np.sort(open_edges[:, 0] * n + open_edges[:, 1])
     loop_keys = np.sort(loop_edges[:, 0] * n + loop_edges[:, 1])
     if len(open_keys) != len(loop_keys) or np.any(open_keys != loop_keys):
-        if np.isin(loop_edges[:, 1] * n + loop_edges[:, 0], dkeys).any():
+        if isin_ints(loop_edges[:, 1] * n + loop_edges[:, 0], dkeys).any():
             raise HoleFillError("patch is oriented against the surrounding mesh")
         raise HoleFillError("patch boundary does not match the hole boundary (not watertight)")
     fe = np.asarray(forbidden_edges, np.int64).reshape(-1, 2)
@@ -95,9 +96,9 @@ def validate_patch(patch, loop_points, forbidden_edges=(), area_tol=None):
         und = np.sort(directed, axis=1)
         und_keys = und[:, 0] * n + und[:, 1]
         fe = np.sort(fe, axis=1)
-        if np.isin(fe[:, 0] * n + fe[:, 1], und_keys).any():
+        if isin_ints(fe[:, 0] * n + fe[:, 1], und_keys).any():
             raise HoleFillError("patch duplicates an existing mesh edge between boundary vertices")
-    if len(Vp) and len(np.unique(Fp[Fp >= k])) != len(Vp):
+    if len(Vp) and len(unique_ints(Fp[Fp >= k])) != len(Vp):
         raise HoleFillError("patch has unused vertices")
 
 

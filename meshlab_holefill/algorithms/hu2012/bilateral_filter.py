@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.sets import unique_ints
 from ...geometry.quality import cross_rows, triangle_quality, vertex_normals
 from ._bilateral_kernels import refuse_slivers
 
@@ -34,7 +35,7 @@ def _ring_pairs(F, n):
     F = np.asarray(F, np.int64)
     i = np.concatenate([F[:, 0], F[:, 1], F[:, 2], F[:, 1], F[:, 2], F[:, 0]])
     j = np.concatenate([F[:, 1], F[:, 2], F[:, 0], F[:, 0], F[:, 1], F[:, 2]])
-    keys = np.unique(i * n + j)
+    keys = unique_ints(i * n + j)
     return keys // n, keys % n
 
 
