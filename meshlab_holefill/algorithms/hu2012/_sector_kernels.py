@@ -45,7 +45,7 @@ def swaps_in_sectors(points, u, w, limit, V, B, margin):
 
     A new edge (c, d) is allowed when, at each end on the loop (index below ``len(points)``),
     it starts into that vertex's hole sector; ``sure=False`` as soon as one angle is too close
-    to a bound to decide here.
+    to a bound to decide here, or an index is out of range.
     """
     k = points.shape[0]
     s = B.shape[0]
@@ -55,6 +55,8 @@ def swaps_in_sectors(points, u, w, limit, V, B, margin):
         for end in range(2):
             i = B[r, 1 + end]
             j = B[r, 2 - end]
+            if i < 0 or j < 0 or i >= V.shape[0] or j >= V.shape[0]:
+                return ok, False
             if i >= k:
                 continue
             d = (V[j, 0] - points[i, 0], V[j, 1] - points[i, 1], V[j, 2] - points[i, 2])

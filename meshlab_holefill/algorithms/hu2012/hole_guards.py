@@ -14,6 +14,7 @@ import numpy as np
 
 from ...core.sets import unique_ints
 from ...geometry.intersections import intersecting_pairs
+from ...geometry.quality import cross_rows
 from ._sector_kernels import sector_contains, swaps_in_sectors
 
 __all__ = ["sector_angle", "inside_hole_sector", "LoopSectors", "patch_crossings", "patch_guard", "swaps_crossing"]
@@ -74,7 +75,7 @@ class LoopSectors:
         u = np.roll(P, -1, axis=0) - P
         u -= np.einsum("ij,ij->i", u, N)[:, None] * N
         u /= np.maximum(np.linalg.norm(u, axis=1), 1e-300)[:, None]
-        self.points, self.u, self.w = np.ascontiguousarray(P), u, np.ascontiguousarray(np.cross(N, u))
+        self.points, self.u, self.w = np.ascontiguousarray(P), u, cross_rows(N, u)  # np.cross's bits
         self.limit = self._angle(np.arange(len(P)), np.roll(P, 1, axis=0))
 
     def _angle(self, i, targets):
@@ -108,7 +109,7 @@ class LoopSectors:
         B = np.asarray(B)
         V = np.asarray(V)
         if B.dtype == np.int64 and B.ndim == 2 and B.shape[1] == 3 and V.dtype == np.float64 and V.ndim == 2 \
-                and (len(B) == 0 or (B[:, 1:].min() >= 0 and B[:, 1:].max() < len(V))):
+                and V.shape[1] == 3:
             ok, sure = swaps_in_sectors(self.points, self.u, self.w, self.limit, np.ascontiguousarray(V),
                                         np.ascontiguousarray(B), 1e-9)
             if sure:

@@ -132,7 +132,7 @@ def warm_up():
 WARM_UP = warm_up
 
 
-def relaxation_guard(ctx):
+def relaxation_guard(ctx, sector=None):
     """Veto for relaxation swaps: the hole-sector test, with an exact second opinion.
 
     The sector test (:func:`hole_guards.patch_guard`) refuses a swap whose new edge leaves a
@@ -145,11 +145,19 @@ def relaxation_guard(ctx):
     therefore allowed when its two new triangles intersect neither the surrounding faces
     nor the rest of the patch, which is what the sector test stands in for.
 
+    Parameters
+    ----------
+    ctx : HoleContext
+    sector : callable, optional
+        ``patch_guard(ctx)``, when the caller has it already (it is built from the loop's
+        hole sectors, about 0.3 ms per hole).
+
     Returns
     -------
     callable ``allowed(V, F, A, B, replaced) -> (s,) bool`` for :func:`geometry.flips.relax_edges`
     """
-    sector = patch_guard(ctx)
+    if sector is None:
+        sector = patch_guard(ctx)
 
     def allowed(V, F, A, B, replaced):
         ok = sector(V, F, A, B, replaced)
@@ -170,7 +178,8 @@ def _refine(ctx, F0, alpha, fixed, max_passes=4, criterion="sphere"):
     in every round), and when any of them is made, refinement resumes from the relaxed patch,
     since the new triangles may need splitting.
     """
-    sector, exact = patch_guard(ctx), relaxation_guard(ctx)
+    sector = patch_guard(ctx)
+    exact = relaxation_guard(ctx, sector)
     V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed, allowed=sector,
                                      criterion=criterion)
     for _ in range(max_passes):
