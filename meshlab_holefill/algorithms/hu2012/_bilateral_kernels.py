@@ -16,7 +16,7 @@ from numba import njit
 from ...geometry._quality_kernels import face_cross, face_quality
 from ...geometry._tri_kernels import _dot, _norm
 
-__all__ = ["refuse_slivers", "vertex_normals_kernel", "ring_log_weights", "ring_step"]  # undo_moves is a helper of the compiled guards, compiled into them
+__all__ = ["refuse_slivers", "ring_log_weights", "ring_step"]  # undo_moves, vertex_normals_kernel: helpers compiled into them
 
 
 @njit(cache=True)

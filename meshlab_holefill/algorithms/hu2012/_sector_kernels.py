@@ -1,4 +1,4 @@
-"""Compiled hole-sector test (numba): :meth:`.hole_guards.LoopSectors.contains` row by row.
+"""Compiled hole-sector tests (numba): :meth:`.hole_guards.LoopSectors.contains` row by row, and both ends of swaps.
 
 The angle of each direction about the vertex normal is computed with the numpy code's
 operations in its order (row dots in numpy's einsum order, the same floor modulo), except that
@@ -17,7 +17,8 @@ from numba import njit
 
 from ...geometry._tri_kernels import _dot
 
-__all__ = ["sector_contains", "swaps_in_sectors", "ANGLE_MARGIN"]
+# The filter runs swaps_in_sectors (its warm-up loads it); sector_contains serves LoopSectors.contains.
+__all__ = ["swaps_in_sectors", "ANGLE_MARGIN"]
 
 ANGLE_MARGIN = 1e-12
 

@@ -103,8 +103,8 @@ class LoopSectors:
         """(s,) bool: does the new edge (B[r, 1], B[r, 2]) of each swap start into the hole at its loop ends?
 
         Both ends in one compiled pass (:func:`._sector_kernels.swaps_in_sectors`); when an
-        angle there is too close to a bound, :meth:`contains` end by end, so the answer is
-        always :meth:`contains_numpy`'s.
+        angle there is too close to a bound, :meth:`contains_numpy` end by end, so the answer
+        is always the numpy code's.
         """
         B = np.asarray(B)
         V = np.asarray(V)
@@ -119,7 +119,7 @@ class LoopSectors:
         ok = np.ones(len(B), bool)
         for end, other in ((c, d), (d, c)):
             on_loop = end < k
-            ok[on_loop] &= self.contains(end[on_loop], V[other[on_loop]])
+            ok[on_loop] &= self.contains_numpy(end[on_loop], V[other[on_loop]])
         return ok
 
     def contains_numpy(self, i, targets, margin=1e-9):

@@ -229,6 +229,23 @@ def test_embeds_in_projection_rejects_a_doubly_wound_fan():
     assert not embeds_in_projection(V, F, m)
 
 
+
+def test_compiled_turn_test_answers_as_the_numpy_code():
+    from meshlab_holefill.algorithms.hu2012._projection_kernels import projected_turns
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import _turns_numpy
+
+    rng = np.random.default_rng(12)
+    V, F, k = _disk_patch()
+    answers = set()
+    for trial in range(60):
+        Q = V[:, :2] + rng.normal(scale=10.0 ** rng.uniform(-4, -0.5), size=(len(V), 2))  # folds at large moves
+        G = F if trial % 5 else F[1:]  # a face less: a vertex may lose its full turn or every face
+        ok, sure = projected_turns(Q, np.ascontiguousarray(G, np.int64), k, 1e-6)
+        assert sure and ok == _turns_numpy(Q, G, k)
+        answers.add(bool(ok))
+    assert answers == {True, False}
+
+
 # ----------------------------------------------------------------------------- quality and the filter's neighbourhood
 
 def _noisy_grid(noise, seed=1):
@@ -631,13 +648,13 @@ def test_warm_up_loads_every_kernel_of_the_filter():
     from numba.core.registry import CPUDispatcher
 
     from meshlab_holefill.algorithms.hu2012 import _bilateral_kernels, _min_angle_kernels, _sector_kernels
-    from meshlab_holefill.algorithms.hu2012 import _smoothing_kernels, min_angle_bilateral
+    from meshlab_holefill.algorithms.hu2012 import _projection_kernels, _smoothing_kernels, min_angle_bilateral
     from meshlab_holefill.geometry import _flip_kernels, _quality_kernels, _refine_kernels
 
     min_angle_bilateral.warm_up()
     assert min_angle_bilateral.WARM_UP is min_angle_bilateral.warm_up
-    for module in (_bilateral_kernels, _min_angle_kernels, _sector_kernels, _smoothing_kernels, _flip_kernels,
-                   _refine_kernels):
+    for module in (_bilateral_kernels, _min_angle_kernels, _sector_kernels, _projection_kernels, _smoothing_kernels,
+                   _flip_kernels, _refine_kernels):
         for name in module.__all__:
             kernel = getattr(module, name)
             if isinstance(kernel, CPUDispatcher):
