@@ -74,7 +74,7 @@ def cotangent_weights(V, F):
     return np.cos(angles) / np.maximum(np.sin(angles), 1e-300)
 
 
-def cotangent_laplacian(V, F, n=None):
+def cotangent_laplacian(V, F, n=None, cotangents=None):
     """Cotangent Laplacian L with L_ij = (cot a_ij + cot b_ij) / 2 and L_ii = -sum_j L_ij.
 
     (L @ V)[i] = sum_j w_ij (v_j - v_i); negative semi-definite for a well-shaped mesh.
@@ -85,13 +85,16 @@ def cotangent_laplacian(V, F, n=None):
     F : (m, 3) int
     n : int, optional
         Matrix size (defaults to len(V)).
+    cotangents : (m, 3) float64, optional
+        The faces' corner cotangents (:func:`cotangent_weights`) to use instead of those of V,
+        e.g. of the same triangles laid out in another embedding.
 
     Returns
     -------
     L : (n, n) CSR float64
     """
     n = len(V) if n is None else n
-    C = cotangent_weights(V, F)
+    C = cotangent_weights(V, F) if cotangents is None else cotangents
     rows, cols, vals = [], [], []
     for k in range(3):
         i, j = F[:, (k + 1) % 3], F[:, (k + 2) % 3]

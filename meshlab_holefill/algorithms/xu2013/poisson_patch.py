@@ -26,7 +26,7 @@ __all__ = ["normalized_cotangent_laplacian", "reference_normals", "planar_bounda
            "initial_patches", "relax_patch", "folds", "repair_slivers", "context_hits"]
 
 
-def normalized_cotangent_laplacian(V, F, n=None):
+def normalized_cotangent_laplacian(V, F, n=None, cotangents=None):
     """Laplacian matrix with normalised cotangent weights (Sec. 2.1, Eq. 1-3, 5-6).
 
     L_ii = -1, L_ij = w_ij = omega_ij / sum_j omega_ij with omega_ij = cot alpha_ij + cot beta_ij,
@@ -41,13 +41,14 @@ def normalized_cotangent_laplacian(V, F, n=None):
     V : (n, 3) float64
     F : (m, 3) int
     n : int, optional  matrix size (default len(V))
+    cotangents : (m, 3) float64, optional  the faces' corner cotangents, instead of those of V
 
     Returns
     -------
     L : (n, n) CSR float64  (rows of vertices without neighbours are zero)
     """
     n = len(V) if n is None else n
-    C = cotangent_laplacian(V, F, n).tocoo()
+    C = cotangent_laplacian(V, F, n, cotangents).tocoo()
     off = C.row != C.col
     rows, cols, w = C.row[off], C.col[off], 2.0 * C.data[off]
     floor = 1e-3 * np.abs(w).mean() if len(w) else 0.0
@@ -154,6 +155,8 @@ def initial_patches(ctx, merge_factor, failures):
     X : (k + p, 3) float64  boundary then new vertices
     F : (q, 3) int64
     stats : dict  the triangulation's counts and ``domain`` ('3d', 'developed', 'projected', 'ears')
+    layout : (k + p, 3) float64 or None  the planar patch the front built, z = 0 (the planar domains;
+        None where the front or the ear cutting built the patch in 3D)
     """
     P = ctx.points
     try:
@@ -161,7 +164,7 @@ def initial_patches(ctx, merge_factor, failures):
             P, ctx.forbidden_edges, merge_factor, reference_normal=reference_normals(ctx),
             obstacles=(ctx.vertices, ctx.faces))
         stats["domain"] = "3d"
-        yield np.concatenate([P, new_vertices]), F, stats
+        yield np.concatenate([P, new_vertices]), F, stats, None
     except HoleFillError as exc:
         failures.append(f"3d advancing front: {exc}")
     for name, D in planar_boundaries(ctx):
@@ -172,7 +175,8 @@ def initial_patches(ctx, merge_factor, failures):
             failures.append(f"{name} advancing front: {exc}")
             continue
         stats["domain"] = name
-        yield harmonic_lift(np.concatenate([D, new_vertices]), F, P), F, stats
+        layout = np.concatenate([D, new_vertices])
+        yield harmonic_lift(layout, F, P), F, stats, layout
     from ...geometry.refine import refine_patch
     from ..hu2012.min_angle_triangulation import min_angle_triangulation
 
@@ -185,7 +189,7 @@ def initial_patches(ctx, merge_factor, failures):
     loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
     fixed = np.concatenate([loop_edges, np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2)])
     X, F, _, info = refine_patch(P, F0, ctx.edge_scale, fixed_edges=fixed)
-    yield X, F, {"domain": "ears", **info}
+    yield X, F, {"domain": "ears", **info}, None
 
 
 def _ear_guard(k):

@@ -673,7 +673,7 @@ def test_initial_patches_yield_every_domain_in_order_each_closing_the_hole_on_it
     assert k == 24
     failures = []
     domains = []
-    for X, F, stats in initial_patches(ctx, 0.75, failures):
+    for X, F, stats, layout in initial_patches(ctx, 0.75, failures):
         domains.append(stats["domain"])
         # Loop first and bit-exact: the planar domains are lifted back onto the loop, not left in z = 0.
         assert np.array_equal(X[:k], ctx.points)
@@ -699,7 +699,7 @@ def test_initial_patches_fall_back_lazily_and_record_why(monkeypatch):
     failures = []
     patches = patch_module.initial_patches(ctx, 0.75, failures)
     assert calls == [] and failures == []  # a generator: nothing runs before it is asked
-    X, F, stats = next(patches)
+    X, F, stats, layout = next(patches)
     assert stats["domain"] == "developed" and calls == [True, False]  # only the 3D front and one planar front ran
     assert failures == ["3d advancing front: front ran out of the hole"]
     assert np.array_equal(X[:ctx.size], ctx.points) and off_plane(X) < 1e-12
