@@ -507,9 +507,9 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     border_faces = border_pos.astype(np.int64)
 
     # Edge scale of loop vertices and forbidden chords, from the edges of local faces.
-    E = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    E = np.sort(E, axis=1)
-    keys = unique_ints(E[:, 0] * len(verts) + E[:, 1])  # the rows' lexicographic order, without unique(axis=0)
+    a, b = faces.T.ravel(), faces[:, [1, 2, 0]].T.ravel()  # edge (F[f, c], F[f, c + 1]), corner by corner
+    # The edges' (smaller, larger) pairs as keys, in the rows' lexicographic order, without unique(axis=0).
+    keys = unique_ints(np.minimum(a, b) * len(verts) + np.maximum(a, b))
     E = np.stack([keys // len(verts), keys % len(verts)], axis=1)
     lengths = np.linalg.norm(verts[E[:, 0]] - verts[E[:, 1]], axis=1)
     sums = np.bincount(E.ravel(), weights=np.repeat(lengths, 2), minlength=len(verts))
