@@ -386,9 +386,10 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
         q = triangle_quality(X, F)
         return float(q.min()), float(q.mean())
 
-    best = (score(np.concatenate([ctx.points, vertices]), faces), vertices, faces, 0)
+    start = score(np.concatenate([ctx.points, vertices]), faces)
     X, F, total = np.concatenate([ctx.points, vertices]), faces, 0
-    for _ in range(rounds):
+    better = []  # rounds scoring above the input: (score, round, interior, faces, swaps so far)
+    for r in range(rounds):
         F, swapped = relax_edges(X, F, fixed_edges=ctx.forbidden_edges, allowed=_quality_improving)
         if swapped == 0:
             break
@@ -399,15 +400,26 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
             interior = relax_patch(ctx, X[ctx.size:], F) if tangential else X[ctx.size:]
         X = np.concatenate([ctx.points, interior])
         sc = score(X, F)
-        if sc <= best[0]:
-            continue
-        if count_crossings is None:
-            count_crossings = _CrossingCounts(ctx)
-        if crossings is None:
-            crossings = count_crossings(vertices, faces)
-        if count_crossings(interior, F) <= crossings:
-            best = (sc, interior, F, total)
-    return best[1], best[2], best[3]
+        if sc > start:
+            better.append((sc, r, interior, F, total))
+    return _best_round(ctx, better, vertices, faces, crossings, count_crossings)
+
+
+def _best_round(ctx, better, vertices, faces, crossings, count_crossings):
+    """The swaps' kept round: the earliest of the best score among the rounds crossing no more than the input.
+
+    That is the round the running best (a round kept when it scores above the best so far and
+    crosses no more than the input) ends on; taken best first, a patch's crossings are counted
+    only until one passes (the input's only when that round crosses something), which spares the
+    crossing tests of the rounds passed over (the most costly step after the solves).
+    """
+    if count_crossings is None:
+        count_crossings = _CrossingCounts(ctx)
+    for sc, _, interior, F, total in sorted(better, key=lambda b: (b[0][0], b[0][1], -b[1]), reverse=True):
+        n = count_crossings(interior, F)
+        if n == 0 or n <= (crossings if crossings is not None else count_crossings(vertices, faces)):
+            return interior, F, total
+    return vertices, faces, 0
 
 
 def domain_area_ratios(P, gap_angles, domains):

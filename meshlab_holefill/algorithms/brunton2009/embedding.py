@@ -32,9 +32,10 @@ import scipy.sparse.linalg as spla
 from ...geometry.laplacian import uniform_laplacian
 from ...geometry.quality import corner_sums, cross_rows, unique_edges
 from ...errors import HoleFillError
+from ._tangential_kernels import free_umbrella
 
 __all__ = ["symmetric_lu", "umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy", "vertex_normals",
-           "tangent_frames", "tangential_relaxation", "embed_patch", "relax_patch"]
+           "tangent_frames", "tangential_system", "tangential_relaxation", "embed_patch", "relax_patch"]
 
 
 def umbrella_operator(F, n):
@@ -104,7 +105,10 @@ def energy_rows(F, n, free, order, anchors=False):
     W = umbrella_operator(F, n)
     rows = np.flatnonzero(free)
     if anchors:
-        touching = np.asarray(abs(W[:, rows]).sum(axis=1)).ravel() > 0
+        # Rows with a stored entry in a free column (U stores no zeros): the column slice's
+        # absolute row sums > 0, without the slice.
+        touching = np.zeros(n, bool)
+        touching[np.repeat(np.arange(n), np.diff(W.indptr))[np.asarray(free, bool)[W.indices]]] = True
         rows = np.concatenate([rows, np.flatnonzero(touching & ~np.asarray(free, bool))])
     R = W[rows]
     if order == 2:
@@ -263,21 +267,8 @@ def tangential_relaxation(X, F, free):
     # The free vertices' rows of U and their normals only see the faces around them: built on
     # those faces they are the same numbers (the same edges, degrees and sums, in the same order).
     star = F[is_free[F].any(axis=1)]
-    W = umbrella_operator(star, len(X))
-    Wf = W[free]
-    Wff = _principal_entries(W, free)
     b1, b2 = tangent_frames(vertex_normals(X, star)[free])
-    frames = (b1, b2)
-    blocks_r, blocks_c, blocks_v = [], [], []
-    for i in range(2):
-        for j in range(2):
-            dots = np.einsum("ij,ij->i", frames[i][Wff.row], frames[j][Wff.col])
-            blocks_r.append(Wff.row + i * s)
-            blocks_c.append(Wff.col + j * s)
-            blocks_v.append(Wff.data * dots)
-    A = sp.csc_matrix((np.concatenate(blocks_v), (np.concatenate(blocks_r), np.concatenate(blocks_c))),
-                      shape=(2 * s, 2 * s))
-    U = Wf @ X
+    A, U = tangential_system(star, X, free, (b1, b2))
     b = -np.concatenate([np.einsum("ij,ij->i", b1, U), np.einsum("ij,ij->i", b2, U)])
     try:
         t = symmetric_lu(A).solve(b)
@@ -296,6 +287,65 @@ def tangential_relaxation(X, F, free):
             return Y
         alpha *= 0.5
     return X
+
+
+def tangential_system(star, X, free, frames, direct=True):
+    """The system of :func:`tangential_relaxation`: its matrix A (2 s, 2 s) and the umbrellas U of the free vertices.
+
+    A has the blocks W_pq b_i(p) . b_j(q) (i, j = 1, 2) over the free vertices p, q, W the
+    umbrella operator of ``star`` (:func:`umbrella_operator`); U = W[free] @ X. ``direct``
+    builds the free rows of W and the CSC arrays of A from the star's edges (the same entries,
+    values and storage order as scipy's construction, so SuperLU and the product see the same
+    numbers); False is that construction (a sparse operator for all vertices, fancy indexing, a
+    COO to CSC conversion), the reference the tests compare with, also taken for degenerate faces.
+
+    Parameters
+    ----------
+    star : (t, 3) int64  the faces touching a free vertex
+    X : (n, 3) float64
+    free : (s,) int64
+    frames : ((s, 3), (s, 3)) float64  tangent frames b1, b2 of the free vertices
+
+    Returns
+    -------
+    A : (2 s, 2 s) CSC float64
+    U : (s, 3) float64
+    """
+    n, s = len(X), len(free)
+    if not direct:
+        return _tangential_system_sparse(star, X, free, frames)
+    ok, indptr, indices, data, r, c, w, a_indptr, a_indices, slots = free_umbrella(
+        np.ascontiguousarray(star, np.int64), np.ascontiguousarray(free, np.int64), n)
+    if not ok:
+        return _tangential_system_sparse(star, X, free, frames)
+    Wf = sp.csr_matrix((data, indices, indptr.astype(np.int32)), shape=(s, n))
+    Wf.has_sorted_indices = False
+    # The values as the reference computes them: the same einsum rows, entry by entry.
+    values = np.empty(4 * len(w))
+    gathered_r, gathered_c = (frames[0][r], frames[1][r]), (frames[0][c], frames[1][c])
+    for i in range(2):
+        for j in range(2):
+            values[slots[2 * i + j]] = w * np.einsum("ij,ij->i", gathered_r[i], gathered_c[j])
+    A = sp.csc_matrix((values, a_indices, a_indptr.astype(np.int32)), shape=(2 * s, 2 * s))
+    return A, Wf @ X
+
+
+def _tangential_system_sparse(star, X, free, frames):
+    """:func:`tangential_system` by scipy's general sparse construction (the reference)."""
+    s = len(free)
+    W = umbrella_operator(star, len(X))
+    Wf = W[free]
+    Wff = _principal_entries(W, free)
+    blocks_r, blocks_c, blocks_v = [], [], []
+    for i in range(2):
+        for j in range(2):
+            dots = np.einsum("ij,ij->i", frames[i][Wff.row], frames[j][Wff.col])
+            blocks_r.append(Wff.row + i * s)
+            blocks_c.append(Wff.col + j * s)
+            blocks_v.append(Wff.data * dots)
+    A = sp.csc_matrix((np.concatenate(blocks_v), (np.concatenate(blocks_r), np.concatenate(blocks_c))),
+                      shape=(2 * s, 2 * s))
+    return A, Wf @ X
 
 
 def _principal_entries(W, rows):

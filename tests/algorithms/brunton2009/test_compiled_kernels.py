@@ -1,0 +1,166 @@
+"""Curve unfolding's compiled and direct constructions against the numpy / scipy code they replace (same bits)."""
+
+import numpy as np
+import pytest
+
+from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
+from meshlab_holefill.algorithms.brunton2009 import embedding as emb
+from meshlab_holefill.core import examples
+from meshlab_holefill.core.holes import boundary_loops, hole_context
+
+from conftest import sphere_with_holes
+
+
+def _joint_system_inputs(ctx, interior_faces, interior):
+    k, n_ctx = ctx.size, len(ctx.vertices)
+    faces = np.where(interior_faces < k, interior_faces, interior_faces - k + n_ctx)
+    X = np.concatenate([ctx.vertices, interior])
+    joint = np.concatenate([ctx.faces, faces])
+    free = np.arange(len(X)) >= n_ctx
+    free = np.flatnonzero(free)
+    is_free = np.zeros(len(X), bool)
+    is_free[free] = True
+    star = joint[is_free[joint].any(axis=1)]
+    frames = emb.tangent_frames(emb.vertex_normals(X, star)[free])
+    return star, X, free, frames
+
+
+def _filled_patches():
+    """Hole contexts with their default patches: the bowl's round hole and two holes cut in a sphere."""
+    V, F, loop = examples.bowl_with_hole()
+    contexts = [hole_context(V, F, loop, rings=cu.RINGS)]
+    V, F, _ = sphere_with_holes()
+    contexts += [hole_context(V, F, loop, rings=cu.RINGS) for loop in boundary_loops(F)]
+    return [(ctx, cu.fill(ctx)) for ctx in contexts]
+
+
+def _same_sparse(A, B):
+    A, B = A.tocsc(), B.tocsc()
+    return (A.shape == B.shape and np.array_equal(A.indptr, B.indptr) and np.array_equal(A.indices, B.indices)
+            and np.array_equal(A.data, B.data))
+
+
+@pytest.mark.parametrize("subset", ["all", "half", "shuffled"])
+def test_tangential_system_direct_equals_scipy_construction(subset):
+    # The compiled structure (free_umbrella) with numpy's values gives the matrix and the umbrellas
+    # of scipy's general construction to the last bit: the same arrays go to SuperLU.
+    rng = np.random.default_rng(0)
+    checked = 0
+    for ctx, patch in _filled_patches():
+        if len(patch.vertices) == 0:
+            continue
+        star, X, free, frames = _joint_system_inputs(ctx, patch.faces, patch.vertices)
+        if subset != "all":  # a part of the vertices free, in any order, with any frames
+            free = free[::2] if subset == "half" else rng.permutation(free)
+            frames = tuple(rng.standard_normal((len(free), 3)) for _ in range(2))
+            is_free = np.zeros(len(X), bool)
+            is_free[free] = True
+            star = star[is_free[star].any(axis=1)]
+        A, U = emb.tangential_system(star, X, free, frames)
+        A_ref, U_ref = emb.tangential_system(star, X, free, frames, direct=False)
+        assert _same_sparse(A, A_ref)
+        assert np.array_equal(U, U_ref)
+        Wf = emb.umbrella_operator(star, len(X))[free]
+        assert np.allclose(U, Wf @ X)
+        checked += 1
+    assert checked >= 2
+
+
+def test_tangential_system_takes_the_general_construction_for_degenerate_faces():
+    X = np.random.default_rng(1).standard_normal((5, 3))
+    star = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4], [4, 4, 1]])
+    free = np.array([4])
+    frames = emb.tangent_frames(np.array([[0.0, 0.0, 1.0]]))
+    A, U = emb.tangential_system(star, X, free, frames)
+    A_ref, U_ref = emb.tangential_system(star, X, free, frames, direct=False)
+    assert _same_sparse(A, A_ref) and np.array_equal(U, U_ref)
+
+
+def _running_best(start, rounds, base, count):
+    """The swaps' rule as a running best: a round is kept when it scores above the best so far and
+    crosses no more than the input (the reference of ``_best_round``)."""
+    best = (start, "input")
+    for sc, r in rounds:
+        if sc > best[0] and count(r) <= base:
+            best = (sc, r)
+    return best[1]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_best_swap_round_is_the_running_best(seed):
+    # Scores with ties and crossing counts drawn at random: the best-first search keeps the
+    # round the running best keeps, and counts fewer patches.
+    rng = np.random.default_rng(seed)
+    start = (0.2, 0.5)
+    rounds = [((float(rng.choice([0.1, 0.3, 0.4])), float(rng.choice([0.5, 0.6]))), r) for r in range(4)]
+    crossing = {r: int(rng.integers(0, 3)) for r in range(4)}
+    base = int(rng.integers(0, 3))
+    counted = []
+
+    def count(interior, F):
+        counted.append(interior)
+        return base if interior == "input" else crossing[interior]
+
+    better = [(sc, r, r, np.zeros((0, 3), np.int64), r + 1) for sc, r in rounds if sc > start]
+    kept, _, swaps = cu._best_round(None, better, "input", None, None, count)
+    assert kept == _running_best(start, rounds, base, lambda r: crossing[r])
+    assert swaps == (0 if kept == "input" else kept + 1)
+    assert len(counted) <= len(better) + 1
+
+
+def _random_loops(count, seed=0):
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        m = int(rng.integers(4, 40))
+        t = np.sort(rng.uniform(0.0, 2.0 * np.pi, m))
+        radius = rng.uniform(0.3, 1.0, m)  # star-shaped, sometimes self-crossing once tilted out of plane
+        yield np.stack([radius * np.cos(t), radius * np.sin(t), rng.normal(0.0, rng.uniform(0.01, 1.0), m)], axis=1)
+
+
+def test_stage_test_equals_projection_and_simplicity_test():
+    # The annealing's stage test against the functions it stands for: the same projection to the
+    # bit and the same answer, for simple and self-crossing projections and clearances near d_MD.
+    from meshlab_holefill.algorithms.brunton2009 import unfolding as unf
+    from meshlab_holefill.geometry.segments import min_segment_distance, nonadjacent_mask
+
+    answers = set()
+    for P in _random_loops(300):
+        Q = unf.project_to_best_plane(P)[0]
+        assert np.array_equal(unf._plane_coordinates(P), Q)
+        h = float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean())
+        d_md = min_segment_distance(Q)
+        for eps in (1e-5 * h, d_md * (1 - 1e-12), d_md, 1.5 * d_md):
+            expected = unf.linear_motion_is_simple(Q, eps, 4.0 * h) if eps < 4.0 * h else None
+            if expected is None:
+                continue
+            assert unf._projection_is_simple(P, nonadjacent_mask(len(P)), eps, 4.0 * h) == expected
+            answers.add(expected)
+    assert answers == {True, False}
+
+
+def test_keeps_clearance_fails_on_nan():
+    from meshlab_holefill.algorithms.brunton2009._anneal_kernels import keeps_clearance
+    from meshlab_holefill.geometry.segments import nonadjacent_mask
+
+    Q = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [np.nan, 1.0]])
+    assert not keeps_clearance(Q, np.roll(Q, -1, axis=0), nonadjacent_mask(4), 4.0, 1e-5)
+
+
+def test_area_rows_are_the_rows_touching_a_free_vertex():
+    # E_AREA's anchor rows, found from U's structure: the fixed vertices whose umbrella has a
+    # non-zero weight on a free vertex (the column slice's absolute row sums), free rows first.
+    for ctx, patch in _filled_patches():
+        if len(patch.vertices) == 0:
+            continue
+        star, X, free, _ = _joint_system_inputs(ctx, patch.faces, patch.vertices)
+        k, n_ctx = ctx.size, len(ctx.vertices)
+        joint = np.concatenate([ctx.faces, np.where(patch.faces < k, patch.faces, patch.faces - k + n_ctx)])
+        is_free = np.zeros(len(X), bool)
+        is_free[free] = True
+        W = emb.umbrella_operator(joint, len(X))
+        touching = np.asarray(abs(W[:, free]).sum(axis=1)).ravel() > 0
+        rows = np.concatenate([free, np.flatnonzero(touching & ~is_free)])
+        R = emb.energy_rows(joint, len(X), is_free, order=1, anchors=True)
+        expected = W[rows].tocsr()
+        assert R.shape == expected.shape and np.array_equal(R.toarray(), expected.toarray())
+        assert len(rows) > len(free)  # the loop's rows are there

@@ -1,0 +1,52 @@
+"""Xu et al. 2013, Sec. 3.4: which folds of a Poisson solution discard it, and which the relaxation undoes."""
+import numpy as np
+
+from meshlab_holefill.algorithms.xu2013 import lssvm_poisson as xu
+from meshlab_holefill.algorithms.xu2013.poisson_patch import solve_folds
+from meshlab_holefill.core import examples, hole_context
+from meshlab_holefill.geometry.flips import folds
+
+
+def test_a_fold_between_triangles_of_fixed_vertices_is_not_the_solve_s():
+    # Two triangles on the edge (0, 1), vertex 3 on the same side as vertex 2: the second lies
+    # turned back over the first (their normals nearly opposite).
+    X = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, 0.9, 0.05]], float)
+    F = np.array([[0, 1, 2], [1, 0, 3]])
+    assert folds(X, F)
+    assert not solve_folds(X, F, np.ones(4, bool))  # nothing the solve moves
+    assert solve_folds(X, F, np.array([True, True, True, False]))  # vertex 3 is the solve's
+
+
+def test_a_degenerate_triangle_of_fixed_vertices_is_not_the_solve_s():
+    X = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 1, 0]], float)  # 0, 1, 2 collinear
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    assert folds(X, F)
+    assert not solve_folds(X, F, np.array([True, True, True, False]))
+    assert solve_folds(X, F, np.array([True, False, True, False]))
+
+
+def bowl_patch():
+    V, F, loop = examples.bowl_with_hole()
+    ctx = hole_context(V, F, loop, rings=xu.RINGS)
+    patch = xu.fill(ctx)
+    X = np.concatenate([ctx.points, patch.vertices])
+    return ctx, X, patch.faces
+
+
+def test_a_vertex_pressed_over_the_border_is_spread_again_by_the_relaxation():
+    ctx, X, F = bowl_patch()
+    k = ctx.size
+    fixed = np.arange(len(X)) < k
+    assert not solve_folds(X, F, fixed)
+    # Press the free vertex next to loop vertex 0 across the loop, as a solve does at a spike of the border.
+    near = [v for v in np.unique(F[np.any(F == 0, axis=1)]) if v >= k]
+    v = near[0]
+    Y = X.copy()
+    Y[v] = X[0] + 0.45 * (X[0] - X[v])  # just beyond the loop vertex, outside the hole
+    assert solve_folds(Y, F, fixed)
+    Z, G = xu.unfold(Y, F, fixed, relax_ctx=ctx)
+    assert Z is not None and not solve_folds(Z, G, fixed)
+    assert np.array_equal(Z[:k], X[:k])  # the boundary stays
+    assert np.linalg.norm(Z[v] - X[v]) < np.linalg.norm(Y[v] - X[v])  # back towards its place
+    # Without the relaxation (relax off) the fold discards the solve.
+    assert xu.unfold(Y, F, fixed)[0] is None
