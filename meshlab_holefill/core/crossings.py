@@ -9,8 +9,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..geometry.intersections import faces_intersecting, intersecting_pairs
+from ..geometry.intersections import intersecting_pairs
 from .holes import nonmanifold_edges
+from .sets import setdiff_ints, unique_ints
 
 __all__ = ["clashing_patches", "crossing_patches", "face_boxes_near", "load_face_boxes_kernel", "patch_box",
            "patch_intersections", "withdraw"]
@@ -120,10 +121,10 @@ def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, l
     lo, hi = patch_points.min(axis=0), patch_points.max(axis=0)
     pad = 1e-9 * float(np.linalg.norm(hi - lo))
     near = near_all[np.all(face_hi >= lo - pad, axis=1) & np.all(face_lo <= hi + pad, axis=1)]
-    used = np.unique(mesh_F[near].ravel()) if len(near) else np.zeros(0, np.int64)
+    used = unique_ints(mesh_F[near]) if len(near) else np.zeros(0, np.int64)
     # Local vertex array: loop vertices keep their loop-local numbers so shared vertices
     # between patch and mesh faces are recognised as shared.
-    others = np.setdiff1d(used, loop)
+    others = setdiff_ints(used, loop)
     k, p = len(loop), len(patch_points) - len(loop)
     X = np.concatenate([patch_points, mesh_V[others]])
     ids = np.concatenate([loop, others])
@@ -134,8 +135,9 @@ def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, l
     q = len(patch_faces)
     # weld=False: the patch is joined to the mesh by index; a vertex of another part at the same
     # place is a contact (MeshLab's per-face test reports it), not a shared vertex.
-    hits = faces_intersecting(X, allF, np.arange(q), np.arange(len(allF)), weld=False)
-    return hits
+    pairs = intersecting_pairs(X, allF, np.arange(q), np.arange(len(allF)), weld=False)
+    # faces_intersecting's answer: a pair of two patch faces is listed once, the smaller first.
+    return unique_ints(np.concatenate([pairs[:, 0], pairs[pairs[:, 1] < q, 1]]))
 
 
 def patch_box(points):

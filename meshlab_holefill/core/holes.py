@@ -17,6 +17,7 @@ from numba import njit
 
 from ..errors import MeshTopologyError
 from ..geometry.quality import cross_rows, vertex_normals
+from .sets import isin_ints, unique_ints
 
 
 @njit(cache=True)
@@ -457,7 +458,7 @@ def incident_faces(incidence, vertices):
     counts = incidence.indptr[vertices + 1] - starts
     first = np.cumsum(counts) - counts  # where each row begins among the gathered entries
     positions = np.repeat(starts - first, counts) + np.arange(int(counts.sum()))
-    return np.unique(incidence.indices[positions])
+    return unique_ints(incidence.indices[positions])
 
 
 def hole_context(V, F, loop, incidence=None, rings=3, index=0):
@@ -481,7 +482,6 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
         incidence = vertex_face_incidence(F, len(V))
     loop_v = np.asarray(loop.vertices, np.int64)
     k = len(loop_v)
-    visited = {int(v) for v in loop_v}
     depth_parts = [np.zeros(k, np.int64)]
     vertex_parts = [loop_v]
     frontier = loop_v
@@ -489,15 +489,14 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     for r in range(1, max(rings, 1) + 1):
         fidx = incident_faces(incidence, frontier)
         face_sets.append(fidx)
-        ring_v = np.unique(F[fidx].ravel())
-        new = np.asarray([v for v in ring_v.tolist() if v not in visited], np.int64)
-        visited.update(new.tolist())
+        ring_v = unique_ints(F[fidx])
+        new = ring_v[~isin_ints(ring_v, np.concatenate(vertex_parts))].astype(np.int64)
         vertex_parts.append(new)
         depth_parts.append(np.full(len(new), r, np.int64))
         frontier = new
         if len(frontier) == 0:
             break
-    local_faces_g = np.unique(np.concatenate(face_sets))
+    local_faces_g = unique_ints(np.concatenate(face_sets))
     global_index = np.concatenate(vertex_parts)
     depth = np.concatenate(depth_parts)
     sorter = np.argsort(global_index)
@@ -508,9 +507,9 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     border_faces = border_pos.astype(np.int64)
 
     # Edge scale of loop vertices and forbidden chords, from the edges of local faces.
-    E = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    E = np.sort(E, axis=1)
-    keys = np.unique(E[:, 0] * len(verts) + E[:, 1])  # the rows' lexicographic order, without unique(axis=0)
+    a, b = faces.T.ravel(), faces[:, [1, 2, 0]].T.ravel()  # edge (F[f, c], F[f, c + 1]), corner by corner
+    # The edges' (smaller, larger) pairs as keys, in the rows' lexicographic order, without unique(axis=0).
+    keys = unique_ints(np.minimum(a, b) * len(verts) + np.maximum(a, b))
     E = np.stack([keys // len(verts), keys % len(verts)], axis=1)
     lengths = np.linalg.norm(verts[E[:, 0]] - verts[E[:, 1]], axis=1)
     sums = np.bincount(E.ravel(), weights=np.repeat(lengths, 2), minlength=len(verts))

@@ -24,7 +24,7 @@ from .parallel import FILL_ERRORS, fill_contexts, reason_of
 from .holes import (boundary_loops, edge_summary, hole_context, hole_measures, is_outline, outline_ratio,
                     vertex_face_incidence)
 from .parameters import ParamSpec, Percentage
-from .patch import merge_patches, validate_patch
+from .patch import load_validation_kernel, merge_patches, validate_patch
 
 __all__ = ["COMMON_PARAMS", "FilledMesh", "fill_mesh_holes"]
 
@@ -160,8 +160,10 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     fill_kwargs = {name: params[name] for name in algorithm_params}
     base = (arrays, list(loops), [dict(entry) for entry in report], incidence)
     fills = {}  # hole -> outcome of its fill, reused by a later pass while its surroundings are the same
-    if warm_up is not None and todo:
-        warm_up()
+    if todo:  # kernels the fills use, loaded before any worker forks
+        load_validation_kernel()
+        if warm_up is not None:
+            warm_up()
     while True:
         arrays, V, F, V2, F2, done_loops, patches, refinement, report = _fill_holes(
             base, todo, params, fill, fill_kwargs, rings, prepare, fills, progress)

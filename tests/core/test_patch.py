@@ -80,3 +80,50 @@ def test_merge_keeps_originals_and_maps_loop_indices():
     assert np.array_equal(V2[:10], V) and np.array_equal(F2[:2], F)
     assert F2[2:].tolist() == [[5, 6, 10], [6, 7, 10], [7, 8, 10], [8, 5, 10]]
     assert V2[10].tolist() == [9, 9, 9]
+
+
+def _edge_failure_numpy(Fp, k, n, fe):
+    """The edge checks of validate_patch in numpy (the compiled checks' reference): 0 or the failure code."""
+    directed = np.concatenate([Fp[:, [0, 1]], Fp[:, [1, 2]], Fp[:, [2, 0]]])
+    dkeys = directed[:, 0] * n + directed[:, 1]
+    if len(np.unique(dkeys)) != len(dkeys):
+        return 1
+    open_edges = directed[~np.isin(dkeys, directed[:, 1] * n + directed[:, 0])]
+    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    open_keys = np.sort(open_edges[:, 0] * n + open_edges[:, 1])
+    loop_keys = np.sort(loop_edges[:, 0] * n + loop_edges[:, 1])
+    if len(open_keys) != len(loop_keys) or np.any(open_keys != loop_keys):
+        return 2 if np.isin(loop_edges[:, 1] * n + loop_edges[:, 0], dkeys).any() else 3
+    und = np.sort(directed, axis=1)
+    fe = np.sort(fe, axis=1)
+    if len(fe) and np.isin(fe[:, 0] * n + fe[:, 1], und[:, 0] * n + und[:, 1]).any():
+        return 4
+    return 5 if n > k and len(np.unique(Fp[Fp >= k])) != n - k else 0
+
+
+def test_compiled_edge_checks_answer_as_the_numpy_checks():
+    from meshlab_holefill.core.patch import _edge_failure
+
+    rng = np.random.default_rng(5)
+    k = 8
+    fan = np.array([[i, (i + 1) % k, k] for i in range(k)])  # a valid patch: a fan around vertex k
+    codes = set()
+    for trial in range(300):
+        F = fan.copy()
+        n = k + 1 + int(rng.integers(0, 2))  # sometimes an unused vertex
+        change = trial % 5
+        if change == 1:
+            F[rng.integers(0, len(F))] = F[rng.integers(0, len(F)), ::-1]  # a face turned over
+        elif change == 2:
+            F = F[rng.random(len(F)) < 0.8]  # faces dropped
+        elif change == 3:
+            F = np.concatenate([F, F[rng.integers(0, len(F), 1)]])  # a face twice
+        elif change == 4:
+            F = rng.integers(0, n, (int(rng.integers(1, 12)), 3))  # anything
+        if len(F) == 0:
+            continue
+        fe = rng.integers(0, k, (int(rng.integers(0, 3)), 2))
+        want = _edge_failure_numpy(F, k, n, fe)
+        assert _edge_failure(np.ascontiguousarray(F, np.int64), k, n, np.ascontiguousarray(fe, np.int64)) == want
+        codes.add(want)
+    assert codes == {0, 1, 2, 3, 4, 5}

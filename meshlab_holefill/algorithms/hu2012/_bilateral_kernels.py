@@ -1,9 +1,12 @@
-"""Compiled guard of the bilateral filter (numba): :func:`.bilateral_filter._refuse_slivers_numpy`.
+"""Compiled steps of the bilateral filter (numba): the guard :func:`.bilateral_filter._refuse_slivers_numpy`
+and the ring iteration of :func:`.bilateral_filter.bilateral_filter` around its exponential.
 
 The same IEEE operations in the same order as the numpy code (face qualities as
-:func:`geometry.quality.triangle_quality`, cross products as ``cross_rows``, the flip test's dot in
-numpy's einsum order), so the same vertices are put back and the result is the same bits.
-tests/algorithms/hu2012/test_bilateral_filter.py checks it against the numpy code.
+:func:`geometry.quality.triangle_quality`, cross products as ``cross_rows``, dots in numpy's
+einsum order, sums in bincount's order), so the same vertices are moved and put back and the
+result is the same bits. The exponential of the weights stays numpy's (its SIMD routine may
+differ from libm's in the last bit). tests/algorithms/hu2012/test_bilateral_filter.py checks
+the kernels against the numpy code.
 """
 from __future__ import annotations
 
@@ -11,9 +14,9 @@ import numpy as np
 from numba import njit
 
 from ...geometry._quality_kernels import face_cross, face_quality
-from ...geometry._tri_kernels import _dot
+from ...geometry._tri_kernels import _dot, _norm
 
-__all__ = ["refuse_slivers"]  # undo_moves is a helper of the compiled guards, compiled into them
+__all__ = ["refuse_slivers", "ring_log_weights", "ring_step"]  # undo_moves, vertex_normals_kernel: helpers compiled into them
 
 
 @njit(cache=True)
@@ -58,3 +61,86 @@ def refuse_slivers(V_old, V_new, F, moved, min_quality):
             break
         undo_moves(V, V_old, moved, back)
     return V
+
+
+@njit(cache=True)
+def vertex_normals_kernel(V, F, n):
+    """:func:`geometry.quality.vertex_normals` bit for bit: face cross products summed at the
+    corners in corner_sums' order (corner 0 of every face, then 1, then 2), unit length."""
+    N = np.zeros((n, 3))
+    m = F.shape[0]
+    C = np.empty((m, 3))
+    for f in range(m):
+        C[f, 0], C[f, 1], C[f, 2] = face_cross(V, F, f)
+    for c in range(3):
+        for f in range(m):
+            v = F[f, c]
+            N[v, 0] += C[f, 0]
+            N[v, 1] += C[f, 1]
+            N[v, 2] += C[f, 2]
+    for v in range(n):
+        length = _norm((N[v, 0], N[v, 1], N[v, 2]))
+        if length > 0:
+            N[v, 0] /= length
+            N[v, 1] /= length
+            N[v, 2] /= length
+    return N
+
+
+@njit(cache=True)
+def ring_log_weights(V, F, rows, cols, sc, ss):
+    """One ring iteration of :func:`.bilateral_filter.bilateral_filter` up to its exponential.
+
+    Returns the vertex normals N, the heights h of the pairs (rows[p], cols[p]) and their
+    log-weights shifted by their row's largest (the numpy code's operations in its order; rows
+    sorted; sc, ss per vertex), so that ``np.exp`` of the last gives the filter's weights.
+    """
+    n = V.shape[0]
+    N = vertex_normals_kernel(V, F, n)
+    s = rows.shape[0]
+    h = np.empty(s)
+    z = np.empty(s)
+    for p in range(s):
+        r, q = rows[p], cols[p]
+        d = (V[r, 0] - V[q, 0], V[r, 1] - V[q, 1], V[r, 2] - V[q, 2])
+        t2 = _dot(d, d)
+        h[p] = _dot((N[r, 0], N[r, 1], N[r, 2]), d)
+        c, g = sc[r], ss[r]
+        z[p] = -t2 / (2 * (c * c)) - (h[p] * h[p]) / (2 * (g * g))
+    start = 0
+    while start < s:  # per row: subtract its largest log-weight (np.maximum: NaN wins)
+        stop = start + 1
+        top = z[start]
+        while stop < s and rows[stop] == rows[start]:
+            v = z[stop]
+            if top == top and (v > top or v != v):
+                top = v
+            stop += 1
+        for p in range(start, stop):
+            z[p] = z[p] - top
+        start = stop
+    return N, h, z
+
+
+@njit(cache=True)
+def ring_step(V, N, rows, w, h, movable):
+    """The move of one ring iteration: v <- v - n sum(w h) / sum(w) (bincount's order of sums).
+
+    Returns the moved vertices and which of them moved (movable, with weights, a nonzero shift).
+    """
+    n = V.shape[0]
+    num = np.zeros(n)
+    den = np.zeros(n)
+    for p in range(rows.shape[0]):
+        num[rows[p]] += w[p] * h[p]
+        den[rows[p]] += w[p]
+    V_new = V.copy()
+    moved = np.zeros(n, np.bool_)
+    for v in range(n):
+        if movable[v] and den[v] > 0:
+            d = num[v] / den[v]
+            V_new[v, 0] = V[v, 0] - N[v, 0] * d
+            V_new[v, 1] = V[v, 1] - N[v, 1] * d
+            V_new[v, 2] = V[v, 2] - N[v, 2] * d
+            moved[v] = d != 0
+    return V_new, moved

@@ -1,4 +1,4 @@
-"""Compiled hole-sector test (numba): :meth:`.hole_guards.LoopSectors.contains` row by row.
+"""Compiled hole-sector tests (numba): :meth:`.hole_guards.LoopSectors.contains` row by row, and both ends of swaps.
 
 The angle of each direction about the vertex normal is computed with the numpy code's
 operations in its order (row dots in numpy's einsum order, the same floor modulo), except that
@@ -17,7 +17,8 @@ from numba import njit
 
 from ...geometry._tri_kernels import _dot
 
-__all__ = ["sector_contains", "ANGLE_MARGIN"]
+# The filter runs swaps_in_sectors (its warm-up loads it); sector_contains serves LoopSectors.contains.
+__all__ = ["swaps_in_sectors", "ANGLE_MARGIN"]
 
 ANGLE_MARGIN = 1e-12
 
@@ -37,3 +38,33 @@ def sector_contains(points, u, w, limit, index, targets, margin):
             return inside, False
         inside[r] = phi > margin and phi < upper
     return inside, True
+
+
+@njit(cache=True)
+def swaps_in_sectors(points, u, w, limit, V, B, margin):
+    """(ok, sure): :func:`sector_contains` for both ends of each swap's new edge (B[r, 1], B[r, 2]).
+
+    A new edge (c, d) is allowed when, at each end on the loop (index below ``len(points)``),
+    it starts into that vertex's hole sector; ``sure=False`` as soon as one angle is too close
+    to a bound to decide here, or an index is out of range.
+    """
+    k = points.shape[0]
+    s = B.shape[0]
+    ok = np.ones(s, np.bool_)
+    two_pi = 2 * np.pi
+    for r in range(s):
+        for end in range(2):
+            i = B[r, 1 + end]
+            j = B[r, 2 - end]
+            if i < 0 or j < 0 or i >= V.shape[0] or j >= V.shape[0]:
+                return ok, False
+            if i >= k:
+                continue
+            d = (V[j, 0] - points[i, 0], V[j, 1] - points[i, 1], V[j, 2] - points[i, 2])
+            phi = math.atan2(_dot(d, (w[i, 0], w[i, 1], w[i, 2])), _dot(d, (u[i, 0], u[i, 1], u[i, 2]))) % two_pi
+            upper = limit[i] - margin
+            if not (abs(phi - margin) > ANGLE_MARGIN and abs(phi - upper) > ANGLE_MARGIN):  # NaN too
+                return ok, False
+            if not (phi > margin and phi < upper):
+                ok[r] = False
+    return ok, True

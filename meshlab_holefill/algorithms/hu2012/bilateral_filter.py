@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.sets import unique_ints
 from ...geometry.quality import cross_rows, triangle_quality, vertex_normals
-from ._bilateral_kernels import refuse_slivers
+from ._bilateral_kernels import refuse_slivers, ring_log_weights, ring_step
 
 __all__ = ["bilateral_filter"]
 
@@ -34,7 +35,7 @@ def _ring_pairs(F, n):
     F = np.asarray(F, np.int64)
     i = np.concatenate([F[:, 0], F[:, 1], F[:, 2], F[:, 1], F[:, 2], F[:, 0]])
     j = np.concatenate([F[:, 1], F[:, 2], F[:, 0], F[:, 0], F[:, 1], F[:, 2]])
-    keys = np.unique(i * n + j)
+    keys = unique_ints(i * n + j)
     return keys // n, keys % n
 
 
@@ -83,8 +84,15 @@ def _refuse_slivers_numpy(V_old, V_new, F, moved, min_quality):
     return V
 
 
+def _valid_faces(F, n):
+    """Whether the compiled ring iteration may index V (n rows) by F."""
+    F = np.asarray(F)
+    return F.ndim == 2 and F.shape[1] == 3 and np.issubdtype(F.dtype, np.integer) and (
+        len(F) == 0 or (F.min() >= 0 and F.max() < n))
+
+
 def bilateral_filter(V, F, movable, sigma_c, sigma_s, iterations=3, *, neighbourhood="ring", fixed_points=None,
-                     radius=2.0, min_quality=None):
+                     radius=2.0, min_quality=None, compiled=True):
     """Move vertices along their normals by the bilateral filter (Hu et al. Sec. III.D, Eq. 3-4).
 
     For a vertex v with unit normal n (area-weighted) and neighbours q_i:
@@ -115,6 +123,9 @@ def bilateral_filter(V, F, movable, sigma_c, sigma_s, iterations=3, *, neighbour
         Guard: after each iteration, moves that would leave a face with quality 2r/R below
         min(min_quality, its quality before the iteration), or flip it, are undone. None
         (default) moves every vertex.
+    compiled : bool
+        With the "ring" neighbourhood, run each iteration's normals, weights and moves compiled
+        (:mod:`._bilateral_kernels`, the same bits); False runs numpy only.
 
     Returns
     -------
@@ -122,35 +133,52 @@ def bilateral_filter(V, F, movable, sigma_c, sigma_s, iterations=3, *, neighbour
     """
     V = np.array(V, np.float64)
     n = len(V)
-    movable = np.asarray(movable, bool)
-    sc_all = np.broadcast_to(np.asarray(sigma_c, np.float64), (n,))
-    ss_all = np.broadcast_to(np.asarray(sigma_s, np.float64), (n,))
+    movable = np.ascontiguousarray(movable, bool)
+    sc_all = np.ascontiguousarray(np.broadcast_to(np.asarray(sigma_c, np.float64), (n,)))
+    ss_all = np.ascontiguousarray(np.broadcast_to(np.asarray(sigma_s, np.float64), (n,)))
+    rows = cols = None
     if neighbourhood == "ring":
         rows, cols = _ring_pairs(F, n)
         keep = movable[rows]
         rows, cols = rows[keep], cols[keep]
     elif neighbourhood != "radius":
         raise ValueError(f"unknown neighbourhood {neighbourhood!r}")
+    compiled = compiled and neighbourhood == "ring" and _valid_faces(F, n)
+    F = np.ascontiguousarray(F, np.int64) if compiled else np.asarray(F)
     for _ in range(iterations):
-        N = vertex_normals(V, F, n)
-        if neighbourhood == "radius":
-            rows, cols, X = _radius_pairs(V, movable, radius * sc_all, fixed_points)
+        if compiled:
+            N, h, z = ring_log_weights(V, F, rows, cols, sc_all, ss_all)
+            V_new, moved = ring_step(V, N, rows, np.exp(z), h, movable)
         else:
-            X = V
-        sc, ss = sc_all[rows], ss_all[rows]
-        D = V[rows] - X[cols]
-        t2 = np.einsum("ij,ij->i", D, D)
-        h = np.einsum("ij,ij->i", N[rows], D)
-        # Work with log-weights so that a narrow closeness kernel does not underflow to 0/0.
-        logw = -t2 / (2 * sc ** 2) - h ** 2 / (2 * ss ** 2)
-        shift = _row_maxima(rows, logw, n)
-        w = np.exp(logw - shift[rows])
-        num = np.bincount(rows, weights=w * h, minlength=n)
-        den = np.bincount(rows, weights=w, minlength=n)
-        d = np.zeros(n)
-        ok = movable & (den > 0)
-        d[ok] = num[ok] / den[ok]
-        V_new = V.copy()
-        V_new[ok] -= N[ok] * d[ok, None]
-        V = V_new if min_quality is None else _refuse_slivers(V, V_new, np.asarray(F), ok & (d != 0), min_quality)
+            if neighbourhood == "radius":
+                rows, cols, X = _radius_pairs(V, movable, radius * sc_all, fixed_points)
+            else:
+                X = V
+            V_new, moved = _numpy_iteration(V, X, F, rows, cols, sc_all, ss_all, movable)
+        V = V_new if min_quality is None else _refuse_slivers(V, V_new, F, moved, min_quality)
     return V
+
+
+def _numpy_iteration(V, X, F, rows, cols, sc_all, ss_all, movable):
+    """One iteration of :func:`bilateral_filter` in numpy: (moved vertices, which moved).
+
+    Pairs (rows[p], cols[p]) join a vertex of V to its neighbour in X (V, or V then fixed points).
+    """
+    n = len(V)
+    N = vertex_normals(V, F, n)
+    sc, ss = sc_all[rows], ss_all[rows]
+    D = V[rows] - X[cols]
+    t2 = np.einsum("ij,ij->i", D, D)
+    h = np.einsum("ij,ij->i", N[rows], D)
+    # Work with log-weights so that a narrow closeness kernel does not underflow to 0/0.
+    logw = -t2 / (2 * sc ** 2) - h ** 2 / (2 * ss ** 2)
+    shift = _row_maxima(rows, logw, n)
+    w = np.exp(logw - shift[rows])
+    num = np.bincount(rows, weights=w * h, minlength=n)
+    den = np.bincount(rows, weights=w, minlength=n)
+    d = np.zeros(n)
+    ok = movable & (den > 0)
+    d[ok] = num[ok] / den[ok]
+    V_new = V.copy()
+    V_new[ok] -= N[ok] * d[ok, None]
+    return V_new, ok & (d != 0)

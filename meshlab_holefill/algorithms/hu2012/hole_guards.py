@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...geometry.intersections import faces_intersecting, intersecting_pairs
-from ._sector_kernels import sector_contains
+from ...core.sets import unique_ints
+from ...geometry.intersections import intersecting_pairs
+from ...geometry.quality import cross_rows
+from ._sector_kernels import sector_contains, swaps_in_sectors
 
 __all__ = ["sector_angle", "inside_hole_sector", "LoopSectors", "patch_crossings", "patch_guard", "swaps_crossing"]
 
@@ -73,7 +75,7 @@ class LoopSectors:
         u = np.roll(P, -1, axis=0) - P
         u -= np.einsum("ij,ij->i", u, N)[:, None] * N
         u /= np.maximum(np.linalg.norm(u, axis=1), 1e-300)[:, None]
-        self.points, self.u, self.w = np.ascontiguousarray(P), u, np.ascontiguousarray(np.cross(N, u))
+        self.points, self.u, self.w = np.ascontiguousarray(P), u, cross_rows(N, u)  # np.cross's bits
         self.limit = self._angle(np.arange(len(P)), np.roll(P, 1, axis=0))
 
     def _angle(self, i, targets):
@@ -96,6 +98,29 @@ class LoopSectors:
             if sure:
                 return inside
         return self.contains_numpy(i, targets, margin)
+
+    def swaps_allowed(self, V, B):
+        """(s,) bool: does the new edge (B[r, 1], B[r, 2]) of each swap start into the hole at its loop ends?
+
+        Both ends in one compiled pass (:func:`._sector_kernels.swaps_in_sectors`); when an
+        angle there is too close to a bound, :meth:`contains_numpy` end by end, so the answer
+        is always the numpy code's.
+        """
+        B = np.asarray(B)
+        V = np.asarray(V)
+        if B.dtype == np.int64 and B.ndim == 2 and B.shape[1] == 3 and V.dtype == np.float64 and V.ndim == 2 \
+                and V.shape[1] == 3:
+            ok, sure = swaps_in_sectors(self.points, self.u, self.w, self.limit, np.ascontiguousarray(V),
+                                        np.ascontiguousarray(B), 1e-9)
+            if sure:
+                return ok
+        k = len(self.points)
+        c, d = B[:, 1], B[:, 2]
+        ok = np.ones(len(B), bool)
+        for end, other in ((c, d), (d, c)):
+            on_loop = end < k
+            ok[on_loop] &= self.contains_numpy(end[on_loop], V[other[on_loop]])
+        return ok
 
     def contains_numpy(self, i, targets, margin=1e-9):
         """:meth:`contains` in numpy (the reference of the compiled test)."""
@@ -125,7 +150,10 @@ def patch_crossings(ctx, patch_points, patch_faces, faces=None):
     X = np.concatenate([ctx.vertices, np.asarray(patch_points)[k:]])
     local = np.where(test >= k, test - k + n_local, test)
     allF = np.concatenate([local, ctx.faces])
-    return faces_intersecting(X, allF, np.arange(len(local)), np.arange(len(local), len(allF)))
+    # The two face sets are disjoint, so every pair has its tested face first: faces_intersecting's
+    # answer, without its membership tests for pairs listed the other way round.
+    pairs = intersecting_pairs(X, allF, np.arange(len(local)), np.arange(len(local), len(allF)))
+    return unique_ints(pairs[:, 0])
 
 
 def patch_guard(ctx, check_intersections=False):
@@ -139,15 +167,10 @@ def patch_guard(ctx, check_intersections=False):
     triangle intersects the surrounding faces or the rest of the patch (slower: one
     intersection query per round of swaps).
     """
-    k = ctx.size
     sectors = LoopSectors(ctx.points, ctx.loop_normals)
 
     def allowed(V, F, A, B, replaced):
-        c, d = B[:, 1], B[:, 2]
-        ok = np.ones(len(A), bool)
-        for end, other in ((c, d), (d, c)):
-            on_loop = end < k
-            ok[on_loop] &= sectors.contains(end[on_loop], V[other[on_loop]])
+        ok = sectors.swaps_allowed(V, B)
         if not check_intersections or not ok.any():
             return ok
         idx = np.flatnonzero(ok)

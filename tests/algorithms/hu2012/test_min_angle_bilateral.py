@@ -229,6 +229,23 @@ def test_embeds_in_projection_rejects_a_doubly_wound_fan():
     assert not embeds_in_projection(V, F, m)
 
 
+
+def test_compiled_turn_test_answers_as_the_numpy_code():
+    from meshlab_holefill.algorithms.hu2012._projection_kernels import projected_turns
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import _turns_numpy
+
+    rng = np.random.default_rng(12)
+    V, F, k = _disk_patch()
+    answers = set()
+    for trial in range(60):
+        Q = V[:, :2] + rng.normal(scale=10.0 ** rng.uniform(-4, -0.5), size=(len(V), 2))  # folds at large moves
+        G = F if trial % 5 else F[1:]  # a face less: a vertex may lose its full turn or every face
+        ok, sure = projected_turns(Q, np.ascontiguousarray(G, np.int64), k, 1e-6)
+        assert sure and ok == _turns_numpy(Q, G, k)
+        answers.add(bool(ok))
+    assert answers == {True, False}
+
+
 # ----------------------------------------------------------------------------- quality and the filter's neighbourhood
 
 def _noisy_grid(noise, seed=1):
@@ -593,6 +610,27 @@ def test_compiled_sector_test_answers_as_the_numpy_code():
         np.testing.assert_array_equal(sectors.contains(i, targets), sectors.contains_numpy(i, targets))
 
 
+
+def test_compiled_swap_sector_test_answers_as_the_numpy_code_at_both_ends():
+    from meshlab_holefill.algorithms.hu2012.hole_guards import LoopSectors
+
+    rng = np.random.default_rng(9)
+    for _ in range(30):
+        k = int(rng.integers(3, 30))
+        t = np.sort(rng.uniform(0, 2 * np.pi, k))
+        P = np.stack([np.cos(t), np.sin(t), 0.2 * rng.normal(size=k)], axis=1)
+        N = np.array([0.0, 0.0, 1.0]) + 0.3 * rng.normal(size=(k, 3))
+        sectors = LoopSectors(P, N)
+        V = np.concatenate([P, 0.5 * rng.normal(size=(20, 3))])  # loop first, then interior points
+        B = np.stack([rng.integers(0, len(V), 200), rng.integers(0, len(V), 200), rng.integers(0, len(V), 200)], 1)
+        oracle = np.ones(len(B), bool)
+        for end, other in ((B[:, 1], B[:, 2]), (B[:, 2], B[:, 1])):
+            on_loop = end < k
+            oracle[on_loop] &= sectors.contains_numpy(end[on_loop], V[other[on_loop]])
+        assert (~oracle).any() and oracle.any()
+        np.testing.assert_array_equal(sectors.swaps_allowed(V, B), oracle)
+
+
 def test_a_direction_on_the_sector_bound_is_left_to_numpy():
     from meshlab_holefill.algorithms.hu2012._sector_kernels import sector_contains
     from meshlab_holefill.algorithms.hu2012.hole_guards import LoopSectors
@@ -610,13 +648,13 @@ def test_warm_up_loads_every_kernel_of_the_filter():
     from numba.core.registry import CPUDispatcher
 
     from meshlab_holefill.algorithms.hu2012 import _bilateral_kernels, _min_angle_kernels, _sector_kernels
-    from meshlab_holefill.algorithms.hu2012 import _smoothing_kernels, min_angle_bilateral
+    from meshlab_holefill.algorithms.hu2012 import _projection_kernels, _smoothing_kernels, min_angle_bilateral
     from meshlab_holefill.geometry import _flip_kernels, _quality_kernels, _refine_kernels
 
     min_angle_bilateral.warm_up()
     assert min_angle_bilateral.WARM_UP is min_angle_bilateral.warm_up
-    for module in (_bilateral_kernels, _min_angle_kernels, _sector_kernels, _smoothing_kernels, _flip_kernels,
-                   _refine_kernels):
+    for module in (_bilateral_kernels, _min_angle_kernels, _sector_kernels, _projection_kernels, _smoothing_kernels,
+                   _flip_kernels, _refine_kernels):
         for name in module.__all__:
             kernel = getattr(module, name)
             if isinstance(kernel, CPUDispatcher):
