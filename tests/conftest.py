@@ -6,6 +6,14 @@ import pymeshlab
 import pytest
 
 import meshlab_holefill  # noqa: F401  (registers the filters)
+from hypothesis import settings
+
+# Property tests draw their examples from a fixed seed, so a run is reproducible (CI runs the
+# suite once on a fresh clone); HYPOTHESIS_PROFILE=explore draws new ones, and a failure found
+# that way becomes an explicit @example of its test.
+settings.register_profile("reproducible", derandomize=True)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "reproducible"))
 
 SAMPLES = os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes")
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pymeshlab
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import meshlab_holefill
@@ -231,9 +231,16 @@ def test_every_fill_keyword_is_a_filter_parameter_with_the_same_default(module):
     assert {p.name: p.default for p in mod.PARAMS} == pytest.approx(keywords)
 
 
+# Hu et al.'s procedure (its defaults) keeps the ear-cut triangles of a small hole where its
+# refinement adds no vertex: a 21-edge hole gives mean 2r/R 0.78 (minimum 0.53; the paper's
+# Table 1 minima are 0.48-0.57). The other filters stay above 0.9 there.
+MEAN_QUALITY = {"meshing_close_holes_min_angle_bilateral": 0.75}
+
+
 @pytest.mark.parametrize("name", filter_list())
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(theta=st.floats(0.3, 2.8), phi=st.floats(0.0, 2 * np.pi), radius=st.floats(0.18, 0.45))
+@example(theta=1.421875, phi=0.0, radius=0.1875)
 def test_random_sphere_holes_close_cleanly_near_the_sphere(name, theta, phi, radius):
     """Any round hole cut into a sphere: closed, manifold, oriented, no crossing, good triangles, on the sphere."""
     centre = [np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)]
@@ -245,7 +252,7 @@ def test_random_sphere_holes_close_cleanly_near_the_sphere(name, theta, phi, rad
     assert_filled_cleanly(V, F, V1, F1, faces_kept=name != "meshing_close_holes_lssvm_poisson")
     new = F1[len(F):]
     q = triangle_quality(V1, new)
-    assert q.mean() >= 0.8 and q.min() >= 0.25
+    assert q.mean() >= MEAN_QUALITY.get(name, 0.8) and q.min() >= 0.25
     # No new vertex is farther from the sphere than the centre of a flat cap over the cut
     # (its sagitta, about radius^2 / 2; the loop reaches a little beyond the cut radius).
     r = np.linalg.norm(V1[len(V):], axis=1)
