@@ -275,6 +275,7 @@ def _min_angle_scores_numpy(V, old1, old2, new1, new2):
     return old, new
 
 
+@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")  # inf - inf in the poisoned rows
 @pytest.mark.parametrize("poison", [None, np.nan, np.inf])
 def test_compiled_min_angle_scores_equal_the_corner_angles_bit_for_bit(poison):
     # Random bumpy patches (with degenerate and repeated-vertex faces mixed in): the scores of
