@@ -155,3 +155,19 @@ def test_ball_hole_and_case_errors():
         remeshed(V, F, 0.0)
     with pytest.raises(ValueError, match="operation must be union"):
         boolean_mesh("xor", (V, F), (V, F))
+
+
+def test_a_boolean_comes_out_the_same_in_every_run():
+    from meshlab_holefill.evaluation.creased import _box, _moved
+    from meshlab_holefill.meshlab.mesh_files import canonical_face_order
+
+    cutter = _moved(_box(1.2), rotation("z", 45.0))
+    runs = [boolean_mesh("intersection", _box(), cutter) for _ in range(3)]
+    for V, F in runs[1:]:
+        assert np.array_equal(V, runs[0][0]) and np.array_equal(F, runs[0][1])
+    V, F = runs[0]
+    assert np.array_equal(canonical_face_order(F[::-1]), F)  # the order depends on the faces only
+    assert np.all(F[:, 0] == F.min(axis=1))
+    # Rotating a face keeps its orientation: the same directed edges.
+    shuffled = np.roll(F[np.random.default_rng(0).permutation(len(F))], 1, axis=1)
+    assert np.array_equal(canonical_face_order(shuffled), F)
