@@ -595,32 +595,30 @@ def test_refuse_worse_undoes_exactly_the_moves_a_full_recompute_undoes():
         assert np.all(worst[kept] >= worst_old[kept] - 1e-12)  # no kept move lowers its faces' minimum
 
 
-def test_compiled_sector_test_answers_as_the_numpy_code():
+def random_loop_sectors(rng):
+    """A bumpy loop of 3-29 points around the z axis with noisy normals, and its LoopSectors: (k, P, sectors)."""
     from meshlab_holefill.algorithms.hu2012.hole_guards import LoopSectors
 
+    k = int(rng.integers(3, 30))
+    t = np.sort(rng.uniform(0, 2 * np.pi, k))
+    P = np.stack([np.cos(t), np.sin(t), 0.2 * rng.normal(size=k)], axis=1)
+    N = np.array([0.0, 0.0, 1.0]) + 0.3 * rng.normal(size=(k, 3))
+    return k, P, LoopSectors(P, N)
+
+
+def test_compiled_sector_test_answers_as_the_numpy_code():
     rng = np.random.default_rng(8)
     for _ in range(30):
-        k = int(rng.integers(3, 30))
-        t = np.sort(rng.uniform(0, 2 * np.pi, k))
-        P = np.stack([np.cos(t), np.sin(t), 0.2 * rng.normal(size=k)], axis=1)
-        N = np.array([0.0, 0.0, 1.0]) + 0.3 * rng.normal(size=(k, 3))
-        sectors = LoopSectors(P, N)
+        k, P, sectors = random_loop_sectors(rng)
         i = rng.integers(0, k, 200)
         targets = np.concatenate([rng.normal(size=(190, 3)), P[rng.integers(0, k, 10)]])  # loop points too
         np.testing.assert_array_equal(sectors.contains(i, targets), sectors.contains_numpy(i, targets))
 
 
-
 def test_compiled_swap_sector_test_answers_as_the_numpy_code_at_both_ends():
-    from meshlab_holefill.algorithms.hu2012.hole_guards import LoopSectors
-
     rng = np.random.default_rng(9)
     for _ in range(30):
-        k = int(rng.integers(3, 30))
-        t = np.sort(rng.uniform(0, 2 * np.pi, k))
-        P = np.stack([np.cos(t), np.sin(t), 0.2 * rng.normal(size=k)], axis=1)
-        N = np.array([0.0, 0.0, 1.0]) + 0.3 * rng.normal(size=(k, 3))
-        sectors = LoopSectors(P, N)
+        k, P, sectors = random_loop_sectors(rng)
         V = np.concatenate([P, 0.5 * rng.normal(size=(20, 3))])  # loop first, then interior points
         B = np.stack([rng.integers(0, len(V), 200), rng.integers(0, len(V), 200), rng.integers(0, len(V), 200)], 1)
         oracle = np.ones(len(B), bool)
