@@ -317,13 +317,24 @@ def _independent_swaps(cand, f1, f2, priority, new_key, face_count, scored):
     return chosen[first]
 
 
-def folds(X, F):
-    """Does the patch fold: a degenerate triangle, or two neighbours at a dihedral over 120 degrees?"""
+def folds(X, F, fixed=None):
+    """Does the patch fold: a degenerate triangle, or two neighbours at a dihedral over 120 degrees?
+
+    With ``fixed`` ((n,) bool), triangles whose three vertices are all fixed are not judged,
+    nor pairs of them: only where a step that moves the free vertices can have folded the patch.
+    """
     N = face_normals(X, F, normalize=False)
     area2 = np.linalg.norm(N, axis=1)
     scale = np.ptp(X, axis=0).max() or 1.0
-    if np.any(area2 <= 1e-12 * scale * scale):
+    moved = None if fixed is None else ~np.all(np.asarray(fixed, bool)[F], axis=1)
+    degenerate = area2 <= 1e-12 * scale * scale
+    if np.any(degenerate if moved is None else degenerate & moved):
         return True
     E, f1, _, f2, _ = interior_edges(F, len(X))
-    U = N / area2[:, None]
+    if moved is None:
+        U = N / area2[:, None]
+    else:
+        U = N / np.maximum(area2, 1e-300)[:, None]
+        judged = moved[f1] | moved[f2]
+        f1, f2 = f1[judged], f2[judged]
     return bool(np.any(np.einsum("ij,ij->i", U[f1], U[f2]) < -0.5))

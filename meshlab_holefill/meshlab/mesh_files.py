@@ -12,8 +12,8 @@ import os
 import numpy as np
 import pymeshlab
 
-__all__ = ["boolean_mesh", "canonical_face_order", "generated_mesh", "is_mesh", "load_mesh", "mesh_arrays", "meshset_from_arrays",
-           "point_to_surface_distances", "remeshed"]
+__all__ = ["boolean_mesh", "canonical_face_order", "generated_mesh", "is_mesh", "load_mesh", "mesh_arrays",
+           "meshset_from_arrays", "point_to_surface_distances", "remeshed"]
 
 
 def load_mesh(path):

@@ -18,8 +18,7 @@ from ...geometry.flips import folds, relax_edges
 from ...geometry.intersections import faces_intersecting
 from ...geometry.laplacian import (cotangent_laplacian, tangential_umbrella_smoothing,
                                    vertices_near)
-from ...geometry.quality import face_normals, triangle_quality, vertex_normals
-from ...geometry.topology import interior_edges
+from ...geometry.quality import triangle_quality, vertex_normals
 from ...geometry.segments import polygon_edges_touch
 from ...errors import HoleFillError
 
@@ -212,16 +211,7 @@ def solve_folds(X, F, fixed):
     bool  a triangle with a free vertex is degenerate, or it meets a neighbour at a dihedral
         angle over 120 degrees
     """
-    moved = ~np.all(np.asarray(fixed, bool)[F], axis=1)
-    N = face_normals(X, F, normalize=False)
-    area2 = np.linalg.norm(N, axis=1)
-    scale = np.ptp(X, axis=0).max() or 1.0
-    if np.any(moved & (area2 <= 1e-12 * scale * scale)):
-        return True
-    _, f1, _, f2, _ = interior_edges(F, len(X))
-    judged = moved[f1] | moved[f2]
-    U = N / np.maximum(area2, 1e-300)[:, None]
-    return bool(np.any(np.einsum("ij,ij->i", U[f1[judged]], U[f2[judged]]) < -0.5))
+    return folds(X, F, fixed)
 
 
 def _ear_guard(k):
