@@ -11,7 +11,7 @@ from numba import njit
 
 from ..geometry.intersections import intersecting_pairs
 from .holes import nonmanifold_edges
-from .sets import setdiff_ints, unique_ints
+from .sets import isin_ints, unique_ints
 
 __all__ = ["clashing_patches", "crossing_patches", "face_boxes_near", "load_face_boxes_kernel", "patch_box",
            "patch_intersections", "withdraw"]
@@ -124,7 +124,7 @@ def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, l
     used = unique_ints(mesh_F[near]) if len(near) else np.zeros(0, np.int64)
     # Local vertex array: loop vertices keep their loop-local numbers so shared vertices
     # between patch and mesh faces are recognised as shared.
-    others = setdiff_ints(used, loop)
+    others = used[~isin_ints(used, loop)]  # used is already sorted and distinct
     k, p = len(loop), len(patch_points) - len(loop)
     X = np.concatenate([patch_points, mesh_V[others]])
     ids = np.concatenate([loop, others])

@@ -17,7 +17,7 @@ from numba import njit
 
 from ..errors import MeshTopologyError
 from ..geometry.quality import cross_rows, vertex_normals
-from .sets import isin_ints, unique_ints
+from .sets import setdiff_ints, unique_ints
 
 
 @njit(cache=True)
@@ -489,8 +489,7 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     for r in range(1, max(rings, 1) + 1):
         fidx = incident_faces(incidence, frontier)
         face_sets.append(fidx)
-        ring_v = unique_ints(F[fidx])
-        new = ring_v[~isin_ints(ring_v, np.concatenate(vertex_parts))].astype(np.int64)
+        new = setdiff_ints(F[fidx], np.concatenate(vertex_parts)).astype(np.int64)
         vertex_parts.append(new)
         depth_parts.append(np.full(len(new), r, np.int64))
         frontier = new

@@ -7,6 +7,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import HoleFillError
+from ..geometry._flip_kernels import _contains
 from ..geometry.quality import face_areas
 
 
@@ -110,19 +111,19 @@ def _edge_failure(Fp, k, n, fe):
     open_count = 0
     for e in range(3 * m):
         a, b = keys[e] // n, keys[e] % n
-        if not _holds(ordered, b * n + a):
+        if not _contains(ordered, b * n + a):
             open_count += 1
             if not (a < k and b == (a + 1) % k):
                 open_count = -1
                 break
     if open_count != k:
         for i in range(k):
-            if _holds(ordered, ((i + 1) % k) * n + i):
+            if _contains(ordered, ((i + 1) % k) * n + i):
                 return 2
         return 3
     for r in range(fe.shape[0]):
         a, b = min(fe[r, 0], fe[r, 1]), max(fe[r, 0], fe[r, 1])
-        if _holds(ordered, a * n + b) or _holds(ordered, b * n + a):
+        if _contains(ordered, a * n + b) or _contains(ordered, b * n + a):
             return 4
     used = np.zeros(n, np.bool_)
     for f in range(m):
@@ -132,13 +133,6 @@ def _edge_failure(Fp, k, n, fe):
         if not used[v]:
             return 5
     return 0
-
-
-@njit(cache=True)
-def _holds(ordered, key):
-    """Is ``key`` among the sorted keys?"""
-    at = np.searchsorted(ordered, key)
-    return at < ordered.shape[0] and ordered[at] == key
 
 
 def load_validation_kernel():

@@ -212,6 +212,7 @@ def _npmax(a, b):
 
 @njit(cache=True)
 def _npmin(a, b):
+    """np.minimum: NaN if either is NaN (ties of +-0 may differ in sign only, which no caller sees)."""
     if a != a:
         return a
     if b != b:

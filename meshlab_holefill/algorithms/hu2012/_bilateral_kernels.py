@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from ...geometry._quality_kernels import face_cross, face_quality
-from ...geometry._tri_kernels import _dot, _norm
+from ...geometry._tri_kernels import _dot, _norm, _npmax
 
 __all__ = ["refuse_slivers", "ring_log_weights", "ring_step"]  # undo_moves, vertex_normals_kernel: helpers compiled into them
 
@@ -112,9 +112,7 @@ def ring_log_weights(V, F, rows, cols, sc, ss):
         stop = start + 1
         top = z[start]
         while stop < s and rows[stop] == rows[start]:
-            v = z[stop]
-            if top == top and (v > top or v != v):
-                top = v
+            top = _npmax(top, z[stop])
             stop += 1
         for p in range(start, stop):
             z[p] = z[p] - top

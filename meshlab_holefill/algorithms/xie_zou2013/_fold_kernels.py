@@ -12,19 +12,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...geometry._tri_kernels import _cross, _dot, _norm, _sub
+from ...geometry._tri_kernels import _cross, _dot, _norm, _npmin, _sub
 
 __all__ = ["pair_agreements"]
-
-
-@njit(cache=True)
-def _minimum(a, b):
-    """np.minimum on two floats: NaN if either is NaN, else the smaller (b when they compare equal)."""
-    if a != a:
-        return a
-    if b != b:
-        return b
-    return a if a < b else b
 
 
 @njit(cache=True)
@@ -49,7 +39,7 @@ def _border_agreement(f, n, border_normals):
         u, v = f[c], f[(c + 1) % 3]
         if u < k and v == (u + 1) % k:
             b = (border_normals[u, 0], border_normals[u, 1], border_normals[u, 2])
-            out = _minimum(out, _dot(n, b))
+            out = _npmin(out, _dot(n, b))
     return out
 
 
@@ -75,7 +65,7 @@ def pair_agreements(V, faces, border_normals):
         for i in range(s):
             fa, fb = faces[2 * t, i], faces[2 * t + 1, i]
             na, nb = _unit_normal(V, fa), _unit_normal(V, fb)
-            across = _minimum(_border_agreement(fa, na, border_normals), _border_agreement(fb, nb, border_normals))
-            agreement[t, i] = _minimum(_dot(na, nb), across)
+            across = _npmin(_border_agreement(fa, na, border_normals), _border_agreement(fb, nb, border_normals))
+            agreement[t, i] = _npmin(_dot(na, nb), across)
             proper[t, i] = (na[0] != 0 or na[1] != 0 or na[2] != 0) and (nb[0] != 0 or nb[1] != 0 or nb[2] != 0)
     return agreement, proper

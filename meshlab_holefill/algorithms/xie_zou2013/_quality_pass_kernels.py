@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 
 from ._de_kernels import _pairwise_sum
+from ...geometry._tri_kernels import _npmin
 
 __all__ = ["star_candidate_scores"]
 
@@ -83,8 +84,7 @@ def star_candidate_scores(P, corner, X, ref, nv, floor_min, floor, gain, turn_co
             N[ci, f, 0], N[ci, f, 1], N[ci, f, 2] = n0, n1, n2
             ok = ok and n0 * ref[f, 0] + n1 * ref[f, 1] + n2 * ref[f, 2] > turn_cos
             ok = ok and n0 * nv[0] + n1 * nv[1] + n2 * nv[2] > turn_cos
-            if q < mn or q != q:  # numpy's min: a NaN, once met, is the minimum
-                mn = q if mn == mn else mn
+            mn = _npmin(mn, q)  # numpy's min: a NaN, once met, is the minimum
             inv[f] = 1.0 / max(q, 1e-12)
         qmin[ci] = mn
         ok = ok and mn >= floor_min - gain

@@ -338,7 +338,7 @@ class _Patch:
         return self.V.copy(), self.F.copy(), self.alive.copy(), [set(faces) for faces in self.inc]
 
     def restore(self, state):
-        self.V, self.F, self.alive, self.inc = state[0], state[1], state[2], [set(faces) for faces in state[3]]
+        self.V, self.F, self.alive, self.inc = state  # a snapshot is restored at most once
 
     def compact(self):
         used = np.zeros(len(self.V), bool)

@@ -13,7 +13,7 @@ import triangle
 from scipy.spatial import cKDTree
 
 from ...geometry.pca import fit_plane, plane_frame
-from ...geometry.topology import interior_edges
+from ...geometry.topology import interior_edges, undirected_keys
 from ...geometry.triangulate import polygon_signed_area, triangulate_polygon
 from ...errors import HoleFillError
 from . import folds
@@ -347,9 +347,9 @@ def split_forbidden_edges(V, F, forbidden_edges):
     V = np.array(V, np.float64)
     F = np.array(F, np.int64)
     n = len(V)
-    keys = np.minimum(fb[:, 0], fb[:, 1]) * n + np.maximum(fb[:, 0], fb[:, 1])
+    keys = undirected_keys(fb, n)
     E, f1, c1, f2, c2 = interior_edges(F, n)
-    hit = np.flatnonzero(np.isin(np.minimum(E[:, 0], E[:, 1]) * n + np.maximum(E[:, 0], E[:, 1]), keys)).tolist()
+    hit = np.flatnonzero(np.isin(undirected_keys(E, n), keys)).tolist()
     new_faces = []
     for i in hit:
         a, b = E[i]
