@@ -375,6 +375,7 @@ def require_filter(python_name):
 PRESET_WORKFLOWS = {
     "close_holes_min_angle_bilateral_faired.mlx": ("meshing_close_holes_min_angle_bilateral",
                                                    {"iterations": 0, "fairing": "thinplate", "smoothing": 10}),
+    "close_holes_curve_unfolding_developed.mlx": ("meshing_close_holes_curve_unfolding", {"domain": "development"}),
 }
 
 
