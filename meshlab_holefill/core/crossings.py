@@ -11,7 +11,7 @@ from numba import njit
 
 from ..geometry.intersections import intersecting_pairs
 from .holes import nonmanifold_edges
-from .sets import isin_ints, unique_ints
+from ..geometry.sets import isin_ints, positions_ints, unique_ints
 
 __all__ = ["clashing_patches", "crossing_patches", "face_boxes_near", "load_face_boxes_kernel", "patch_box",
            "patch_intersections", "withdraw"]
@@ -127,9 +127,7 @@ def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, l
     others = used[~isin_ints(used, loop)]  # used is already sorted and distinct
     k, p = len(loop), len(patch_points) - len(loop)
     X = np.concatenate([patch_points, mesh_V[others]])
-    ids = np.concatenate([loop, others])
-    sorter = np.argsort(ids)
-    local_mesh = sorter[np.searchsorted(ids, mesh_F[near], sorter=sorter)].reshape(-1, 3)
+    local_mesh = positions_ints(np.concatenate([loop, others]), mesh_F[near]).reshape(-1, 3)
     local_mesh = np.where(local_mesh >= k, local_mesh + p, local_mesh)
     allF = np.concatenate([patch_faces, local_mesh])
     q = len(patch_faces)
@@ -167,7 +165,7 @@ def crossing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
         return list(range(len(patches)))
     sizes = [len(p.faces) for p in patches]
     start = len(F) + np.concatenate([[0], np.cumsum(sizes)])
-    boxes = np.stack([patch_box(V2[np.unique(F2[start[j]:start[j + 1]])]) for j in range(len(patches))])
+    boxes = np.stack([patch_box(V2[unique_ints(F2[start[j]:start[j + 1]])]) for j in range(len(patches))])
     overlap = np.all((boxes[:, None, 0] <= boxes[None, :, 1]) & (boxes[None, :, 0] <= boxes[:, None, 1]), axis=2)
     np.fill_diagonal(overlap, False)
     near = np.flatnonzero(overlap.any(axis=1))
@@ -201,7 +199,7 @@ def clashing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
     list of int  positions in ``patches`` of the patches kept
     """
     shared = np.concatenate(done_loops) if done_loops else np.zeros(0, np.int64)
-    if len(F2) == len(F) or len(np.unique(shared)) == len(shared):
+    if len(F2) == len(F) or len(unique_ints(shared)) == len(shared):
         return list(range(len(patches)))  # no two patches meet: nothing can clash
     rows = _faces_on_new_edges(len(V2), F, F2, shared)
     sub = np.asarray(F2[rows], np.int64)
@@ -212,7 +210,7 @@ def clashing_patches(V2, F, F2, done_loops, patches, report, closed_ids):
     E = np.sort(np.stack([sub[:, [0, 1]], sub[:, [1, 2]], sub[:, [2, 0]]], axis=1).reshape(-1, 2), axis=1)
     key = E[:, 0] * n + E[:, 1]
     face = np.repeat(rows, 3)
-    on_bad = np.isin(key, bad[:, 0] * n + bad[:, 1])
+    on_bad = isin_ints(key, bad[:, 0] * n + bad[:, 1])
     key, face = key[on_bad], face[on_bad]
     used = {}
     for k in key[face < len(F)].tolist():

@@ -17,7 +17,7 @@ from numba import njit
 
 from ..errors import MeshTopologyError
 from ..geometry.quality import cross_rows, vertex_normals
-from .sets import setdiff_ints, unique_ints
+from ..geometry.sets import positions_ints, setdiff_ints, unique_ints
 
 
 @njit(cache=True)
@@ -498,8 +498,7 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     local_faces_g = unique_ints(np.concatenate(face_sets))
     global_index = np.concatenate(vertex_parts)
     depth = np.concatenate(depth_parts)
-    sorter = np.argsort(global_index)
-    faces = sorter[np.searchsorted(global_index, F[local_faces_g], sorter=sorter)].reshape(-1, 3)
+    faces = positions_ints(global_index, F[local_faces_g]).reshape(-1, 3)
     verts = np.asarray(V[global_index], dtype=np.float64)
     normals = vertex_normals(verts, faces, len(verts))
     border_pos = np.searchsorted(local_faces_g, loop.border_faces)

@@ -12,7 +12,8 @@ Plain numpy arrays in and out; nothing here imports the core, the algorithms or 
 * :mod:`.segments`: exact segment distances, simple-polygon tests.
 * :mod:`.intersections`: topology-aware triangle-triangle intersection queries.
 * :mod:`.development`: a border loop laid out in the plane with its edge lengths and surface angles.
+* :mod:`.sets`: np.unique, np.isin and np.setdiff1d of integer arrays, by sorting.
 """
 
 __all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca", "triangulate", "segments", "intersections",
-           "development"]
+           "development", "sets"]

@@ -128,45 +128,41 @@ def _contains(sorted_keys, key):
 @njit(cache=True)
 def _outgoing(F, n):
     """Half-edges grouped by their first vertex: h = 3 f + j (F[f, j] -> F[f, (j + 1) % 3]) for
-    start[a] <= r < start[a + 1] in ascending h; ok=False when an index is out of range or a
-    directed edge repeats (the numpy code's order of such edges is its own)."""
+    start[a] <= r < start[a + 1] in ascending h, with tip[r] the end vertex of half[r]; ok=False
+    when an index is out of range or a directed edge repeats (the numpy code's order of such
+    edges is its own)."""
     m = F.shape[0]
     start = np.zeros(n + 1, np.int64)
     half = np.empty(3 * m, np.int64)
+    tip = np.empty(3 * m, np.int64)
     for f in range(m):
         for j in range(3):
             a = F[f, j]
             if a < 0 or a >= n:
-                return start, half, False
+                return start, half, tip, False
             start[a + 1] += 1
     for a in range(n):
         start[a + 1] += start[a]
     fill = start[:-1].copy()
-    for h in range(3 * m):
-        a = F[h // 3, h % 3]
-        half[fill[a]] = h
-        fill[a] += 1
-    for a in range(n):
-        for r in range(start[a], start[a + 1]):
-            b = _head(F, half[r])
+    for f in range(m):
+        for j in range(3):
+            a, b = F[f, j], F[f, (j + 1) % 3]
             if b < 0 or b >= n:
-                return start, half, False
+                return start, half, tip, False
+            r = fill[a]
             for t in range(start[a], r):
-                if _head(F, half[t]) == b:
-                    return start, half, False
-    return start, half, True
+                if tip[t] == b:
+                    return start, half, tip, False
+            half[r], tip[r] = 3 * f + j, b
+            fill[a] = r + 1
+    return start, half, tip, True
 
 
 @njit(cache=True)
-def _head(F, h):
-    return F[h // 3, (h % 3 + 1) % 3]
-
-
-@njit(cache=True)
-def _find(F, start, half, a, b):
+def _find(start, half, tip, a, b):
     """The half-edge a -> b, or -1."""
     for r in range(start[a], start[a + 1]):
-        if _head(F, half[r]) == b:
+        if tip[r] == b:
             return half[r]
     return -1
 
@@ -176,20 +172,21 @@ def _interior_edges(F, n):
     """topology.interior_edges: (he, tw) half-edge indices of each interior edge (he ascending),
     the half-edge table, and ok=False when the numpy code must decide (see :func:`_outgoing`)."""
     m = F.shape[0]
-    start, half, fine = _outgoing(F, n)
+    start, half, tip, fine = _outgoing(F, n)
     he = np.empty(3 * m, np.int64)
     tw = np.empty(3 * m, np.int64)
     if not fine:
-        return he[:0], tw[:0], start, half, False
+        return he[:0], tw[:0], start, half, tip, False
     e = 0
-    for h in range(3 * m):
-        a, b = F[h // 3, h % 3], _head(F, h)
-        if a < b:
-            t = _find(F, start, half, b, a)
-            if t >= 0:
-                he[e], tw[e] = h, t
-                e += 1
-    return he[:e], tw[:e], start, half, True
+    for f in range(m):
+        for j in range(3):
+            a, b = F[f, j], F[f, (j + 1) % 3]
+            if a < b:
+                t = _find(start, half, tip, b, a)
+                if t >= 0:
+                    he[e], tw[e] = 3 * f + j, t
+                    e += 1
+    return he[:e], tw[:e], start, half, tip, True
 
 
 @njit(cache=True)
@@ -212,7 +209,7 @@ def swap_candidates(V, F, fixed, sphere):
     new_key : (e,) int64 min(c, d) * n + max(c, d)
     """
     n, m = V.shape[0], F.shape[0]
-    he, tw, start, half, fine = _interior_edges(F, n)
+    he, tw, start, half, tip, fine = _interior_edges(F, n)
     e = he.shape[0]
     abcd = np.empty((e, 4), np.int64)
     f1f2 = np.empty((e, 2), np.int64)
@@ -241,7 +238,7 @@ def swap_candidates(V, F, fixed, sphere):
         if ok[i]:
             a, b, c, d = abcd[i, 0], abcd[i, 1], abcd[i, 2], abcd[i, 3]
             old_key = min(a, b) * n + max(a, b)
-            exists = _find(F, start, half, c, d) >= 0 or _find(F, start, half, d, c) >= 0
+            exists = _find(start, half, tip, c, d) >= 0 or _find(start, half, tip, d, c) >= 0
             ok[i] = not exists and not _contains(fixed, old_key) and not _contains(fixed, new_key[i])
     return CANDIDATES, abcd, f1f2, ok, new_key
 

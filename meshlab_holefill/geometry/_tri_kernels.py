@@ -23,9 +23,11 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["face_bounds", "box_pairs", "narrow_codes", "NO", "HIT", "FOLD"]
+__all__ = ["face_bounds", "boxes_meeting", "candidate_pairs", "box_pairs", "narrow_codes", "NO", "HIT", "FOLD",
+           "RADIUS_BINS"]
 
 NO, HIT, FOLD = 0, 1, 2  # narrow_codes: no contact, contact, shared edge whose fold angle decides
+RADIUS_BINS = 16  # candidate_pairs: faces binned by radius in factors of 4 below the largest
 
 
 # ---------------------------------------------------------------- broad phase
@@ -133,6 +135,81 @@ def box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, d
                             out_i[n], out_j[n] = i, j
                             n += 1
     return out_i[:n].copy(), out_j[:n].copy()
+
+
+@njit(cache=True)
+def boxes_meeting(lo_q, hi_q, lo_a, hi_a, tol):
+    """Positions of the boxes [lo_a, hi_a] that meet the box of all [lo_q, hi_q] grown by tol, (k,) int64.
+
+    The union box of the query boxes is their row-wise min and max (NaN propagating, as
+    ``lo_q.min(0)`` does), so a NaN coordinate leaves no box meeting it.
+    """
+    lo, hi = np.empty(3), np.empty(3)
+    for k in range(3):
+        lo[k], hi[k] = lo_q[0, k], hi_q[0, k]
+        for i in range(1, lo_q.shape[0]):
+            lo[k] = _npmin(lo[k], lo_q[i, k])
+            hi[k] = _npmax(hi[k], hi_q[i, k])
+        lo[k] -= tol
+        hi[k] += tol
+    keep = np.empty(lo_a.shape[0], np.int64)
+    n = 0
+    for j in range(lo_a.shape[0]):
+        if (hi_a[j, 0] >= lo[0] and hi_a[j, 1] >= lo[1] and hi_a[j, 2] >= lo[2]
+                and lo_a[j, 0] <= hi[0] and lo_a[j, 1] <= hi[1] and lo_a[j, 2] <= hi[2]):
+            keep[n] = j
+            n += 1
+    return keep[:n]
+
+
+@njit(cache=True)
+def candidate_pairs(bounds_q, bounds_a, bins, tol, q, a, n_faces):
+    """Global face pairs (i, j) worth the narrow test, and the two sets' marks in_q, in_a (n_faces,) bool.
+
+    ``bounds_q``, ``bounds_a`` are :func:`face_bounds` of the face sets q and a; ``bins`` (nq + na,)
+    the radius bins of their faces (0 for the largest radii to ``RADIUS_BINS - 1``, as floats; NaN
+    for a radius that is not a number). Each pair of bins bounds the centroid distance by its
+    largest radii plus tol, and :func:`box_pairs` keeps the pairs within it whose boxes (query
+    boxes grown by tol) overlap, on a grid of cells about the size of a typical face box,
+    doubled while there are far more cells than faces (the cell size changes the time only).
+    """
+    lo_q, hi_q, cq, rq = bounds_q
+    lo_a, hi_a, ca, ra = bounds_a
+    nq, na = q.shape[0], a.shape[0]
+    in_q, in_a = np.zeros(n_faces, np.bool_), np.zeros(n_faces, np.bool_)
+    in_q[q] = True
+    in_a[a] = True
+    bin_q, bin_a = np.empty(nq, np.int64), np.empty(na, np.int64)
+    top_q, top_a = np.full(RADIUS_BINS, -np.inf), np.full(RADIUS_BINS, -np.inf)
+    for p in range(nq + na):
+        if bins[p] != bins[p]:
+            raise ValueError("face radii are not numbers (infinite coordinates)")
+        b = int(bins[p])
+        if p < nq:
+            bin_q[p] = b
+            top_q[b] = max(top_q[b], rq[p])
+        else:
+            bin_a[p - nq] = b
+            top_a[b] = max(top_a[b], ra[p - nq])
+    ub2 = np.empty((RADIUS_BINS, RADIUS_BINS))
+    for s in range(RADIUS_BINS):
+        for t in range(RADIUS_BINS):
+            ub = top_q[s] + top_a[t] + tol
+            ub2[s, t] = ub * ub
+    origin, span = np.empty(3), np.empty(3)
+    for k in range(3):
+        origin[k] = lo_a[:, k].min()
+        span[k] = hi_a[:, k].max() - origin[k]
+    extent = np.empty(na)
+    for j in range(na):
+        extent[j] = max(hi_a[j, 0] - lo_a[j, 0], hi_a[j, 1] - lo_a[j, 1], hi_a[j, 2] - lo_a[j, 2])
+    cell = max(np.median(extent), span.max() / 4096, np.finfo(np.float64).tiny)
+    while np.prod(np.floor(span / cell) + 1) > 8 * na + 64:
+        cell *= 2
+    dims = (np.floor(span / cell) + 1).astype(np.int64)
+    iq, ja = box_pairs(lo_q - tol, hi_q + tol, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, dims, q, a,
+                       in_q, in_a)
+    return q[iq], a[ja], in_q, in_a
 
 
 @njit(cache=True)

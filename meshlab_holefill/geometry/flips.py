@@ -5,6 +5,7 @@ import numpy as np
 
 from . import _flip_kernels as K
 from .quality import cross_rows, face_normals
+from .sets import isin_ints, unique_ints
 from .topology import interior_edges, undirected_keys
 
 __all__ = ["circumcenters", "folds", "min_angle_scores", "relax_edges"]
@@ -130,7 +131,7 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
     """
     F = np.array(F, np.int64)
     n = len(V)
-    fixed = np.unique(undirected_keys(() if fixed_edges is None else fixed_edges, n))
+    fixed = unique_ints(undirected_keys(() if fixed_edges is None else fixed_edges, n))
     scorer = min_angle_scores if criterion == "min_angle" else criterion if callable(criterion) else None
     if compiled and isinstance(criterion, str) and criterion in ("angles", "sphere") and normal_cos == 0.0:
         V = np.ascontiguousarray(V, np.float64)
@@ -153,8 +154,8 @@ def _relax_compiled(V, F, fixed, max_rounds, allowed, criterion):
             break
         cand = np.flatnonzero(ok)
         if allowed is not None and len(cand):
-            a, b, c, d = abcd[cand].T
-            cand = cand[allowed(V, F, np.stack([a, d, c], axis=1), np.stack([b, c, d], axis=1), f1f2[cand])]
+            abcd_c = abcd[cand]  # the new triangles (a, d, c) and (b, c, d)
+            cand = cand[allowed(V, F, abcd_c[:, [0, 3, 2]], abcd_c[:, [1, 2, 3]], f1f2[cand])]
         if len(cand) == 0:
             break
         total += K.apply_swaps(F, cand, abcd, f1f2, new_key)
@@ -169,7 +170,7 @@ def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer
     more = False
     for _ in range(max_rounds):
         more = False
-        E, f1, c1, f2, c2 = _interior_edges(F, n)
+        E, f1, c1, f2, c2 = interior_edges(F, n)
         if len(E) == 0:
             break
         c = F[f1, (c1 + 2) % 3]
@@ -186,11 +187,11 @@ def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer
         lo, hi = np.minimum(c, d), np.maximum(c, d)
         new_key = lo * n + hi
         cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        existing = np.sort(cur[:, 0] * n + cur[:, 1])  # duplicates do not matter to _in_sorted
-        ok_s = passes & keeps_orientation & (c_ != d_) & ~_in_sorted(new_key[s], existing)
+        existing = cur[:, 0] * n + cur[:, 1]
+        ok_s = passes & keeps_orientation & (c_ != d_) & ~isin_ints(new_key[s], existing)
         if len(fixed):
             old_key = np.minimum(a_, b_) * n + np.maximum(a_, b_)
-            ok_s &= ~_in_sorted(old_key, fixed) & ~_in_sorted(new_key[s], fixed)
+            ok_s &= ~isin_ints(old_key, fixed) & ~isin_ints(new_key[s], fixed)
         ok[s] = ok_s
         cand = np.flatnonzero(ok)
         if allowed is not None and len(cand):
@@ -205,25 +206,6 @@ def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer
         total += len(chosen)
         more = True
     return (F, total, more) if rounds_left else (F, total)
-
-
-def _interior_edges(F, n):
-    """topology.interior_edges of an int64 face array by the compiled half-edge table (the same edges in
-    the same order, :func:`._flip_kernels._interior_edges`); by numpy where the kernel leaves it to it."""
-    he, tw, _, _, ok = K._interior_edges(F, n)
-    if not ok:
-        return interior_edges(F, n)
-    f1, c1 = he // 3, he % 3
-    return np.stack([F[f1, c1], F[f1, (c1 + 1) % 3]], axis=1), f1, c1, tw // 3, tw % 3
-
-
-def _in_sorted(x, table):
-    """np.isin(x, table) for a sorted int ``table`` (a binary search; isin's setup dominates on the
-    few hundred keys of a patch). Repeated keys in ``table`` are fine: searchsorted finds the first."""
-    if len(table) == 0:
-        return np.zeros(len(x), bool)
-    pos = np.minimum(np.searchsorted(table, x), len(table) - 1)
-    return table[pos] == x
 
 
 def _failing_edges(V, F, a, b, c, d, f1, f2, criterion, scorer):

@@ -47,8 +47,10 @@ degenerate face with a face it shares an edge with.
 import numpy as np
 
 from . import _tri_kernels as K
+from .sets import isin_ints, unique_ints
 
 FOLD_ANGLE = 1e-3  # radians of opening below which edge-adjacent faces overlap
+_LOG4 = np.log(4)
 
 __all__ = ["intersecting_pairs", "faces_intersecting"]
 
@@ -89,41 +91,30 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
 
     # boxes, centroids and radii of all faces in one compiled pass (no (n, 3, 3) arrays)
     bq, ba = K.face_bounds(V, F, q), K.face_bounds(V, F, a)
-    if tol is None:
-        # the box of the used vertices is the box of their faces' boxes
-        P_lo = np.minimum(bq[0].min(0), ba[0].min(0))
-        P_hi = np.maximum(bq[1].max(0), ba[1].max(0))
-        diag = np.linalg.norm(P_hi - P_lo)
-        tol = 1e-9 * diag + 1e-13 * max(np.abs(P_lo).max(), np.abs(P_hi).max())
-    tol = float(tol)
+    tol = _default_tol(bq, ba) if tol is None else float(tol)
     # Faces of `against` outside the query faces' common box (grown by tol) meet none of them;
     # dropping them first spares the candidate search and the welding that work (a few new
     # triangles tested against a whole ring of faces).
-    lo, hi = bq[0].min(0) - tol, bq[1].max(0) + tol
-    inside = np.all(ba[1] >= lo, axis=1) & np.all(ba[0] <= hi, axis=1)
-    a, ba = a[inside], tuple(x[inside] for x in ba)
-    if len(a) == 0:
+    inside = K.boxes_meeting(bq[0], bq[1], ba[0], ba[1], tol)
+    if len(inside) == 0:
         return empty
-    used = _used_vertices(F, np.concatenate([q, a]), len(V))
-    P = V[used] + 0.0  # +0.0 turns -0.0 into 0.0 so the welding below sees them equal
+    if len(inside) < len(a):
+        a, ba = a[inside], tuple(x[inside] for x in ba)
+    i, j, in_q, in_a = _candidates(bq, ba, tol, q, a, len(F))
     if weld:
+        used = _used_vertices(F, np.concatenate([q, a]), len(V))
         canon = np.zeros(len(V), np.int64)
-        canon[used] = _row_ranks(P)
+        canon[used] = _row_ranks(V[used] + 0.0)  # +0.0 turns -0.0 into 0.0 so that they weld
     else:
         canon = np.arange(len(V), dtype=np.int64)
-    in_q = np.zeros(len(F), bool)
-    in_q[q] = True
-    in_a = np.zeros(len(F), bool)
-    in_a[a] = True
-
-    iq, ja = _candidates(bq, ba, tol, q, a, in_q, in_a)
-    i, j = q[iq], a[ja]
     code, fy, fx = K.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
     hit = code == K.HIT
-    fold = code == K.FOLD
-    hit[fold] = np.arctan2(fy[fold], fx[fold]) < fold_angle  # numpy's arctan2, as before
-    pairs = np.stack([i[hit], j[hit]], axis=1)
-    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    fold = np.flatnonzero(code == K.FOLD)
+    if len(fold):
+        hit[fold] = np.arctan2(fy[fold], fx[fold]) < fold_angle  # numpy's arctan2, as before
+    # i and j each come from a set of distinct faces, so the keys are distinct: their order is the pairs'
+    key = np.sort(i[hit] * len(F) + j[hit])
+    return np.stack([key // len(F), key % len(F)], axis=1)
 
 
 def faces_intersecting(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE, weld=True):
@@ -138,40 +129,37 @@ def faces_intersecting(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
     """
     pairs = intersecting_pairs(V, F, query, against, tol, fold_angle=fold_angle, weld=weld)
     # a pair of two faces that are both in both sets is listed once, either way round
-    flipped = pairs[np.isin(pairs[:, 1], query) & np.isin(pairs[:, 0], against), 1]
-    return np.unique(np.concatenate([pairs[:, 0], flipped]))
+    flipped = pairs[isin_ints(pairs[:, 1], query) & isin_ints(pairs[:, 0], against), 1]
+    return unique_ints(np.concatenate([pairs[:, 0], flipped]))
 
 
-def _candidates(bounds_q, bounds_a, tol, q, a, in_q, in_a):
-    """Local index pairs (iq, ja) worth the narrow test: boxes overlap (query boxes grown by tol)
-    and centroids lie within the sum of the faces' bounding-sphere radii plus tol.
+def _default_tol(bounds_q, bounds_a):
+    """1e-9 of the diagonal of the faces' common box, plus a rounding floor for coordinates far from the origin.
 
-    `bounds_q`, `bounds_a` are `_tri_kernels.face_bounds` of the two face sets (lo, hi, centroid,
-    radius), `q`, `a` their global face indices and `in_q`, `in_a` the sets' marks by global index
-    (self-pairs and mirrored pairs are left out, see `_tri_kernels.box_pairs`). A single radius would be set by the largest face, so faces are binned by radius
-    (factors of 4) and each pair of bins is bounded by its largest radii (the bound the former
-    dual-tree search on centroids used; the grid of `_tri_kernels.box_pairs` applies it pair by
-    pair).
+    The box of the used vertices is the box of their faces' boxes.
     """
-    (lo_q, hi_q, cq, rq), (lo_a, hi_a, ca, ra) = bounds_q, bounds_a
+    lo = np.minimum(bounds_q[0].min(0), bounds_a[0].min(0))
+    hi = np.maximum(bounds_q[1].max(0), bounds_a[1].max(0))
+    return float(1e-9 * np.linalg.norm(hi - lo) + 1e-13 * max(np.abs(lo).max(), np.abs(hi).max()))
+
+
+def _candidates(bounds_q, bounds_a, tol, q, a, n_faces):
+    """Global face pairs (i, j) worth the narrow test, and the marks in_q, in_a (n_faces,) bool of the sets.
+
+    A pair is kept when the boxes overlap (query boxes grown by tol) and the centroids lie
+    within the sum of the faces' bounding-sphere radii plus tol (self-pairs and mirrored pairs
+    are left out, see `_tri_kernels.box_pairs`). `bounds_q`, `bounds_a` are
+    `_tri_kernels.face_bounds` of the face sets `q`, `a` (lo, hi, centroid, radius). A single
+    radius would be set by the largest face, so faces are binned by radius (factors of 4) and
+    each pair of bins is bounded by its largest radii (the bound the former dual-tree search on
+    centroids used; the grid of `_tri_kernels.candidate_pairs` applies it pair by pair). The
+    bins take numpy's logarithm here, whose last bits may differ from the compiled one's.
+    """
+    rq, ra = bounds_q[3], bounds_a[3]
     top = max(rq.max(), ra.max(), np.finfo(float).tiny)
-    bin_q, bin_a = (np.clip(np.floor(np.log(np.maximum(r, 1e-300) / top) / np.log(4)), -15, 0)
-                    for r in (rq, ra))
-    uq, bq = np.unique(bin_q, return_inverse=True)
-    ua, ba = np.unique(bin_a, return_inverse=True)
-    rq_max = np.array([rq[bin_q == b].max() for b in uq])
-    ra_max = np.array([ra[bin_a == b].max() for b in ua])
-    ub = rq_max[:, None] + ra_max[None, :] + tol
-    lo_q, hi_q = lo_q - tol, hi_q + tol
-    # grid cells about the size of a typical face box, doubled while far more cells than faces
-    origin = lo_a.min(0)
-    span = hi_a.max(0) - origin
-    cell = max(float(np.median((hi_a - lo_a).max(1))), float(span.max()) / 4096, np.finfo(float).tiny)
-    while np.prod(np.floor(span / cell) + 1) > 8 * len(lo_a) + 64:
-        cell *= 2
-    dims = (np.floor(span / cell) + 1).astype(np.int64)
-    return K.box_pairs(lo_q, hi_q, lo_a, hi_a, cq, ca, bq.ravel().astype(np.int64), ba.ravel().astype(np.int64),
-                       ub * ub, origin, cell, dims, q, a, in_q, in_a)
+    r = np.maximum(np.concatenate([rq, ra]), 1e-300)
+    bins = -np.clip(np.floor(np.log(r / top) / _LOG4), 1 - K.RADIUS_BINS, 0)
+    return K.candidate_pairs(bounds_q, bounds_a, bins, tol, q, a, n_faces)
 
 
 def _row_ranks(P):
@@ -196,7 +184,7 @@ def _sorted_unique(x):
     """np.unique(x) for an int array, skipping the sort when x already increases (an arange, usually)."""
     if len(x) and np.all(x[1:] > x[:-1]):
         return x
-    return np.unique(x)
+    return unique_ints(x)
 
 
 def _used_vertices(F, faces, n):

@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["segment_distances", "nonadjacent_mask", "segment_distance_rows", "segment_distance_matrix",
-           "min_segment_distance", "is_simple_polygon", "polygon_edges_touch"]
+           "min_segment_distance", "is_simple_polygon", "polygon_edges_touch", "polygon_edges_touch_numpy"]
 
 
 def segment_distances(A0, A1, B0, B1):
@@ -235,14 +235,54 @@ def is_simple_polygon(Q, eps, near=None):
     return min_segment_distance(Q, near) > eps
 
 
-def polygon_edges_touch(P, chunk=200_000):
+def polygon_edges_touch(P):
     """Do two non-adjacent edges of the closed 2D polygon P (k, 2) touch or cross?
 
-    Exact orientation tests on all pairs of edges (in chunks of ``chunk`` pairs, k being a
-    hole boundary of up to a few thousand vertices); touching, and overlap of collinear
-    edges, count as crossing, collinear edges apart do not. ``not polygon_edges_touch(P)``
-    is the simplicity test without a clearance (:func:`is_simple_polygon` asks for one).
+    Exact orientation tests on all pairs of edges; touching, and overlap of collinear edges,
+    count as crossing, collinear edges apart do not. ``not polygon_edges_touch(P)`` is the
+    simplicity test without a clearance (:func:`is_simple_polygon` asks for one). Compiled
+    (:func:`_edges_touch`, stopping at the first touching pair), with the operations of
+    :func:`polygon_edges_touch_numpy`: the same answer.
     """
+    P = np.ascontiguousarray(P, np.float64)
+    if P.ndim != 2 or P.shape[1] != 2:
+        return polygon_edges_touch_numpy(P)
+    return bool(_edges_touch(P))
+
+
+@njit(cache=True)
+def _orient(P, p, q, r):
+    return (P[q, 0] - P[p, 0]) * (P[r, 1] - P[p, 1]) - (P[q, 1] - P[p, 1]) * (P[r, 0] - P[p, 0])
+
+
+@njit(cache=True)
+def _within(P, p, q, r):
+    """Point r within the box of segment p-q (np.minimum and np.maximum: a NaN end holds nothing)."""
+    for c in range(2):
+        a, b, x = P[p, c], P[q, c], P[r, c]
+        if a != a or b != b or not (min(a, b) <= x <= max(a, b)):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _edges_touch(P):
+    k = P.shape[0]
+    for i in range(k):
+        a, b = i, (i + 1) % k
+        for j in range(i + 2, k - 1 if i == 0 else k):  # edges 0 and k - 1 share vertex 0
+            c, d = j, (j + 1) % k
+            d1, d2, d3, d4 = _orient(P, a, b, c), _orient(P, a, b, d), _orient(P, c, d, a), _orient(P, c, d, b)
+            if d1 * d2 < 0 and d3 * d4 < 0:
+                return True
+            if ((d1 == 0 and _within(P, a, b, c)) or (d2 == 0 and _within(P, a, b, d))
+                    or (d3 == 0 and _within(P, c, d, a)) or (d4 == 0 and _within(P, c, d, b))):
+                return True
+    return False
+
+
+def polygon_edges_touch_numpy(P, chunk=200_000):
+    """:func:`polygon_edges_touch` in numpy, in chunks of ``chunk`` pairs of edges (the reference of the compiled test)."""
     P = np.asarray(P, np.float64)
     k = len(P)
     A, B = P, np.roll(P, -1, axis=0)

@@ -4,11 +4,17 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["interior_edges", "one_ring_matrix", "undirected_keys", "edge_pair_set", "face_adjacency"]
+from ._flip_kernels import _interior_edges as _interior_edge_table
+
+__all__ = ["interior_edges", "interior_edges_numpy", "one_ring_matrix", "undirected_keys", "edge_pair_set",
+           "face_adjacency"]
 
 
 def interior_edges(F, n):
-    """Interior (two-face) edges of a consistently oriented face list.
+    """Interior (two-face) edges of a consistently oriented face list, in the order of their half-edges a -> b, a < b.
+
+    From the compiled half-edge table (:func:`._flip_kernels._interior_edges`); where a directed
+    edge repeats or an index is out of range, by :func:`interior_edges_numpy`, whose answer it is.
 
     Returns
     -------
@@ -19,6 +25,18 @@ def interior_edges(F, n):
     f2, c2 : (e,) int64
         Face holding the twin half-edge b -> a and the corner index of ``b`` in it.
     """
+    F = np.ascontiguousarray(F, np.int64)
+    if F.ndim != 2 or F.shape[1] != 3:
+        return interior_edges_numpy(F, n)
+    he, tw, _, _, _, ok = _interior_edge_table(F, n)
+    if not ok:
+        return interior_edges_numpy(F, n)
+    f1, c1 = he // 3, he % 3
+    return np.stack([F[f1, c1], F[f1, (c1 + 1) % 3]], axis=1), f1, c1, tw // 3, tw % 3
+
+
+def interior_edges_numpy(F, n):
+    """:func:`interior_edges` by sorting the half-edge keys a * n + b (the reference of the compiled table)."""
     F = np.asarray(F, np.int64)
     a = F.ravel()
     b = np.roll(F, -1, axis=1).ravel()

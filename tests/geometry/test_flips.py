@@ -196,16 +196,6 @@ def test_relax_edges_respects_fixed_edges_of_a_convex_fan(seed, criterion):
     assert np.all(np.cross(P[F2[:, 1]] - P[F2[:, 0]], P[F2[:, 2]] - P[F2[:, 0]])[:, 2] > 0)
 
 
-def test_sorted_membership_equals_isin():
-    from meshlab_holefill.geometry.flips import _in_sorted
-
-    rng = np.random.default_rng(0)
-    for _ in range(300):
-        table = np.sort(rng.integers(0, 50, int(rng.integers(0, 30))))  # repeats allowed
-        x = rng.integers(-5, 55, int(rng.integers(0, 30)))
-        np.testing.assert_array_equal(_in_sorted(x, table), np.isin(x, table))
-
-
 def _bumpy_patch(rng, nx=9):
     """A jittered, bumpy grid with random diagonals: many failing edges, folds and near-ties."""
     from conftest import grid
@@ -298,11 +288,11 @@ def test_compiled_min_angle_scores_equal_the_corner_angles_bit_for_bit(poison):
     assert [len(x) for x in min_angle_scores(V, empty, empty, empty, empty)] == [0, 0]
 
 
-def test_compiled_interior_edges_equal_the_topology_edges():
-    # The relaxation's interior edges from the compiled half-edge table: the edges, faces and
-    # corners of topology.interior_edges in its order, also where a directed edge repeats or an
-    # index is out of range (then numpy answers).
-    from meshlab_holefill.geometry.flips import _interior_edges
+def test_compiled_interior_edges_equal_the_sorted_keys_edges():
+    # The interior edges from the compiled half-edge table: the edges, faces and corners of the
+    # numpy reference in its order, also where a directed edge repeats or an index is out of
+    # range (then numpy answers).
+    from meshlab_holefill.geometry.topology import interior_edges_numpy
 
     rng = np.random.default_rng(9)
     for trial in range(60):
@@ -313,6 +303,6 @@ def test_compiled_interior_edges_equal_the_topology_edges():
         if trial % 4 == 2:
             F = F[: int(rng.integers(0, len(F) + 1))]
         n = len(V) if trial % 4 != 3 else int(F.max())  # the last index out of range
-        got, want = _interior_edges(np.ascontiguousarray(F), n), interior_edges(F, n)
+        got, want = interior_edges(F, n), interior_edges_numpy(F, n)
         for g, w in zip(got, want):
             np.testing.assert_array_equal(g, w)

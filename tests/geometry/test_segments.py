@@ -99,7 +99,7 @@ def test_is_simple_polygon_compares_the_clearance_with_eps(polar, star, eps):
 @given(st.lists(small_grid_point, min_size=4, max_size=8))
 def test_polygon_edges_touch_is_any_pairwise_touch_of_non_adjacent_edges(points):
     """The vectorised test against the exact rational one, pair by pair."""
-    from meshlab_holefill.geometry.segments import polygon_edges_touch
+    from meshlab_holefill.geometry.segments import polygon_edges_touch, polygon_edges_touch_numpy
 
     Q = np.array(points, np.float64)
     k = len(Q)
@@ -107,7 +107,29 @@ def test_polygon_edges_touch_is_any_pairwise_touch_of_non_adjacent_edges(points)
                    for i in range(k) for j in range(i + 2, k) if not (i == 0 and j == k - 1))
     assert polygon_edges_touch(Q) is expected
     assert polygon_edges_touch(Q[::-1]) is expected
-    assert polygon_edges_touch(Q, chunk=3) is expected
+    assert polygon_edges_touch_numpy(Q) is polygon_edges_touch_numpy(Q, chunk=3) is expected
+
+
+def test_compiled_edge_touch_test_equals_numpy_on_random_loops():
+    # Jittered circles, some folded (a vertex pulled across), with repeated points and NaNs.
+    from meshlab_holefill.geometry.segments import polygon_edges_touch, polygon_edges_touch_numpy
+
+    rng = np.random.default_rng(2)
+    seen = set()
+    for t in range(300):
+        k = int(rng.integers(3, 40))
+        angle = np.sort(rng.uniform(0, 2 * np.pi, k))
+        Q = np.stack([np.cos(angle), np.sin(angle)], axis=1) * rng.uniform(0.5, 1.5, (k, 1))
+        if t % 3 == 0:
+            Q[rng.integers(0, k)] *= -0.5
+        if t % 7 == 0:
+            Q[rng.integers(0, k)] = Q[rng.integers(0, k)]
+        if t % 29 == 0:
+            Q[rng.integers(0, k), rng.integers(0, 2)] = np.nan
+        want = polygon_edges_touch_numpy(Q)
+        assert polygon_edges_touch(Q) is want
+        seen.add(want)
+    assert seen == {True, False}
 
 
 # ----------------------------------------------------------------- compiled distance kernels

@@ -8,6 +8,7 @@ indices, coplanar and collinear faces from integer grids, near touches at the to
 of very different sizes (several radius bins).
 """
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
@@ -131,9 +132,10 @@ def test_broad_phase_equals_kdtree_search(seed, n, m, spread, flat):
     tol = 1e-9 * 3
     blocks = list(R._candidates(Tq, Ta, tol))
     ref = {(int(x), int(y)) for b in blocks for x, y in zip(*b)}
-    none = np.zeros(n + m, bool)  # disjoint sets: no pair is a self or mirrored pair
-    iq, ja = I._candidates(_bounds(Tq), _bounds(Ta), tol, np.arange(n), np.arange(n, n + m), none, none)
-    got = list(zip(iq.tolist(), ja.tolist()))
+    # disjoint sets: no pair is a self or mirrored pair
+    i, j, in_q, in_a = I._candidates(_bounds(Tq), _bounds(Ta), tol, np.arange(n), np.arange(n, n + m), n + m)
+    assert np.flatnonzero(in_q).tolist() == list(range(n)) and np.flatnonzero(in_a).tolist() == list(range(n, n + m))
+    got = list(zip(i.tolist(), (j - n).tolist()))
     assert len(got) == len(set(got))
     assert set(got) == ref
 
@@ -191,3 +193,24 @@ def test_row_dot_and_norm_sum_as_numpy_does():
     assert d3.tobytes() == np.einsum("kij,kj->ki", T, n).tobytes()
     norms = np.array([K._norm(tuple(x)) for x in X])
     assert norms.tobytes() == np.linalg.norm(X, axis=1).tobytes()
+
+
+def test_boxes_meeting_the_query_box_equal_numpy():
+    """The faces kept for the candidate search: boxes meeting the query faces' common box grown by tol."""
+    rng = np.random.default_rng(4)
+    for t in range(50):
+        lo_q, lo_a = rng.uniform(0, 3, (int(rng.integers(1, 20)), 3)), rng.uniform(-2, 6, (200, 3))
+        hi_q, hi_a = lo_q + rng.uniform(0, 0.5, lo_q.shape), lo_a + rng.uniform(0, 0.5, lo_a.shape)
+        if t % 5 == 0:
+            lo_a[rng.integers(0, 200, 10), rng.integers(0, 3, 10)] = np.nan
+        lo, hi = lo_q.min(0) - 1e-3, hi_q.max(0) + 1e-3
+        want = np.flatnonzero(np.all(hi_a >= lo, axis=1) & np.all(lo_a <= hi, axis=1))
+        assert np.array_equal(K.boxes_meeting(lo_q, hi_q, lo_a, hi_a, 1e-3), want)
+    lo_q[0, 1] = np.nan  # a query face that is not a number meets nothing
+    assert len(K.boxes_meeting(lo_q, hi_q, lo_a, hi_a, 1e-3)) == 0
+
+
+def test_radii_that_are_not_numbers_are_refused():
+    T = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 0, 0], [np.inf, 0, 0], [0, 1, 0]]], float)
+    with pytest.raises(ValueError, match="not numbers"):
+        I._candidates(_bounds(T[:1]), _bounds(T[1:]), 1e-9, np.arange(1), np.arange(1, 2), 2)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.sets import unique_ints
+from ...geometry.sets import unique_ints
 from ...geometry.quality import cross_rows, triangle_quality, vertex_normals
 from ._bilateral_kernels import refuse_slivers, ring_log_weights, ring_step
 

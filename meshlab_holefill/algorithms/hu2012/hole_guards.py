@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.sets import unique_ints
+from ...geometry.sets import unique_ints
 from ...geometry.intersections import intersecting_pairs
 from ...geometry.quality import cross_rows
 from ._sector_kernels import sector_contains, swaps_in_sectors

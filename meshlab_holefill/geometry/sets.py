@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["unique_ints", "isin_ints", "setdiff_ints"]
+__all__ = ["unique_ints", "isin_ints", "setdiff_ints", "positions_ints"]
 
 
 def unique_ints(x):
@@ -58,3 +58,20 @@ def setdiff_ints(a, b):
     """``np.setdiff1d(a, b)`` for integer arrays: the sorted distinct values of ``a`` not in ``b``."""
     u = unique_ints(a)
     return u[~isin_ints(u, b)]
+
+
+def positions_ints(table, values):
+    """Where each of ``values`` stands in ``table``: ``p`` with ``table[p] == values``, a renumbering.
+
+    Parameters
+    ----------
+    table : (n,) int, distinct values in any order
+    values : int array of any shape, every value in ``table``
+
+    Returns
+    -------
+    int64 array of ``values``' shape
+    """
+    table = np.asarray(table)
+    sorter = np.argsort(table)
+    return sorter[np.searchsorted(table, values, sorter=sorter)]

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from meshlab_holefill.core.sets import isin_ints, setdiff_ints, unique_ints
+from meshlab_holefill.geometry.sets import isin_ints, positions_ints, setdiff_ints, unique_ints
 
 
 @pytest.mark.parametrize("dtype", [np.int32, np.int64])
@@ -21,3 +21,12 @@ def test_membership_keeps_the_shape_of_the_values():
     values = np.array([[1, 5], [9, 2]])
     assert isin_ints(values, [2, 9, 11]).tolist() == [[False, False], [True, True]]
     assert isin_ints(values, np.zeros(0, np.int64)).tolist() == [[False, False], [False, False]]
+
+
+def test_positions_renumber_values_by_an_unordered_table():
+    rng = np.random.default_rng(5)
+    table = rng.permutation(np.arange(-20, 400, 3))
+    values = rng.choice(table, (50, 3))
+    got = positions_ints(table, values)
+    assert got.shape == values.shape and got.dtype == np.int64
+    np.testing.assert_array_equal(table[got], values)
