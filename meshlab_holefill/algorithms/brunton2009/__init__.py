@@ -11,14 +11,17 @@ Where each step lives:
 * Sec. 3.3, the embedding energies E_AREA and E_DF, each one sparse solve: :mod:`.embedding`
   (:func:`embedding_energy`, :func:`minimise_embedding_energy`, :func:`embed_patch`).
 * Beyond the paper: the development fallback
-  (:mod:`meshlab_holefill.geometry.development`, shared with Xu et al.), the crossing repair and
-  the quality swaps (:mod:`.curve_unfolding`: :func:`repair_crossings`, :func:`improve_by_swaps`);
+  (:mod:`meshlab_holefill.geometry.development`, shared with Xu et al.) and the planar domains the
+  filter tries (:mod:`.planar_domains`), the crossing repair (:mod:`.crossing_repair`:
+  :func:`repair_crossings`), the quality swaps (:mod:`.quality_swaps`: :func:`improve_by_swaps`);
   the resampling of the energy's patch at the surrounding density
   (:func:`.unfolded_triangulation.resample_patch`, option ``density``) and the sliver repair
   (:mod:`.slivers`, option ``slivers``).
 * The filter (``fill``, ``PARAMS``, ``RINGS``): :mod:`.curve_unfolding`.
 """
-from .curve_unfolding import PARAMS, RINGS, fill, improve_by_swaps, repair_crossings
+from .crossing_repair import repair_crossings
+from .curve_unfolding import PARAMS, RINGS, fill
+from .quality_swaps import improve_by_swaps
 from .embedding import embed_patch, embedding_energy, minimise_embedding_energy
 from .slivers import repair_slivers
 from .unfolded_triangulation import constrained_delaunay, refine_planar, resample_patch, triangulate_and_embed

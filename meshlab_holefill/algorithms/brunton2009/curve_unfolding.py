@@ -32,51 +32,42 @@ vertices within their tangent planes until the umbrella has no tangential part, 
 on the solved shape (:func:`.embedding.tangential_relaxation`);
 ``repair`` replaces a patch that crosses the surrounding mesh (scan borders with folded sliver
 faces) by the best patch of another planar domain that crosses nothing, else clips the ears of
-the boundary vertices involved and fills the rest of the loop again (:func:`repair_crossings`);
+the boundary vertices involved and fills the rest of the loop again (:func:`.crossing_repair.repair_crossings`);
 ``swaps`` improves the connectivity of the embedded patch by quality-improving edge swaps, the
-energy solved again after each round (:func:`improve_by_swaps`);
+energy solved again after each round (:func:`.quality_swaps.improve_by_swaps`);
 ``max_domain_area`` refuses planar domains many times larger than the missing surface, whose
-patches bulge out of it (long strip-shaped holes, :func:`domains_within_area`);
+patches bulge out of it (long strip-shaped holes, :func:`.planar_domains.domains_within_area`);
 ``density='surrounding'`` (default) samples the energy's patch at the surrounding mesh's density
 (mean new edge 0.8 of the surrounding one before, 0.99 now;
 :func:`.unfolded_triangulation.resample_patch`; ``'twice'`` and ``'equilateral'`` keep the
 refinement's own patch); ``slivers`` lifts the triangles still below quality 0.3 by local moves,
 splits and collapses (:func:`.slivers.repair_slivers`). Off by default: ``domain='development'``
 takes the surface's development of the loop as the planar domain whenever it is simple
-(:func:`_development_domain`).
+(:func:`.planar_domains.development_domain`).
 """
 from __future__ import annotations
 
-import hashlib
 import time
 
 import numpy as np
 
-from ...geometry.flips import relax_edges
-from ...geometry.intersections import faces_intersecting
-from ...geometry.quality import edge_lengths, triangle_quality
-from ...geometry.topology import edge_pair_set
+from ...geometry.quality import edge_lengths
+from ...geometry.development import boundary_gap_angles
 from ...core import examples
 from ...core.holes import hole_context
 from ...core.patch import Patch
-from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
-from .embedding import embed_patch, relax_patch
+from .crossing_repair import CrossingCounts, crossing_faces, repair_crossings
+from .planar_domains import PlanarDomains, development_domain
+from .quality_swaps import improve_by_swaps
 from .slivers import repair_slivers
 from .unfolded_triangulation import DENSITIES, resample_patch, surrounding_edge_length, triangulate_and_embed
-from ...geometry.development import boundary_gap_angles, develop_loop, developed_area, simple_development, simple_developments
-from ...geometry.triangulate import polygon_perimeter, polygon_signed_area
-from .unfolding import anneal_loop, linear_motion_is_simple, unfold_loop
+from .unfolding import anneal_loop, unfold_loop
 
-__all__ = ["fill", "PARAMS", "RINGS", "WARM_UP", "warm_up", "crossing_faces", "clip_ears", "repair_crossings", "improve_by_swaps",
-           "domains_within_area"]
+__all__ = ["fill", "PARAMS", "RINGS", "WARM_UP", "warm_up"]
 
 RINGS = 2
-
-MAX_REPAIR_ROUNDS = 4  # rounds of ear clipping when a patch crosses its surroundings
-MAX_SWAP_ROUNDS = 4  # rounds of quality-improving edge swaps, each followed by a new energy solve
 RESAMPLE_TOLERANCE = 0.1  # density 'surrounding': a patch whose mean edge is within 10 % of the surroundings' is kept
-GOOD_QUALITY = 0.3  # repair stops trying domains at a clean patch of this minimum quality (poor triangles are below it)
 
 PARAMS = [
     ParamSpec("k", "float", 0.9,
@@ -167,414 +158,10 @@ PARAMS = [
 ]
 
 
-def crossing_faces(ctx, vertices, faces):
-    """Patch faces that intersect the hole's surrounding faces or another patch face.
-
-    Parameters
-    ----------
-    ctx : HoleContext
-    vertices : (s, 3) float64  new vertices
-    faces : (t, 3) int64  in Patch numbering
-
-    Returns
-    -------
-    (h,) int64  indices into ``faces``
-    """
-    k, n_ctx = ctx.size, len(ctx.vertices)
-    X = np.concatenate([ctx.vertices, vertices])
-    joint = np.where(faces < k, faces, faces - k + n_ctx)
-    allF = np.concatenate([joint, ctx.faces])
-    return faces_intersecting(X, allF, np.arange(len(faces)), np.arange(len(allF)))
-
-
-def clip_ears(ctx, Q, keep, ears, bad_vertices):
-    """Repair step (beyond the paper): cut off the ear at each offending boundary vertex.
-
-    An ear (prev, v, next) of the current sub-loop is clipped when its chord is no mesh edge,
-    it has non-zero area, it does not cross the surrounding faces or earlier ears, and the
-    planar sub-polygon stays simple without v. Clipped vertices are never neighbours within
-    one round.
-
-    Returns
-    -------
-    keep : (r,) int64  the new sub-loop
-    ears : list of (3,) tuples
-    clipped : int
-    """
-    keep = list(keep)
-    ears = list(ears)
-    forbidden = edge_pair_set(ctx.forbidden_edges)
-    h = float(np.mean(np.linalg.norm(np.roll(ctx.points, -1, axis=0) - ctx.points, axis=1)))
-    order = sorted(set(bad_vertices) & set(keep), key=lambda v: _corner_angle(ctx.points, keep, v))
-    clipped, touched = 0, set()
-    for v in order:
-        if len(keep) <= 3 or v in touched:
-            continue
-        i = keep.index(v)
-        a, b = keep[i - 1], keep[(i + 1) % len(keep)]
-        if tuple(sorted((a, b))) in forbidden:
-            continue
-        if np.linalg.norm(np.cross(ctx.points[v] - ctx.points[a], ctx.points[b] - ctx.points[a])) <= 1e-12 * h * h:
-            continue
-        trial = keep[:i] + keep[i + 1:]
-        if not linear_motion_is_simple(Q[trial], 1e-9 * h):
-            continue
-        ear = np.array([[a, v, b]])
-        if len(crossing_faces(ctx, np.zeros((0, 3)), np.concatenate([np.asarray(ears, np.int64).reshape(-1, 3), ear]))):
-            continue
-        keep = trial
-        ears.append((a, v, b))
-        touched.update((a, v, b))
-        clipped += 1
-    return np.asarray(keep, np.int64), ears, clipped
-
-
-def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangential=False, density="surrounding",
-                     record=None, bad=None):
-    """Repair (beyond the paper, option ``repair``): a patch that crosses nothing, best quality first.
-
-    ``domains`` are planar polygons of the loop, the unfolding used first (its patch given as
-    ``vertices``, ``faces``), then the loop's simple developments (:func:`..geometry.development.simple_developments`).
-    When the first patch crosses the surrounding mesh, the patches of the other domains are
-    tried as they are, least relaxed first, and the one of best minimum quality that crosses
-    nothing is taken (the first reaching quality GOOD_QUALITY = 0.3 ends the search):
-    the triangulation near a folded border face depends on the domain, and a domain whose
-    patch clears the fold needs no clipped ear (an ear at a wide corner is a sliver;
-    measured on bunny10k_textured's 22-edge hole: ear 0.116, the 0.2-relaxed development's
-    patch 0.345). Only if none does are ears clipped (:func:`clip_ears`), in the first domain
-    and then in the least relaxed development, until a patch crosses nothing (the fewest
-    crossings otherwise).
-
-    Parameters
-    ----------
-    ctx : HoleContext
-    domains : list of ((k, 2) float64, str, float or None)  polygon, unfolding name, development blend
-    vertices, faces : the patch of the first domain
-    energy, refinement, tangential, density, record : see :func:`triangulate_and_embed`
-    bad : (h,) int64, optional  :func:`crossing_faces` of the first patch, when already known
-
-    Returns
-    -------
-    crossings : int  faces of the returned patch crossing the mesh
-    vertices, faces : the patch
-    clipped : int  ears clipped
-    method : str  unfolding name of the domain used
-    relax : float or None  its development blend
-    """
-    m = ctx.size
-    if bad is None:
-        bad = crossing_faces(ctx, vertices, faces)
-    if len(bad) == 0:
-        return 0, vertices, faces, 0, domains[0][1], domains[0][2]
-    patches = [(vertices, faces, bad)]
-    clean = []
-    for domain, name, relax in domains[1:]:
-        V, F = triangulate_and_embed(ctx, domain, np.arange(m), [], energy, refinement, tangential, density, record)
-        b = crossing_faces(ctx, V, F)
-        patches.append((V, F, b))
-        if len(b) == 0:
-            q = float(triangle_quality(np.concatenate([ctx.points, V]), F).min()) if len(F) else 0.0
-            clean.append((q, V, F, name, relax))
-            if q >= GOOD_QUALITY:  # good enough: more relaxed domains lose the loop's concavities
-                break
-    if clean:
-        q, V, F, name, relax = max(clean, key=lambda c: c[0])
-        return 0, V, F, 0, name, relax
-    best = None
-    # Ear clipping is costly (up to MAX_REPAIR_ROUNDS fills each): the first domain and the
-    # least relaxed development only.
-    for (domain, name, relax), (vertices, faces, bad) in list(zip(domains, patches))[:2]:
-        keep, ears, n_clipped = np.arange(m), [], 0
-        for _ in range(MAX_REPAIR_ROUNDS):
-            if len(bad) == 0:
-                break
-            offending = np.unique(faces[bad][faces[bad] < m]).tolist()
-            keep, ears, clipped_now = clip_ears(ctx, domain, keep, ears, offending)
-            if clipped_now == 0:
-                break
-            n_clipped += clipped_now
-            vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement, tangential,
-                                                    density, record)
-            bad = crossing_faces(ctx, vertices, faces)
-        if best is None or len(bad) < best[0]:
-            best = (len(bad), vertices, faces, n_clipped, name, relax)
-        if len(bad) == 0:
-            break
-    return best
-
-
-def _quality_improving(V, F, A, B, replaced):
-    """Swap filter for :func:`relax_edges`: the new pair's lower quality beats the old pair's."""
-    old = np.minimum(triangle_quality(V, F[replaced[:, 0]]), triangle_quality(V, F[replaced[:, 1]]))
-    new = np.minimum(triangle_quality(V, A), triangle_quality(V, B))
-    return new > old + 1e-9
-
-
-class _CrossingCounts:
-    """``len(crossing_faces(ctx, vertices, faces))``, remembered per patch (by content) for one hole.
-
-    The filter's later steps count the same patch more than once (the swaps' best round, the
-    resampling's check, the sliver repair's input): one count each, the same numbers.
-    """
-
-    def __init__(self, ctx):
-        self.ctx = ctx
-        self._counts = {}
-
-    @staticmethod
-    def _key(vertices, faces):
-        digest = hashlib.sha1()
-        for a in (np.asarray(vertices, np.float64), np.asarray(faces, np.int64)):
-            digest.update(repr(a.shape).encode())
-            digest.update(np.ascontiguousarray(a).tobytes())
-        return digest.digest()
-
-    def remember(self, vertices, faces, count):
-        self._counts[self._key(vertices, faces)] = int(count)
-
-    def __call__(self, vertices, faces):
-        key = self._key(vertices, faces)
-        if key not in self._counts:
-            self._counts[key] = len(crossing_faces(self.ctx, vertices, faces))
-        return self._counts[key]
-
-
-def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, crossings=None, tangential=False,
-                     resolve=True, count_crossings=None):
-    """Quality-improving edge swaps followed by a new energy solve (beyond the paper, option ``swaps``).
-
-    Sec. 3.3 places the interior vertices by a uniform-Laplacian energy on the connectivity
-    of the planar refinement; at border vertices where the surface leaves a wide opening
-    (gap angles near 300 degrees) the uniform weights pull interior vertices onto the border
-    and squeeze triangles that were well shaped in the plane (measured: planar quality 0.98,
-    spatial 0.14). Each round swaps the interior patch edges that fail the circumsphere test
-    and whose swap raises the lower quality of their two triangles (no fold, no duplicate
-    edge, never an edge the mesh already has, :func:`relax_edges`), then solves the energy
-    again on the new connectivity, so the result still minimises E_AREA / E_DF exactly (then
-    relaxes tangentially if ``tangential``, as the first embedding did). The round with the
-    best minimum quality (then mean) that crosses nothing new is kept.
-
-    Parameters
-    ----------
-    ctx : HoleContext
-    vertices : (s, 3) float64  new vertices
-    faces : (t, 3) int64  patch faces in Patch numbering (loop index i < k, new vertex k + j)
-    energy : {'area', 'area_interior', 'fairing'}  see :func:`.embedding.embed_patch`
-    rounds : int
-    crossings : int, optional  faces of the given patch crossing the mesh (computed when needed)
-    tangential : bool  see :func:`.embedding.embed_patch`
-    resolve : bool
-        Solve the energy again after each round (default). False keeps the vertices where they
-        are (a patch sampled from the energy's shape on a finer refinement, density
-        'surrounding': a new solve on the coarser connectivity would change the shape) and only
-        relaxes them tangentially on the new connectivity if ``tangential``.
-    count_crossings : callable, optional
-        ``(vertices, faces) -> int``, the patch's faces crossing the mesh (default: the length of
-        :func:`crossing_faces`; the filter passes one that remembers the patches it counted).
-
-    Returns
-    -------
-    vertices : (s, 3) float64
-    faces : (t, 3) int64
-    swaps : int  edge swaps in the kept result
-    """
-    s = len(vertices)
-    if s == 0:
-        return vertices, faces, 0
-
-    def score(X, F):
-        q = triangle_quality(X, F)
-        return float(q.min()), float(q.mean())
-
-    start = score(np.concatenate([ctx.points, vertices]), faces)
-    X, F, total = np.concatenate([ctx.points, vertices]), faces, 0
-    better = []  # rounds scoring above the input: (score, round, interior, faces, swaps so far)
-    for r in range(rounds):
-        F, swapped = relax_edges(X, F, fixed_edges=ctx.forbidden_edges, allowed=_quality_improving)
-        if swapped == 0:
-            break
-        total += swapped
-        if resolve:
-            interior = embed_patch(ctx, s, F, energy=energy, tangential=tangential)
-        else:
-            interior = relax_patch(ctx, X[ctx.size:], F) if tangential else X[ctx.size:]
-        X = np.concatenate([ctx.points, interior])
-        sc = score(X, F)
-        if sc > start:
-            better.append((sc, r, interior, F, total))
-    return _best_round(ctx, better, vertices, faces, crossings, count_crossings)
-
-
-def _best_round(ctx, better, vertices, faces, crossings, count_crossings):
-    """The swaps' kept round: the earliest of the best score among the rounds crossing no more than the input.
-
-    That is the round the running best (a round kept when it scores above the best so far and
-    crosses no more than the input) ends on; taken best first, a patch's crossings are counted
-    only until one passes (the input's only when that round crosses something), which spares the
-    crossing tests of the rounds passed over (the most costly step after the solves).
-    """
-    if count_crossings is None:
-        count_crossings = _CrossingCounts(ctx)
-    for sc, _, interior, F, total in sorted(better, key=lambda b: (b[0][0], b[0][1], -b[1]), reverse=True):
-        n = count_crossings(interior, F)
-        if n == 0 or n <= (crossings if crossings is not None else count_crossings(vertices, faces)):
-            return interior, F, total
-    return vertices, faces, 0
-
-
-def domain_area_ratios(P, gap_angles, domains):
-    """Area of each planar domain, scaled to the loop's perimeter, over the missing surface's (beyond the paper).
-
-    Parameters as :func:`domains_within_area`.
-
-    Returns
-    -------
-    list of float  (0 for every domain of a loop whose development has no area: nothing to compare with)
-    """
-    reference = developed_area(P, gap_angles)
-    if not reference > 0.0:
-        return [0.0] * len(domains)
-    perimeter = polygon_perimeter(P)
-    return [abs(polygon_signed_area(D)) * (perimeter / polygon_perimeter(D)) ** 2 / reference
-            for D, _, _ in domains]
-
-
-def domains_within_area(P, gap_angles, domains, max_ratio):
-    """The planar domains whose area is at most ``max_ratio`` times the missing surface's (beyond the paper).
-
-    Unfolding keeps the loop's edge lengths, not its shape: a long strip-shaped hole (a scan
-    line missing across a body) can unfold to a round polygon that encloses many times the
-    strip's area, and its embedded patch bulges far out of the surface. Each domain, scaled to
-    the loop's perimeter as Sec. 3.3 scales it, is compared with
-    :func:`..geometry.development.developed_area`. Measured: on the benchmark's 62 holes the
-    ratio is at most 1.9; on 632 fuzzed holes at most 4.8 apart from two, whose patches
-    crossed the mesh anyway: a 159-edge hole of cow.obj (8.9) and a 697-edge strip across
-    bunny.obj (14.9, 158 s of repair before it failed).
-
-    Parameters
-    ----------
-    P : (m, 3) float64  loop
-    gap_angles : (m,) float64
-    domains : list of ((m, 2) float64, str, float or None)  see :func:`repair_crossings`
-    max_ratio : float
-
-    Returns
-    -------
-    list  the domains kept, in their order
-
-    Raises
-    ------
-    HoleFillError
-        when no domain is small enough.
-    """
-    ratios = domain_area_ratios(P, gap_angles, domains)
-    kept = [d for d, r in zip(domains, ratios) if r <= max_ratio]
-    if not kept:
-        raise HoleFillError(
-            f"every unfolding of the boundary encloses at least {min(ratios):.1f} times the area of the "
-            f"missing surface (max_domain_area = {max_ratio:g}): a strip-shaped hole whose patch would bulge "
-            f"out of the surface")
-    return kept
-
-
-class _PlanarDomains:
-    """The planar domains of one hole, each computed when first needed.
-
-    Developing the loop and testing a development for simplicity cost O(m^2) each (the exact
-    clearance of every pair of segments), and the annealing's first projection is simple on
-    most holes, whose patches then cross nothing: the fallback polygon is only developed when
-    the first annealing run fails, the repair's developments only when the first patch crosses
-    the mesh (the same polygons and the same choices as when all were developed up front).
-
-    Parameters
-    ----------
-    P : (m, 3) float64  loop
-    gaps : (m,) float64 or None  gap angles of the surrounding surface (None for a triangle)
-    epsilon : float  relative clearance, as :func:`fill`'s
-    developments : bool  the repair may try the loop's developments
-    max_domain_area : float  as :func:`fill`'s (0: no bound)
-    """
-
-    def __init__(self, P, gaps, epsilon, developments, max_domain_area):
-        self.P, self.gaps, self.epsilon = P, gaps, epsilon
-        self.developments, self.max_domain_area = developments, max_domain_area
-        self.relax = None  # blend of the fallback development, once developed (None: none simple)
-        self._fallback = self._all = None
-
-    def fallback(self):
-        """The development offered to :func:`.unfolding.unfold_loop`: the least relaxed simple one, else the plain one."""
-        if self._fallback is None:
-            m = len(self.P)
-            h = polygon_perimeter(self.P) / m
-            self._fallback, self.relax = simple_development(self.P, self.gaps, self.epsilon * h)
-            if self._fallback is None:  # offered anyway: unfold_loop then names it in its failure
-                self._fallback = develop_loop(self.P, self.gaps)
-        return self._fallback
-
-    def _bounded(self):
-        return self.max_domain_area > 0 and self.gaps is not None
-
-    def first(self, Q, method):
-        """[the unfolding's domain] if it is within the area bound, else every domain within it (:meth:`all`)."""
-        first = [(Q, method, self.relax if method == "development" else None)]
-        if not self._bounded() or domain_area_ratios(self.P, self.gaps, first)[0] <= self.max_domain_area:
-            return first
-        return self.all(Q, method)
-
-    def all(self, Q, method):
-        """The unfolding's domain, then the loop's other simple developments, those within the area bound.
-
-        Raises
-        ------
-        HoleFillError
-            when none is within the area bound (:func:`domains_within_area`).
-        """
-        if self._all is None:
-            domains = [(Q, method, self.relax if method == "development" else None)]
-            if self.developments:
-                m = len(self.P)
-                eps_abs = self.epsilon * polygon_perimeter(self.P) / m
-                domains += [(D, "development", r) for D, r in simple_developments(self.P, self.gaps, eps_abs)
-                            if not (method == "development" and r == self.relax)]
-            if self._bounded():
-                domains = domains_within_area(self.P, self.gaps, domains, self.max_domain_area)
-            self._all = domains
-        return self._all
-
-
-def _development_domain(planar_domains):
-    """Option ``domain='development'`` (beyond the paper): the loop's least relaxed simple development, no annealing.
-
-    The development (:func:`..geometry.development.develop_loop`) turns by the angles the
-    surrounding surface leaves at each loop vertex and walks the loop's edge lengths: on a
-    developable surface (a crease between two flat flanks, a cylinder) it is the removed
-    surface's own layout, on a curved one the closure spreads the angle deficit along the loop.
-    Measured on the benchmark's 45 cut holes (mean patch-to-ground-truth distance per mille of
-    the diagonal, default -> this option, the loop-length unfolding as the default): crease 4.05
-    -> 2.55, crossing 0.46 -> 0.29, real-size 1.31 -> 0.78, large 2.06 -> 2.70 (the sphere's
-    157-edge hole 1.26 -> 3.70), medium 1.64 -> 1.67, small 0.153 -> 0.192, all holes 2.01 -> 1.50.
-
-    Returns
-    -------
-    Q : (m, 2) float64 or None  None when no development of the ladder is simple
-    info : dict or None  as :func:`.unfolding.unfold_loop`'s
-    """
-    D = planar_domains.fallback()
-    if planar_domains.relax is None:
-        return None, None
-    return D, {"method": "development", "restarts": 0, "sa_steps": 0, "accepted_steps": 0, "loop_lengths": False}
-
-
 def _edge_ratio(ctx, vertices, faces):
     """Mean patch edge (each face's three edges) over the mean edge of the faces around the hole."""
     e = surrounding_edge_length(ctx)
     return float(edge_lengths(np.concatenate([ctx.points, vertices]), faces).mean() / e) if e > 0 else 1.0
-
-
-def _corner_angle(P, keep, v):
-    i = keep.index(v)
-    a, b = P[keep[i - 1]] - P[v], P[keep[(i + 1) % len(keep)]] - P[v]
-    return float(np.arccos(np.clip(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)), -1.0, 1.0)))
 
 
 def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5000, step_bound="global",
@@ -604,7 +191,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         Edge lengths of the unfolded polygon (:func:`.unfolding.with_loop_lengths`).
     domain : {'unfolding', 'development'}
         Beyond the paper: 'development' takes the loop's simple development as the planar domain
-        whenever there is one (:func:`_development_domain`).
+        whenever there is one (:func:`.planar_domains.development_domain`).
     energy : {'area', 'fairing'}
         E_AREA or E_DF (Sec. 3.3); ``area_rows`` ({'mesh', 'interior'}) chooses E_AREA's rows.
     refinement : bool
@@ -627,7 +214,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         loop vertex i). ``info``: ``unfolding`` ('annealing' or 'development'), ``restarts``, ``sa_steps``,
         ``energy_pe_start`` / ``energy_pe_end`` (E_PE before / after annealing),
         ``development_relax`` (blend of the development used, or offered to the annealing
-        after its first run failed, see :func:`simple_development`; None when none was developed), ``ears_clipped``, ``edge_swaps``, ``crossing_faces`` (left
+        after its first run failed, see :func:`meshlab_holefill.geometry.development.simple_development`; None when none was developed), ``ears_clipped``, ``edge_swaps``, ``crossing_faces`` (left
         after repair; the filter rejects such a patch),
         ``unfolding_seconds`` (Sec. 3.1), ``embedding_seconds`` (Sec. 3.2-3.3: triangulation,
         refinement and energy solve, as the paper's embedding times), ``repair_seconds`` and
@@ -663,8 +250,8 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         energy = "area_interior"  # the embedding's name for E_AREA summed over P_Int only
     t0 = time.perf_counter()
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m) if m > 3 else None
-    planar_domains = _PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
-    Q, unfold_info = _development_domain(planar_domains) if domain == "development" and m > 3 else (None, None)
+    planar_domains = PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
+    Q, unfold_info = development_domain(planar_domains) if domain == "development" and m > 3 else (None, None)
     if Q is None:
         Q, unfold_info = unfold_loop(P, rng, k=k, temperature=temperature, epsilon=epsilon,
                                      max_restarts=max_restarts, sa_steps=sa_steps, step_bound=step_bound,
@@ -690,7 +277,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
             ctx, domains, vertices, faces, energy, refinement, tangential, density, records, bad=bad)
         if method == "development":
             relax = used
-    counts = _CrossingCounts(ctx)
+    counts = CrossingCounts(ctx)
     if repair:
         counts.remember(vertices, faces, n_bad)
     n_swaps = 0

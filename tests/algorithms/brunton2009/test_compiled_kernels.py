@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
+from meshlab_holefill.algorithms.brunton2009 import quality_swaps
 from meshlab_holefill.algorithms.brunton2009 import embedding as emb
 from meshlab_holefill.core import examples
 from meshlab_holefill.core.holes import boundary_loops, hole_context
@@ -102,7 +103,7 @@ def test_best_swap_round_is_the_running_best(seed):
         return base if interior == "input" else crossing[interior]
 
     better = [(sc, r, r, np.zeros((0, 3), np.int64), r + 1) for sc, r in rounds if sc > start]
-    kept, _, swaps = cu._best_round(None, better, "input", None, None, count)
+    kept, _, swaps = quality_swaps._best_round(None, better, "input", None, None, count)
     assert kept == _running_best(start, rounds, base, lambda r: crossing[r])
     assert swaps == (0 if kept == "input" else kept + 1)
     assert len(counted) <= len(better) + 1

@@ -11,6 +11,9 @@ from hypothesis import strategies as st
 
 from meshlab_holefill import FILTERS, HoleFillError
 from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
+from meshlab_holefill.algorithms.brunton2009 import crossing_repair
+from meshlab_holefill.algorithms.brunton2009 import planar_domains
+from meshlab_holefill.algorithms.brunton2009 import quality_swaps
 from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
 from meshlab_holefill.algorithms.brunton2009.embedding import embed_patch, embedding_energy, energy_rows, tangential_relaxation, umbrella_operator, vertex_normals
 from meshlab_holefill.algorithms.brunton2009.unfolding import anneal_loop, colour_classes, linear_motion_is_simple, planarity_energy, planarity_terms, project_to_best_plane, unfold_loop
@@ -440,7 +443,7 @@ def test_wrapped_hole_on_a_tube_is_filled_on_the_tube():
     assert np.abs(radius - 1).max() < 0.03
     q = triangle_quality(patch.all_points(ctx.points), patch.faces)
     assert q.mean() > 0.85 and q.min() > 0.3
-    assert len(cu.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+    assert len(crossing_repair.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
 
 
 def test_filter_registration_and_paper_defaults():
@@ -529,7 +532,7 @@ def test_relaxed_development_unfolds_the_wrapped_torus_hole(torus_wrapped_hole):
     patch = cu.fill(ctx, max_restarts=2)
     validate_patch(patch, ctx.points, ctx.forbidden_edges)
     assert patch.info["unfolding"] == "development" and patch.info["development_relax"] == relax
-    assert len(cu.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+    assert len(crossing_repair.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
     X = patch.all_points(ctx.points)
     tube = np.hypot(np.hypot(X[:, 0], X[:, 1]) - 1.0, X[:, 2]) - 0.4
     assert np.abs(tube).mean() < 0.01  # on the torus, not a membrane across the tube
@@ -546,7 +549,7 @@ def test_edge_swaps_lift_squeezed_triangles_and_keep_the_energy_solved(torus_wra
     assert q0.min() < 0.3 <= q1.min() and q1.mean() >= max(q0.mean(), 0.85)
     assert swapped.info["edge_swaps"] > 0 and len(swapped.faces) == len(plain.faces)
     validate_patch(swapped, ctx.points, ctx.forbidden_edges)
-    assert len(cu.crossing_faces(ctx, swapped.vertices, swapped.faces)) == 0
+    assert len(crossing_repair.crossing_faces(ctx, swapped.vertices, swapped.faces)) == 0
     # Interior vertices still minimise E_DF on the swapped connectivity.
     n_ctx, s = len(ctx.vertices), len(swapped.vertices)
     joint = np.concatenate([ctx.faces, np.where(swapped.faces < ctx.size, swapped.faces,
@@ -627,7 +630,7 @@ def test_tangential_relaxation_lifts_the_triangles_fairing_squeezes_on_scan_hole
     assert q0.min() < 0.3 < bound
     assert q1.min() >= 0.3 and q1.mean() >= 0.85
     validate_patch(relaxed, ctx.points, ctx.forbidden_edges)
-    assert len(cu.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) == 0
+    assert len(crossing_repair.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) == 0
 
 
 # ----------------------------------------------------------------------------- repair
@@ -641,9 +644,9 @@ def test_repair_prefers_a_domain_whose_patch_clears_a_folded_border_to_a_sliver_
     assert len(loops[1]) == 22 and corner_quality_bound(V, F, loops[1].vertices) > 0.3
     first, _ = unfold_loop(ctx.points, np.random.default_rng(0))
     X, Fp = tri.triangulate_and_embed(ctx, first, np.arange(ctx.size), [], "fairing", True, True)
-    assert len(cu.crossing_faces(ctx, X, Fp)) > 0  # the paper's patch crosses the fold
+    assert len(crossing_repair.crossing_faces(ctx, X, Fp)) > 0  # the paper's patch crosses the fold
     # Ear clipping alone (the first domain only) ends with a sliver ear.
-    n_bad, Xe, Fe, clipped, _, _ = cu.repair_crossings(ctx, [(first, "annealing", None)], X, Fp, "fairing", True, True)
+    n_bad, Xe, Fe, clipped, _, _ = crossing_repair.repair_crossings(ctx, [(first, "annealing", None)], X, Fp, "fairing", True, True)
     assert n_bad == 0 and clipped > 0
     assert triangle_quality(np.concatenate([ctx.points, Xe]), Fe).min() < 0.3
     patch = cu.fill(ctx)
@@ -651,7 +654,7 @@ def test_repair_prefers_a_domain_whose_patch_clears_a_folded_border_to_a_sliver_
     assert patch.info["ears_clipped"] == 0 and patch.info["crossing_faces"] == 0
     assert patch.info["unfolding"] == "development" and patch.info["development_relax"] > 0
     assert q.min() >= 0.3
-    assert len(cu.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+    assert len(crossing_repair.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
     validate_patch(patch, ctx.points, ctx.forbidden_edges)
 
 
@@ -682,7 +685,7 @@ def test_clip_ears_cuts_exactly_the_convex_corners_of_a_staircase_hole():
     # Turn of each corner (counter-clockwise loop): > 0 convex, < 0 reflex, 0 straight.
     d_in, d_out = Q - np.roll(Q, 1, axis=0), np.roll(Q, -1, axis=0) - Q
     turn = np.round(d_in[:, 0] * d_out[:, 1] - d_in[:, 1] * d_out[:, 0], 12)
-    keep, ears, clipped = cu.clip_ears(ctx, Q, np.arange(k), [], list(range(k)))
+    keep, ears, clipped = crossing_repair.clip_ears(ctx, Q, np.arange(k), [], list(range(k)))
     # Every vertex offends, yet a reflex ear would lie on the mesh and a straight one has no area:
     # exactly the 8 convex corners go, and never two neighbours in one round.
     assert clipped == len(ears) == 8
@@ -692,7 +695,7 @@ def test_clip_ears_cuts_exactly_the_convex_corners_of_a_staircase_hole():
     # The ears and the rest of the loop close the hole once, oriented like the loop.
     validate_patch(Patch(np.zeros((0, 3)), fill_rest(ctx, Q, keep, ears)), ctx.points, ctx.forbidden_edges)
     # Nothing offending, nothing clipped.
-    keep, ears, clipped = cu.clip_ears(ctx, Q, np.arange(k), [], [])
+    keep, ears, clipped = crossing_repair.clip_ears(ctx, Q, np.arange(k), [], [])
     assert clipped == 0 and ears == [] and keep.tolist() == list(range(k))
 
 
@@ -708,10 +711,10 @@ def test_clip_ears_never_uses_a_chord_the_mesh_already_has():
     ctx = hole_context(V, F, min(boundary_loops(F), key=len), rings=cu.RINGS)
     assert ctx.loop[:3].tolist() == [14, 21, 15] and ctx.forbidden_edges.tolist() == [[0, 2]]
     Q = ctx.points[:, :2]
-    keep, ears, clipped = cu.clip_ears(ctx, Q, np.arange(ctx.size), [], [1])
+    keep, ears, clipped = crossing_repair.clip_ears(ctx, Q, np.arange(ctx.size), [], [1])
     assert clipped == 0 and ears == [] and keep.tolist() == list(range(ctx.size))
     # With every vertex offending, the corner at 21 still stays; what is clipped closes cleanly.
-    keep, ears, clipped = cu.clip_ears(ctx, Q, np.arange(ctx.size), [], list(range(ctx.size)))
+    keep, ears, clipped = crossing_repair.clip_ears(ctx, Q, np.arange(ctx.size), [], list(range(ctx.size)))
     assert clipped > 0 and 1 in keep.tolist() and all(e[1] != 1 for e in ears)
     validate_patch(Patch(np.zeros((0, 3)), fill_rest(ctx, Q, keep, ears)), ctx.points, ctx.forbidden_edges)
     # The rule on its own (that ear above also lies on the mesh face): on the staircase hole the
@@ -721,9 +724,9 @@ def test_clip_ears_never_uses_a_chord_the_mesh_already_has():
 
     ctx = flat_disk_hole()
     walled = dataclasses.replace(ctx, forbidden_edges=np.array([[1, 19]]))
-    _, ears, clipped = cu.clip_ears(ctx, ctx.points[:, :2], np.arange(20), [], list(range(20)))
+    _, ears, clipped = crossing_repair.clip_ears(ctx, ctx.points[:, :2], np.arange(20), [], list(range(20)))
     assert 0 in [e[1] for e in ears] and clipped == 8
-    keep, ears, clipped = cu.clip_ears(walled, ctx.points[:, :2], np.arange(20), [], list(range(20)))
+    keep, ears, clipped = crossing_repair.clip_ears(walled, ctx.points[:, :2], np.arange(20), [], list(range(20)))
     assert clipped == 7 and 0 in keep.tolist() and all(e[1] != 0 for e in ears)
 
 
@@ -754,17 +757,17 @@ def test_improve_by_swaps_undoes_a_bad_swap_and_keeps_the_energy_solved():
     bad_faces = worst[1]
     bad_vertices = embed_patch(ctx, s, bad_faces, energy="area")
     q0 = triangle_quality(np.concatenate([ctx.points, bad_vertices]), bad_faces)
-    out_vertices, out_faces, swaps = cu.improve_by_swaps(ctx, bad_vertices, bad_faces, "area")
+    out_vertices, out_faces, swaps = quality_swaps.improve_by_swaps(ctx, bad_vertices, bad_faces, "area")
     q1 = triangle_quality(np.concatenate([ctx.points, out_vertices]), out_faces)
     assert swaps > 0 and q1.min() > q0.min() + 0.1  # measured: 0.49 -> 0.82
     assert len(out_faces) == len(bad_faces) and len(out_vertices) == s
     validate_patch(Patch(out_vertices, out_faces), ctx.points, ctx.forbidden_edges)
-    assert len(cu.crossing_faces(ctx, out_vertices, out_faces)) == 0
+    assert len(crossing_repair.crossing_faces(ctx, out_vertices, out_faces)) == 0
     assert np.abs(out_vertices[:, 2]).max() < 1e-12  # flat context, flat patch
     # The kept vertices minimise E_AREA on the kept connectivity, not on the one they came from.
     assert np.allclose(out_vertices, embed_patch(ctx, s, out_faces, energy="area"), atol=1e-12)
     # No new vertex, nothing to swap.
-    assert cu.improve_by_swaps(ctx, np.zeros((0, 3)), bad_faces, "area")[2] == 0
+    assert quality_swaps.improve_by_swaps(ctx, np.zeros((0, 3)), bad_faces, "area")[2] == 0
 
 
 @settings(max_examples=30, deadline=None)
@@ -852,10 +855,10 @@ def test_domains_much_larger_than_the_missing_surface_are_refused():
     strip = (develop_loop(ctx.points, gaps), "development", 0.0)
     round_polygon = (develop_loop(ctx.points, gaps, relax=1.0), "development", 1.0)  # same edges, convex
     # the convex polygon of a 1.7-long perimeter encloses ~0.22, 5.7 times the strip's 0.04
-    assert cu.domains_within_area(ctx.points, gaps, [round_polygon, strip], 6.0) == [round_polygon, strip]
-    assert cu.domains_within_area(ctx.points, gaps, [round_polygon, strip], 5.0) == [strip]
+    assert planar_domains.domains_within_area(ctx.points, gaps, [round_polygon, strip], 6.0) == [round_polygon, strip]
+    assert planar_domains.domains_within_area(ctx.points, gaps, [round_polygon, strip], 5.0) == [strip]
     with pytest.raises(HoleFillError, match=r"at least 5\.\d times the area of the missing surface"):
-        cu.domains_within_area(ctx.points, gaps, [round_polygon], 5.0)
+        planar_domains.domains_within_area(ctx.points, gaps, [round_polygon], 5.0)
 
 
 def test_max_domain_area_reaches_the_filter_and_fails_the_hole_cleanly():

@@ -7,6 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
+from meshlab_holefill.algorithms.brunton2009 import crossing_repair
 from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
 from meshlab_holefill.algorithms.brunton2009.slivers import repair_slivers
 from meshlab_holefill.geometry.flips import folds
@@ -130,7 +131,7 @@ def test_repair_slivers_lifts_a_cap_pulled_onto_a_border_edge():
     Y[v] = 0.5 * (X[a] + X[b]) + 0.03 * (X[v] - 0.5 * (X[a] + X[b]))
     q0 = triangle_quality(Y, patch.faces).min()
     assert q0 < 0.1
-    V2, F2, rounds = repair_slivers(ctx, Y[k:], patch.faces, lambda W, G: len(cu.crossing_faces(ctx, W, G)))
+    V2, F2, rounds = repair_slivers(ctx, Y[k:], patch.faces, lambda W, G: len(crossing_repair.crossing_faces(ctx, W, G)))
     Z = np.concatenate([ctx.points, V2])
     assert rounds > 0 and triangle_quality(Z, F2).min() >= 0.1
     assert not folds(Z, F2)
