@@ -1,6 +1,7 @@
 """A planar layout whose lift stretches it is refined to the boundary's density before the Poisson solve."""
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from meshlab_holefill.algorithms.xu2013.advancing_front import advancing_front_triangulation
 from meshlab_holefill.algorithms.xu2013.poisson_patch import LIFT_STRETCH, harmonic_lift, lift_stretch, refine_layout
@@ -47,10 +48,10 @@ def test_lift_of_a_flat_loop_does_not_stretch(radius):
     assert lift_stretch(X, D, F, 40) == pytest.approx(1.0, abs=0.01)
 
 
-@pytest.mark.parametrize("aspect", [2.5, 4.0])
-def test_refined_layout_lifts_at_the_boundary_density(aspect):
+@settings(max_examples=15, deadline=None)
+@given(aspect=st.floats(2.5, 5.0), k=st.integers(24, 64))
+def test_refined_layout_lifts_at_the_boundary_density(aspect, k):
     """A layout smaller than the surface its boundary spans (an ellipse lifted onto a circle of equal perimeter)."""
-    k = 40
     D, F = layout_of(k, aspect)
     P = circle(k)
     X = harmonic_lift(D, F, P)
