@@ -7,7 +7,7 @@ Imports ``errors`` and ``geometry`` only (no pymeshlab). Modules:
 - ``parameters``: :class:`ParamSpec`, :func:`resolve_params`, :class:`Percentage`.
 - ``attributes``: :class:`MeshArrays`, attributes of new elements and of refined borders.
 - ``crossings``: patches against the mesh near them, against each other, at shared vertices.
-- ``parallel``: holes filled in forked worker processes, with a time limit per hole.
+- ``parallel``: holes filled by this process and forked children at once, with a time limit per hole.
 - ``pipeline``: :func:`fill_mesh_holes`, what every filter does around its algorithm.
 """
 from .attributes import MeshArrays

@@ -1,21 +1,23 @@
-"""Holes filled one per worker process (they are independent), with a time limit per hole.
+"""Holes filled by several processes at once (they are independent), with a time limit per hole.
 
-Each fill sees only its :class:`~meshlab_holefill.core.holes.HoleContext` and is
-deterministic (stochastic algorithms take a seed), so the outcome of a hole does not depend
-on which process fills it or when: the result is the same whatever the number of workers.
-Workers are forked, so they inherit the fill function and the contexts without pickling
-them (closures and monkeypatched functions work too); only each outcome travels back. Where
-fork is not available, or inside a daemonic process (a Dask or multiprocessing worker,
-which may not have children), holes are filled in this process.
+Each fill sees only its own hole and is deterministic (stochastic algorithms take a seed),
+so the outcome of a hole does not depend on which process fills it or when: the result is
+the same whatever the number of workers. :func:`run_jobs` runs one job per hole in this
+process and in children forked for the call, which inherit the mesh, the job and the loaded
+kernels without pickling them (closures and monkeypatched functions work too); only each
+job's result travels back. This process takes jobs too, so ``workers`` processes means
+``workers - 1`` forks. Where fork is not available, or inside a daemonic process (a Dask or
+multiprocessing worker, which may not have children), jobs run in this process.
 """
 from __future__ import annotations
 
-import concurrent.futures
 import multiprocessing
 import os
+import queue
 import signal
 import threading
 import time
+import traceback
 from contextlib import contextmanager
 
 import numpy as np
@@ -23,7 +25,8 @@ import numpy as np
 from ..errors import HoleFillError
 from .patch import validate_patch
 
-__all__ = ["FILL_ERRORS", "HoleTimeLimit", "available_workers", "fill_contexts", "limit_workers", "reason_of"]
+__all__ = ["FILL_ERRORS", "HoleTimeLimit", "available_workers", "fill_one", "limit_workers", "reason_of", "run_jobs",
+           "worker_count"]
 
 _WORKER_CAP = None  # set by limit_workers
 
@@ -52,6 +55,11 @@ def available_workers():
     return cpus if _WORKER_CAP is None else min(cpus, _WORKER_CAP)
 
 
+def worker_count(workers, jobs):
+    """Processes :func:`run_jobs` uses for ``jobs`` jobs when asked for ``workers`` (0: one per CPU)."""
+    return max(1, min(available_workers() if workers == 0 else workers, available_workers(), jobs))
+
+
 @contextmanager
 def limit_workers(count):
     """Fill holes with at most ``count`` processes inside the block (a batch task already runs one file per core)."""
@@ -63,10 +71,15 @@ def limit_workers(count):
         _WORKER_CAP = previous
 
 
+def _can_time():
+    """Whether :func:`_time_limit` works here: only a main thread receives SIGALRM."""
+    return threading.current_thread() is threading.main_thread()
+
+
 @contextmanager
 def _time_limit(seconds):
     """Raise HoleTimeLimit in this thread after ``seconds`` (0: no limit; only in a main thread)."""
-    if not seconds or threading.current_thread() is not threading.main_thread():
+    if not seconds or not _can_time():
         yield
         return
 
@@ -82,8 +95,14 @@ def _time_limit(seconds):
         signal.signal(signal.SIGALRM, previous)
 
 
-def _fill_one(fill, ctx, fill_kwargs, timelimit):
-    """(validated patch or failure reason, seconds) of one hole."""
+def fill_one(fill, ctx, fill_kwargs, timelimit):
+    """Fill and validate one hole within ``timelimit`` seconds (0: no limit).
+
+    Returns
+    -------
+    (Patch or str, float)
+        The validated patch or the reason the hole failed, and the seconds it took.
+    """
     t0 = time.perf_counter()
     try:
         with _time_limit(timelimit):
@@ -94,69 +113,138 @@ def _fill_one(fill, ctx, fill_kwargs, timelimit):
     return patch, time.perf_counter() - t0
 
 
-_JOB = None  # (fill, contexts, fill_kwargs, timelimit, check) of the pool being run, inherited by forked workers
+class _Raised:
+    """An exception a job raised in a child, carried back to be raised here."""
+
+    def __init__(self, exc):
+        self.exc = exc
+        self.trace = "".join(traceback.format_exception(exc))
 
 
-def _fill_in_worker(index):
-    fill, contexts, fill_kwargs, timelimit, check = _JOB
-    patch, seconds = _fill_one(fill, contexts[index], fill_kwargs, timelimit)
-    checked = check(contexts[index], patch) if check is not None and not isinstance(patch, str) else None
-    return index, (patch, seconds, checked)
+def _take(counter, count):
+    """The next position nobody has taken, or None when all are."""
+    with counter.get_lock():
+        position = counter.value
+        counter.value = position + 1
+    return position if position < count else None
 
 
-def fill_contexts(fill, contexts, fill_kwargs, workers=1, timelimit=0.0, progress=None, check=None):
-    """Fill every context, in worker processes when ``workers`` > 1.
+def _child_main(job, items, counter, conn):
+    try:
+        while (position := _take(counter, len(items))) is not None:
+            conn.send((position, job(items[position])))
+    except BaseException as exc:  # a bug in a job: raised again by the parent, as if the job ran there
+        try:
+            conn.send((None, _Raised(exc)))
+        except Exception:  # the exception itself does not pickle
+            conn.send((None, _Raised(RuntimeError(f"{type(exc).__name__}: {exc}"))))
+    finally:
+        conn.close()
+
+
+def _receive(conn, inbox):
+    """Move what one child sends into ``inbox`` until it closes its end (done, or dead)."""
+    try:
+        while True:
+            inbox.put(conn.recv())
+    except (EOFError, OSError):
+        pass
+    finally:
+        inbox.put(conn)  # this child is done
+
+
+def _fork_children(count, fork, job_items_counter, inbox, procs):
+    """Fork ``count`` children running :func:`_child_main` (appended to ``procs``), each with a reader thread here."""
+    receivers = []
+    for _ in range(count):  # every fork before the first reader thread, which a child would not have
+        receiving, sending = fork.Pipe(duplex=False)
+        procs.append(fork.Process(target=_child_main, args=(*job_items_counter, sending), daemon=True))
+        procs[-1].start()
+        sending.close()  # only the child holds it now: its end of the pipe closes when the child is done
+        receivers.append(receiving)
+    for receiving in receivers:
+        threading.Thread(target=_receive, args=(receiving, inbox), daemon=True).start()
+
+
+def run_jobs(job, items, workers=1, progress=None):
+    """``job(item)`` for every item, by up to ``workers`` processes at once: this one and forked children.
+
+    Every process takes the next item not yet taken, in the order given: put the longest
+    jobs first, as the run ends when the last job does. Children are forked here, after
+    everything the jobs read is ready, and gone when this returns.
 
     Parameters
     ----------
-    fill : callable ``fill(ctx, **fill_kwargs) -> Patch``
-    contexts : list of HoleContext
-    fill_kwargs : dict
+    job : callable ``job(item) -> picklable value``
+        Should catch what makes one item fail; anything else it raises is raised here.
+    items : sequence
     workers : int
-        Processes at once; 0: :func:`available_workers`; 1: in this process.
-    timelimit : float
-        Seconds one fill may take; 0: no limit. A fill over it fails with the reason.
+        Processes at once (0: one per CPU); see :func:`worker_count`.
     progress : callable, optional
-        ``progress(position)`` after each fill, ``position`` into ``contexts``, in the order
-        fills finish.
-    check : callable, optional
-        ``check(ctx, patch) -> small picklable value``, run on each validated patch by the
-        worker that filled it, when holes are filled in workers: per-hole work that would
-        otherwise wait for every fill in this process (the crossing check against the mesh).
+        ``progress(position)`` after each job, ``position`` into ``items``, in the order jobs
+        finish (called in this thread).
 
     Returns
     -------
-    list of (Patch or str, float, object)
-        Per context, in order: the validated patch or the reason it failed, the seconds its
-        fill took, and ``check``'s value (None when it was not run: in this process, or
-        for a failed fill).
+    list
+        Per item, in order: ``job(item)``, or for an item whose child died (killed by the
+        system, out of memory) the str reason.
     """
-    global _JOB
-    workers = min(available_workers() if workers == 0 else workers, available_workers(), len(contexts))
-    if workers <= 1:
-        outcomes = []
-        for position, ctx in enumerate(contexts):
-            outcomes.append(_fill_one(fill, ctx, fill_kwargs, timelimit) + (None,))
+    workers = worker_count(workers, len(items))
+    # A job's time limit is a SIGALRM, which only a main thread gets: elsewhere this process only collects.
+    children = workers - 1 if workers == 1 or _can_time() else workers
+    results, done = [None] * len(items), [False] * len(items)
+    if children == 0:
+        for position, item in enumerate(items):
+            results[position] = job(item)
             if progress:
                 progress(position)
-        return outcomes
-    # Largest holes first: the pool ends when its longest fill does, so start that one early.
-    order = sorted(range(len(contexts)), key=lambda j: -len(contexts[j].loop))
-    outcomes = [None] * len(contexts)
-    _JOB = (fill, contexts, fill_kwargs, timelimit, check)
-    try:
-        with concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
-            futures = [pool.submit(_fill_in_worker, j) for j in order]
+        return results
+    fork = multiprocessing.get_context("fork")
+    counter = fork.Value("q", 0)
+    inbox = queue.SimpleQueue()
+    procs = []
+    open_children, finished = children, False
+
+    def collect(block):
+        """Record what the children sent (all of it, when ``block``: until every child is done)."""
+        nonlocal open_children
+        while open_children:
             try:
-                for future in concurrent.futures.as_completed(futures):
-                    index, outcome = future.result()
-                    outcomes[index] = outcome
-                    if progress:
-                        progress(index)
-            except concurrent.futures.process.BrokenProcessPool as exc:  # a fill killed its worker (e.g. memory)
-                for index, outcome in enumerate(outcomes):
-                    if outcome is None:
-                        outcomes[index] = (f"the worker process filling this hole died ({exc})", 0.0, None)
+                message = inbox.get(block=block)
+            except queue.Empty:
+                return
+            if not isinstance(message, tuple):  # a child's connection, closed: it sends nothing more
+                message.close()
+                open_children -= 1
+                continue
+            position, value = message
+            if isinstance(value, _Raised):
+                raise value.exc from RuntimeError(f"in a worker process:\n{value.trace}")
+            results[position], done[position] = value, True
+            if progress:
+                progress(position)
+
+    try:
+        _fork_children(children, fork, (job, items, counter), inbox, procs)
+        if children < workers:
+            while (position := _take(counter, len(items))) is not None:
+                results[position], done[position] = job(items[position]), True
+                if progress:
+                    progress(position)
+                collect(block=False)
+        collect(block=True)
+        finished = True
     finally:
-        _JOB = None
-    return outcomes
+        if not finished:  # this process raised: the children's work is not wanted
+            with counter.get_lock():
+                counter.value = len(items)
+            for proc in procs:
+                proc.terminate()
+        for proc in procs:
+            proc.join()
+    codes = ", ".join(sorted({str(p.exitcode) for p in procs if p.exitcode}))
+    for position in range(len(items)):
+        if not done[position]:
+            results[position] = f"the worker process filling this hole died (exit code {codes or 'unknown'})"
+    return results

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
 from .crossings import (clashing_patches, crossing_patches, face_boxes_near, load_face_boxes_kernel, patch_box,
                         patch_intersections)
-from .parallel import FILL_ERRORS, fill_contexts, reason_of
+from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .holes import (boundary_loops, edge_summary, hole_context, hole_measures, is_outline, outline_ratio,
                     vertex_face_incidence)
 from .parameters import ParamSpec, Percentage
@@ -271,41 +271,51 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     elif prepare is not None:
         for i in todo:
             report[i]["split_boundary_edges"] = 0
-    contexts, context_seconds = {}, {}
-    for i in todo:
+    # A hole met in an earlier pass is filled again only where its surroundings changed.
+    refill = [i for i in todo if i not in fills or fills[i][0] != _key_here(V, F, loops[i], incidence, rings, i)]
+    # Largest holes first: the run ends when its longest fill does, so start that one early.
+    order = sorted(refill, key=lambda i: -len(loops[i]))
+    workers = worker_count(params["workers"], len(order))
+    # With workers each checks its own patches against the mesh, instead of waiting for every fill here.
+    check_in_job = params["selfintersection"] and workers > 1
+    if check_in_job:
+        load_face_boxes_kernel(F)  # the workers inherit the loaded kernel
+
+    def fill_hole(i):
+        """(context key, patch or failure reason, seconds, mesh crossings or None) of hole ``i``."""
         t0 = time.perf_counter()
         try:
-            contexts[i] = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
+            ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
         except FILL_ERRORS as exc:
-            report[i].update(status="failed", reason=reason_of(exc), seconds=time.perf_counter() - t0)
-            continue
-        context_seconds[i] = time.perf_counter() - t0
-    keys = {i: _context_key(ctx) for i, ctx in contexts.items()}
-    refill = [i for i in contexts if i not in fills or fills[i][0] != keys[i]]
-    def filled_one(position):  # fill_contexts counts positions in ``refill``; the caller wants hole ids
-        progress(refill[position], len(refill))
+            return None, reason_of(exc), time.perf_counter() - t0, None
+        context_seconds = time.perf_counter() - t0
+        outcome, seconds = fill_one(fill, ctx, fill_kwargs, params["timelimit"])
+        crossed = None
+        if check_in_job and not isinstance(outcome, str):
+            crossed = _mesh_crossings(V, F, ctx.loop, outcome)
+        return _context_key(ctx), outcome, context_seconds + seconds, crossed
 
-    check = (lambda ctx, patch: _mesh_crossings(V, F, ctx, patch)) if params["selfintersection"] else None
-    if check is not None and params["workers"] != 1 and len(refill) > 1:
-        load_face_boxes_kernel(F)  # the workers run the check: they inherit the loaded kernel
-    outcomes = fill_contexts(fill, [contexts[i] for i in refill], fill_kwargs, workers=params["workers"],
-                             timelimit=params["timelimit"], progress=filled_one if progress else None, check=check)
-    checked = {}  # hole -> (mesh faces crossed, seconds) where a worker checked its own patch
-    for i, (outcome, seconds, crossed) in zip(refill, outcomes):
-        fills[i] = (keys[i], outcome, context_seconds[i] + seconds)
+    def filled_one(position):  # run_jobs counts positions in ``order``; the caller wants hole ids
+        progress(order[position], len(order))
+
+    outcomes = run_jobs(fill_hole, order, workers, progress=filled_one if progress else None)
+    checked = {}  # hole -> (mesh faces crossed, seconds) where the job checked its own patch
+    for i, outcome in zip(order, outcomes):
+        key, outcome, seconds, crossed = (None, outcome, 0.0, None) if isinstance(outcome, str) else outcome
+        fills[i] = (key, outcome, seconds)
         if crossed is not None:
             checked[i] = crossed
-    filled = []  # (hole id, context, patch, seconds) of patches that passed validation
-    for i, ctx in contexts.items():
-        _, outcome, seconds = fills[i]
+    filled = []  # (hole id, loop vertices, patch, seconds) of patches that passed validation
+    for i in todo:
+        key, outcome, seconds = fills[i]
         if isinstance(outcome, str):
             report[i].update(status="failed", reason=outcome, seconds=seconds)
             continue
-        filled.append((i, ctx, outcome, seconds))
+        filled.append((i, np.asarray(loops[i].vertices, np.int64), outcome, seconds))
     if params["selfintersection"]:
         _check_here(V, F, filled, checked)
     done_loops, patches, closed_ids, crossing = [], [], [], []
-    for i, ctx, patch, seconds in filled:
+    for i, loop, patch, seconds in filled:
         entry = report[i]
         if params["selfintersection"]:
             hits, check_seconds = checked[i]
@@ -317,7 +327,7 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
                 continue
         entry.update(status="closed", new_vertices=len(patch.vertices), new_faces=len(patch.faces),
                      seconds=seconds, **_json_safe(patch.info))
-        done_loops.append(ctx.loop)
+        done_loops.append(loop)
         patches.append(patch)
         closed_ids.append(i)
     if crossing:
@@ -334,33 +344,41 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     return arrays, V, F, V2, F2, done_loops, patches, refinement, report
 
 
-def _mesh_crossings(V, F, ctx, patch, candidates=None):
-    """(mesh faces the patch of ``ctx`` crosses, seconds): the self-intersection check of one patch.
+def _key_here(V, F, loop, incidence, rings, index):
+    """:func:`_context_key` of a hole's context built here, or None where it cannot be built."""
+    try:
+        return _context_key(hole_context(V, F, loop, incidence, rings=rings, index=index))
+    except FILL_ERRORS:
+        return None
+
+
+def _mesh_crossings(V, F, loop, patch, candidates=None):
+    """(mesh faces the patch of the hole with ``loop`` crosses, seconds): the self-intersection check of one patch.
 
     ``candidates`` are :func:`.crossings.face_boxes_near` of a union of patch boxes holding
-    this patch's; without them (in a worker, for its own patch) they are found for this
+    this patch's; without them (in a job, for its own patch) they are found for this
     patch's box alone. Either way the faces tested are those overlapping the patch's box,
     so the answer is the same.
     """
     t0 = time.perf_counter()
-    points = patch.all_points(ctx.points)
+    points = patch.all_points(V[loop])
     if candidates is None:
         candidates = face_boxes_near(V, F, patch_box(points)[None])
-    hits = patch_intersections(points, patch.faces, V, F, candidates, ctx.loop)
+    hits = patch_intersections(points, patch.faces, V, F, candidates, loop)
     return len(hits), time.perf_counter() - t0
 
 
 def _check_here(V, F, filled, checked):
-    """Check, in this process, the patches no worker checked, adding them to ``checked``.
+    """Check, in this process, the patches no job checked, adding them to ``checked``.
 
     Their mesh faces are found in one pass over the mesh for the union of their boxes.
     """
-    todo = [(i, ctx, patch) for i, ctx, patch, _ in filled if i not in checked]
+    todo = [(i, loop, patch) for i, loop, patch, _ in filled if i not in checked]
     if not todo:
         return
-    candidates = face_boxes_near(V, F, np.stack([patch_box(p.all_points(c.points)) for _, c, p in todo]))
-    for i, ctx, patch in todo:
-        checked[i] = _mesh_crossings(V, F, ctx, patch, candidates)
+    candidates = face_boxes_near(V, F, np.stack([patch_box(p.all_points(V[loop])) for _, loop, p in todo]))
+    for i, loop, patch in todo:
+        checked[i] = _mesh_crossings(V, F, loop, patch, candidates)
 
 
 def _explain_outlines(V, F, crossing, report, incidence):

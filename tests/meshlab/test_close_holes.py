@@ -11,6 +11,7 @@ from meshlab_holefill.core.parameters import resolve_params
 from meshlab_holefill.core.pipeline import COMMON_PARAMS
 from meshlab_holefill.meshlab.close_holes import close_holes
 from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops, nonmanifold_edges
+from meshlab_holefill.core.parallel import available_workers
 from meshlab_holefill.core.patch import Patch, validate_patch
 
 from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sphere_with_holes
@@ -389,6 +390,39 @@ def test_the_mesh_is_the_same_whatever_the_number_of_workers(name):
     assert statuses_one == statuses_two and all(s == "closed" for s, _ in statuses_one)
     np.testing.assert_array_equal(one[0], two[0])
     np.testing.assert_array_equal(one[1], two[1])
+
+
+@pytest.mark.skipif(available_workers() < 2, reason="needs two CPUs and fork")
+def test_with_workers_each_hole_is_prepared_filled_and_checked_by_one_process(monkeypatch):
+    """Each hole's context is built by the process that fills it, and this process fills holes too."""
+    import os
+
+    from meshlab_holefill.core import pipeline
+
+    V, F, _ = _one_cell_hole()
+    copies = 6
+    V, F = np.concatenate([V + [2 * c, 0, 0] for c in range(copies)]), np.concatenate([F + c * len(V) for c in range(copies)])
+    built = pipeline.hole_context
+
+    def context_noting_its_process(*args, **kwargs):
+        ctx = built(*args, **kwargs)
+        ctx.extra["built_by"] = os.getpid()
+        return ctx
+
+    def slow_roof_noting_its_process(ctx):
+        import time
+
+        time.sleep(0.05)  # long enough for the forked child to take holes too
+        patch = _roof(ctx.points, folded=False)
+        patch.info.update(built_by=ctx.extra["built_by"], filled_by=os.getpid())
+        return patch
+
+    monkeypatch.setattr(pipeline, "hole_context", context_noting_its_process)
+    res = close_holes(meshset_from_arrays(V, F), slow_roof_noting_its_process, dict(COMMON, workers=2))
+    holes = [h for h in res["holes"] if h["boundary_edges"] == 4]
+    assert len(holes) == copies and all(h["status"] == "closed" for h in holes)
+    assert all(h["built_by"] == h["filled_by"] for h in holes)
+    assert os.getpid() in {h["filled_by"] for h in holes} and len({h["filled_by"] for h in holes}) == 2
 
 
 def _slow_roof(ctx):
