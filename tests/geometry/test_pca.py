@@ -52,3 +52,15 @@ def test_project_to_plane_is_rigid_and_counter_clockwise_seen_from_the_normal(no
     assert (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]) == pytest.approx(-1.0)
     # Off-plane offsets along n are dropped: the projection is orthogonal.
     assert np.allclose(project_to_plane(P + heights[:, None] * n, c, n), Q, atol=1e-12)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-1, 1), min_size=3, max_size=3).filter(lambda n: np.linalg.norm(n) > 0.1))
+def test_plane_frame_is_right_handed_and_np_cross_to_the_bit(normal):
+    from meshlab_holefill.geometry.pca import plane_frame
+
+    u, v = plane_frame(normal)
+    n = _unit(normal)
+    assert np.array_equal(v, np.cross(n, u))  # the frame's bits do not depend on how the product is written
+    assert abs(u @ n) < 1e-12 and abs(u @ v) < 1e-12 and abs(np.linalg.norm(v) - 1) < 1e-12
+    assert np.linalg.det(np.stack([u, v, n])) > 0

@@ -71,7 +71,7 @@ import math
 import numpy as np
 
 from ...geometry.development import close_lengths
-from ...geometry.pca import fit_plane, plane_frame
+from ...geometry.pca import fit_plane, project_to_plane
 from ...geometry.quality import cross_rows
 from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
 from ...errors import HoleFillError
@@ -374,32 +374,14 @@ def _projection_is_simple(P, mask, eps, near):
 
     ``linear_motion_is_simple(project_to_best_plane(P)[0], eps, near)``.
 
-    The same projection (:func:`_plane_coordinates`) and the same distances, with the loop's
+    The same projection and the same distances, with the loop's
     mask of non-adjacent segments built once per run and the test stopping at the first pair
     closer than eps (most stages' projections cross themselves). The stage tests were a third of
     the annealing's time under cProfile, np.cross and the mask most of it.
     """
-    Q = _plane_coordinates(P)
-    return bool(keeps_clearance(Q, np.ascontiguousarray(np.roll(Q, -1, axis=0)), mask, float(near), float(eps)))
-
-
-_AXES = np.eye(3)
-
-
-def _plane_coordinates(P):
-    """Q of :func:`project_to_best_plane`: the coordinates in the frame of :func:`..geometry.pca.plane_frame`.
-
-    plane_frame's operations with its np.cross as ``cross_rows`` (the same arithmetic, without
-    np.cross's axis handling, which cost more than the rest of the projection).
-    """
     centroid, normal, _, _ = fit_plane(P)
-    n = normal / np.linalg.norm(normal)
-    hint = _AXES[np.argmin(np.abs(n))]
-    u = hint - np.dot(hint, n) * n
-    u /= np.linalg.norm(u)
-    v = cross_rows(n, u)
-    rel = P - centroid
-    return np.stack([rel @ u, rel @ v], axis=1)
+    Q = project_to_plane(P, centroid, normal)
+    return bool(keeps_clearance(Q, np.ascontiguousarray(np.roll(Q, -1, axis=0)), mask, float(near), float(eps)))
 
 
 def project_to_best_plane(P):
@@ -419,10 +401,8 @@ def project_to_best_plane(P):
     """
     P = np.asarray(P, np.float64)
     centroid, normal, _, _ = fit_plane(P)
-    u, v = plane_frame(normal)
-    rel = P - centroid
-    Q = np.stack([rel @ u, rel @ v], axis=1)
-    projected = P - np.outer(rel @ normal, normal)
+    Q = project_to_plane(P, centroid, normal)
+    projected = P - np.outer((P - centroid) @ normal, normal)
     return Q, projected, normal
 
 
