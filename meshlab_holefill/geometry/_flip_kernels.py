@@ -247,11 +247,40 @@ def swap_candidates(V, F, fixed, sphere):
 def apply_swaps(F, cand, abcd, f1f2, new_key):
     """flips._independent_swaps (unscored: priority = edge index) and the swap of the chosen edges.
 
+    F is changed in place (:func:`choose_swaps`, then each chosen edge (a, b) becomes (c, d));
+    returns the number of swaps.
+    """
+    chosen = choose_swaps(cand, f1f2, new_key, F.shape[0])
+    for x in chosen:
+        swap_faces(F, abcd[x, 0], abcd[x, 1], abcd[x, 2], abcd[x, 3], f1f2[x, 0], f1f2[x, 1])
+    return chosen.shape[0]
+
+
+@njit(cache=True)
+def swap_faces(F, a, b, c, d, f1, f2):
+    """Faces f1 = (a, b, c), f2 = (b, a, d) become (a, d, c), (b, c, d)."""
+    F[f1, 0], F[f1, 1], F[f1, 2] = a, d, c
+    F[f2, 0], F[f2, 1], F[f2, 2] = b, c, d
+
+
+@njit(cache=True)
+def choose_swaps(cand, f1f2, new_key, m):
+    """The candidates flips._independent_swaps picks (unscored: priority = candidate index), in its order.
+
     Up to four claiming passes; in each, a candidate wins when it has the highest index among
     the remaining candidates at both its faces. Of chosen swaps making the same new edge the first
-    chosen is kept. F is changed in place; returns the number of swaps.
+    chosen is kept.
+
+    Parameters
+    ----------
+    cand : (s,) int64 ascending indices into f1f2 and new_key
+    f1f2 : (e, 2) int64, new_key : (e,) int64
+    m : int  face count
+
+    Returns
+    -------
+    (t,) int64 the chosen candidates, no two sharing a face or a new edge
     """
-    m = F.shape[0]
     taken = np.zeros(m, np.bool_)
     claim = np.empty(m, np.int64)
     chosen = np.empty(cand.shape[0], np.int64)
@@ -288,11 +317,9 @@ def apply_swaps(F, cand, abcd, f1f2, new_key):
         if _seen_before(seen, made, new_key[x]):
             continue
         seen[made] = new_key[x]
+        chosen[made] = x
         made += 1
-        a, b, c, d = abcd[x, 0], abcd[x, 1], abcd[x, 2], abcd[x, 3]
-        F[f1f2[x, 0], 0], F[f1f2[x, 0], 1], F[f1f2[x, 0], 2] = a, d, c
-        F[f1f2[x, 1], 0], F[f1f2[x, 1], 1], F[f1f2[x, 1], 2] = b, c, d
-    return made
+    return chosen[:made]
 
 
 @njit(cache=True)

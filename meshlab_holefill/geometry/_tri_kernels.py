@@ -316,13 +316,19 @@ def _unit_normal(t0, t1, t2, tol):
 
 
 @njit(cache=True)
-def _beyond(t0, n, deg, s0, s1, s2, tol):
-    """intersections._beyond_plane: triangle s lies wholly more than tol to one side of t's plane."""
+def _heights(t0, n, s0, s1, s2):
+    """Signed heights of triangle s's corners above the plane of t (corner t0, normal n): the dots both
+    intersections._beyond_plane and the slab of intersections._clip take."""
+    return _dot(_sub(s0, t0), n), _dot(_sub(s1, t0), n), _dot(_sub(s2, t0), n)
+
+
+@njit(cache=True)
+def _beyond(d, deg, tol):
+    """intersections._beyond_plane: triangle s lies wholly more than tol to one side of t's plane,
+    from s's :func:`_heights` ``d`` above it."""
     if deg:
         return False
-    d0 = _dot(_sub(s0, t0), n)
-    d1 = _dot(_sub(s1, t0), n)
-    d2 = _dot(_sub(s2, t0), n)
+    d0, d1, d2 = d
     return (d0 > tol and d1 > tol and d2 > tol) or (d0 < -tol and d1 < -tol and d2 < -tol)
 
 
@@ -390,9 +396,32 @@ def _frame_row(frame, t, k):
 
 
 @njit(cache=True)
-def _edges_meet(S0, S1, S2, T0, T1, T2, nt, frame, ft, shs, degs, degt, one, S, tol):
+def _clip(P0, P1, h0, h1, Tt, ms, us, grow, tol):
+    """intersections._clip of the segment P0P1 (heights h0, h1 above T): (ok, t0, t1).
+
+    Its constraints in its order (the slab's two, then per target edge its edge normal's and its
+    bisector's); it stops at the first one negative (or NaN) at both ends, which leaves ``ok``
+    False whatever the others give.
+    """
+    ok, t0, t1 = True, 0.0, 1.0
+    if not (tol - h0 >= 0 or tol - h1 >= 0) or not (tol + h0 >= 0 or tol + h1 >= 0):
+        return False, t0, t1
+    ok, t0, t1 = _step(tol - h0, tol - h1, ok, t0, t1)
+    ok, t0, t1 = _step(tol + h0, tol + h1, ok, t0, t1)
+    for e in range(3):
+        a = Tt[e]
+        for direction in (ms[e], us[e]):
+            c0, c1 = _dot(_sub(P0, a), direction) + grow, _dot(_sub(P1, a), direction) + grow
+            if not (c0 >= 0 or c1 >= 0):
+                return False, t0, t1
+            ok, t0, t1 = _step(c0, c1, ok, t0, t1)
+    return ok, t0, t1
+
+
+@njit(cache=True)
+def _edges_meet(S0, S1, S2, T0, T1, T2, d, frame, ft, shs, degs, degt, one, S, tol):
     """intersections._edges_meet for one pair: some edge of triangle S0S1S2 meets T0T1T2
-    (whose clipping frame is row ft of `frame`)."""
+    (whose clipping frame is row ft of `frame`; d: S's :func:`_heights` above T)."""
     if degt:
         return False
     Ts = (S0, S1, S2)
@@ -405,14 +434,7 @@ def _edges_meet(S0, S1, S2, T0, T1, T2, nt, frame, ft, shs, degs, degt, one, S, 
             continue
         P0, P1 = Ts[k], Ts[(k + 1) % 3]
         grow = 0.0 if (one and degs) else tol
-        d0, d1 = _dot(_sub(P0, T0), nt), _dot(_sub(P1, T0), nt)
-        ok, t0, t1 = True, 0.0, 1.0
-        ok, t0, t1 = _step(tol - d0, tol - d1, ok, t0, t1)
-        ok, t0, t1 = _step(tol + d0, tol + d1, ok, t0, t1)
-        for e in range(3):
-            a = Tt[e]
-            ok, t0, t1 = _step(_dot(_sub(P0, a), ms[e]) + grow, _dot(_sub(P1, a), ms[e]) + grow, ok, t0, t1)
-            ok, t0, t1 = _step(_dot(_sub(P0, a), us[e]) + grow, _dot(_sub(P1, a), us[e]) + grow, ok, t0, t1)
+        ok, t0, t1 = _clip(P0, P1, d[k], d[(k + 1) % 3], Tt, ms, us, grow, tol)
         if not (ok and t0 <= t1):
             continue
         if not one:
@@ -450,7 +472,11 @@ def narrow_codes(V, F, canon, I, J, in_q, in_a, tol):
         si, sj = slot[i], slot[j]
         n1, deg1 = (N[si, 0], N[si, 1], N[si, 2]), DEG[si]
         n2, deg2 = (N[sj, 0], N[sj, 1], N[sj, 2]), DEG[sj]
-        if _beyond(A0, n1, deg1, B0, B1, B2, tol) or _beyond(B0, n2, deg2, A0, A1, A2, tol):
+        dB = _heights(A0, n1, B0, B1, B2)
+        if _beyond(dB, deg1, tol):
+            continue
+        dA = _heights(B0, n2, A0, A1, A2)
+        if _beyond(dA, deg2, tol):
             continue
         C1 = (canon[F[i, 0]], canon[F[i, 1]], canon[F[i, 2]])
         C2 = (canon[F[j, 0]], canon[F[j, 1]], canon[F[j, 2]])
@@ -487,7 +513,7 @@ def narrow_codes(V, F, canon, I, J, in_q, in_a, tol):
                 _ensure_frame(frame, done, sj, B0, B1, B2, n2)
             if not deg1:
                 _ensure_frame(frame, done, si, A0, A1, A2, n1)
-            if (_edges_meet(A0, A1, A2, B0, B1, B2, n2, frame, sj, sh1, deg1, deg2, one, S, tol)
-                    or _edges_meet(B0, B1, B2, A0, A1, A2, n1, frame, si, sh2, deg2, deg1, one, S, tol)):
+            if (_edges_meet(A0, A1, A2, B0, B1, B2, dA, frame, sj, sh1, deg1, deg2, one, S, tol)
+                    or _edges_meet(B0, B1, B2, A0, A1, A2, dB, frame, si, sh2, deg2, deg1, one, S, tol)):
                 code[p] = HIT
     return code, fy, fx

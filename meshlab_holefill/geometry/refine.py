@@ -44,7 +44,7 @@ def split_condition_numpy(V, F, scale, alpha):
 
 
 def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iterations=200, allowed=None,
-                 criterion="sphere"):
+                 criterion="sphere", relax=None):
     """Refine a patch until its density matches the scale of its boundary (Hu et al. Sec. III.C).
 
     Step 1 (the scales of the boundary vertices) is the caller's ``scale``. Steps 2-5:
@@ -72,6 +72,9 @@ def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iteratio
         Passed to :func:`relax_edges` to veto swaps.
     criterion : {"sphere", "angles"}
         Relaxation test, passed to :func:`relax_edges`.
+    relax : callable, optional
+        ``relax(V, F) -> (F, swaps)`` run instead of ``relax_edges(V, F, fixed_edges,
+        allowed=allowed, criterion=criterion)`` (a caller's faster equivalent).
 
     Returns
     -------
@@ -83,9 +86,12 @@ def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iteratio
     V = np.asarray(V, np.float64)
     F = np.asarray(F, np.int64)
     scale = np.asarray(scale, np.float64)
+    if relax is None:
+        def relax(V, F):
+            return relax_edges(V, F, fixed_edges, allowed=allowed, criterion=criterion)
     swaps = 0
     rounds = 0
-    F, s = relax_edges(V, F, fixed_edges, allowed=allowed, criterion=criterion)
+    F, s = relax(V, F)
     swaps += s
     for rounds in range(1, max_iterations + 1):
         mask, C, sc = split_condition(V, F, scale, alpha)
@@ -99,6 +105,6 @@ def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iteratio
         scale = np.concatenate([scale, sc[idx]])
         F[idx] = np.stack([new_ids, j, k], axis=1)
         F = np.concatenate([F, np.stack([i, new_ids, k], axis=1), np.stack([i, j, new_ids], axis=1)])
-        F, s = relax_edges(V, F, fixed_edges, allowed=allowed, criterion=criterion)
+        F, s = relax(V, F)
         swaps += s
     return V, F, scale, {"split_rounds": rounds, "swaps": swaps}

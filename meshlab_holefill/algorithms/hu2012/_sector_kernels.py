@@ -48,23 +48,32 @@ def swaps_in_sectors(points, u, w, limit, V, B, margin):
     it starts into that vertex's hole sector; ``sure=False`` as soon as one angle is too close
     to a bound to decide here, or an index is out of range.
     """
-    k = points.shape[0]
     s = B.shape[0]
     ok = np.ones(s, np.bool_)
-    two_pi = 2 * np.pi
     for r in range(s):
-        for end in range(2):
-            i = B[r, 1 + end]
-            j = B[r, 2 - end]
-            if i < 0 or j < 0 or i >= V.shape[0] or j >= V.shape[0]:
-                return ok, False
-            if i >= k:
-                continue
-            d = (V[j, 0] - points[i, 0], V[j, 1] - points[i, 1], V[j, 2] - points[i, 2])
-            phi = math.atan2(_dot(d, (w[i, 0], w[i, 1], w[i, 2])), _dot(d, (u[i, 0], u[i, 1], u[i, 2]))) % two_pi
-            upper = limit[i] - margin
-            if not (abs(phi - margin) > ANGLE_MARGIN and abs(phi - upper) > ANGLE_MARGIN):  # NaN too
-                return ok, False
-            if not (phi > margin and phi < upper):
-                ok[r] = False
+        verdict = new_edge_in_sectors(points, u, w, limit, V, B[r, 1], B[r, 2], margin)
+        if verdict < 0:
+            return ok, False
+        ok[r] = verdict == 1
     return ok, True
+
+
+@njit(cache=True)
+def new_edge_in_sectors(points, u, w, limit, V, c, d, margin):
+    """1 / 0: the edge (c, d) starts into the hole sector at each of its loop ends / does not; -1: undecided."""
+    k = points.shape[0]
+    if c < 0 or d < 0 or c >= V.shape[0] or d >= V.shape[0]:
+        return -1
+    verdict = 1
+    for end in range(2):
+        i, j = (c, d) if end == 0 else (d, c)
+        if i >= k:
+            continue
+        dv = (V[j, 0] - points[i, 0], V[j, 1] - points[i, 1], V[j, 2] - points[i, 2])
+        phi = math.atan2(_dot(dv, (w[i, 0], w[i, 1], w[i, 2])), _dot(dv, (u[i, 0], u[i, 1], u[i, 2]))) % (2 * np.pi)
+        upper = limit[i] - margin
+        if not (abs(phi - margin) > ANGLE_MARGIN and abs(phi - upper) > ANGLE_MARGIN):  # NaN too
+            return -1
+        if not (phi > margin and phi < upper):
+            verdict = 0
+    return verdict

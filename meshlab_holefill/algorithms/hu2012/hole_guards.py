@@ -12,12 +12,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...geometry.flips import relax_edges
 from ...geometry.sets import unique_ints
 from ...geometry.intersections import intersecting_pairs
 from ...geometry.quality import cross_rows
+from ...geometry.topology import undirected_keys
+from ._relax_kernels import STOPPED, relax_rounds
 from ._sector_kernels import sector_contains, swaps_in_sectors
 
-__all__ = ["sector_angle", "inside_hole_sector", "LoopSectors", "patch_crossings", "patch_guard", "swaps_crossing"]
+__all__ = ["sector_angle", "inside_hole_sector", "LoopSectors", "patch_crossings", "patch_guard", "swaps_crossing",
+           "relax_in_sectors"]
 
 
 def sector_angle(apex, normal, reference, directions):
@@ -156,7 +160,7 @@ def patch_crossings(ctx, patch_points, patch_faces, faces=None):
     return unique_ints(pairs[:, 0])
 
 
-def patch_guard(ctx, check_intersections=False):
+def patch_guard(ctx, check_intersections=False, sectors=None):
     """Veto for edge swaps that would push a patch out of its hole or through itself.
 
     Returns ``allowed(V, F, A, B, replaced) -> (s,) bool`` (the ``allowed`` hook of
@@ -165,9 +169,11 @@ def patch_guard(ctx, check_intersections=False):
     faces replaced[i]. A swap is refused when its new edge leaves a boundary vertex outside
     its hole sector (:class:`LoopSectors`) and, with ``check_intersections``, when a new
     triangle intersects the surrounding faces or the rest of the patch (slower: one
-    intersection query per round of swaps).
+    intersection query per round of swaps). ``sectors``: the loop's :class:`LoopSectors`, when
+    the caller has them.
     """
-    sectors = LoopSectors(ctx.points, ctx.loop_normals)
+    if sectors is None:
+        sectors = LoopSectors(ctx.points, ctx.loop_normals)
 
     def allowed(V, F, A, B, replaced):
         ok = sectors.swaps_allowed(V, B)
@@ -178,6 +184,50 @@ def patch_guard(ctx, check_intersections=False):
         return ok
 
     return allowed
+
+
+def relax_in_sectors(sectors, V, F, fixed_edges=None, criterion="sphere", refused=None, max_rounds=200):
+    """:func:`geometry.flips.relax_edges` vetoed by the hole-sector test, its rounds compiled.
+
+    The faces and swap count of ``relax_edges(V, F, fixed_edges, allowed=guard, criterion=criterion,
+    max_rounds=max_rounds)`` with the guard ``patch_guard(ctx, sectors=sectors)``, or ``refused``
+    when given: a hook that agrees with the sector test wherever that allows every candidate
+    (:func:`.min_angle_bilateral.relaxation_guard`, which reconsiders the swaps it refuses). The
+    rounds run in :func:`._relax_kernels.relax_rounds`; a round it cannot decide, or one the sector
+    test refuses a swap of when ``refused`` is given, runs in :func:`relax_edges` with the hook.
+
+    Parameters
+    ----------
+    sectors : LoopSectors  of the loop, vertices 0 .. k - 1 of V
+    V : (n, 3) float64, F : (m, 3) int64  the patch, loop first
+    fixed_edges : (p, 2) int, optional
+    criterion : {"sphere", "angles"}
+    refused : callable ``allowed(V, F, A, B, replaced) -> (s,) bool``, optional
+    max_rounds : int
+
+    Returns
+    -------
+    F : (m, 3) int64
+    swaps : int
+    """
+    V = np.ascontiguousarray(V, np.float64)
+    F = np.array(F, np.int64)
+    guard = refused if refused is not None else (lambda V, F, A, B, replaced: sectors.swaps_allowed(V, B))
+    if criterion not in ("sphere", "angles") or F.ndim != 2 or F.shape[1] != 3 or V.ndim != 2 or V.shape[1] != 3:
+        return relax_edges(V, F, fixed_edges, max_rounds=max_rounds, allowed=guard, criterion=criterion)
+    fixed = unique_ints(undirected_keys(() if fixed_edges is None else fixed_edges, len(V)))
+    total, left = 0, max_rounds
+    while left > 0:
+        status, swaps, rounds = relax_rounds(V, F, fixed, criterion == "sphere", left, sectors.points, sectors.u,
+                                             sectors.w, sectors.limit, 1e-9, refused is not None)
+        total, left = total + swaps, left - rounds
+        if status == STOPPED:
+            break
+        F, swaps = relax_edges(V, F, fixed_edges, max_rounds=1, allowed=guard, criterion=criterion)
+        total, left = total + swaps, left - 1
+        if swaps == 0:
+            break
+    return F, total
 
 
 def swaps_crossing(ctx, V, F, A, B, replaced):

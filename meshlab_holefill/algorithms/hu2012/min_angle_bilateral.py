@@ -53,7 +53,7 @@ from .fairing import fair_patch_in_context
 from ...geometry.flips import relax_edges
 from ...geometry.refine import refine_patch
 from ...geometry.segments import polygon_edges_touch
-from .hole_guards import patch_crossings, patch_guard, swaps_crossing
+from .hole_guards import LoopSectors, patch_crossings, patch_guard, relax_in_sectors, swaps_crossing
 from ...core.patch import Patch
 from ...core.parameters import ParamSpec
 from .tangential_smoothing import tangential_smoothing
@@ -177,19 +177,21 @@ def _refine(ctx, F0, alpha, fixed, max_passes=4, criterion="sphere"):
     The rounds of :func:`refine_patch` use the fast sector test; the swaps it refuses are then
     reconsidered with :func:`relaxation_guard` (an exact intersection check, too slow to run
     in every round), and when any of them is made, refinement resumes from the relaxed patch,
-    since the new triangles may need splitting.
+    since the new triangles may need splitting. Both relax by :func:`.hole_guards.relax_in_sectors`.
     """
-    sector = patch_guard(ctx)
-    exact = relaxation_guard(ctx, sector)
-    V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed, allowed=sector,
-                                     criterion=criterion)
+    sectors = LoopSectors(ctx.points, ctx.loop_normals)
+    exact = relaxation_guard(ctx, patch_guard(ctx, sectors=sectors))
+
+    def relax(V, F):
+        return relax_in_sectors(sectors, V, F, fixed, criterion)
+
+    V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed, relax=relax)
     for _ in range(max_passes):
-        F, swaps = relax_edges(V, F, fixed, allowed=exact, criterion=criterion)
+        F, swaps = relax_in_sectors(sectors, V, F, fixed, criterion, refused=exact)
         info["swaps"] += swaps
         if swaps == 0:
             break
-        V, F, scale, more = refine_patch(V, F, scale, alpha=alpha, fixed_edges=fixed, allowed=sector,
-                                         criterion=criterion)
+        V, F, scale, more = refine_patch(V, F, scale, alpha=alpha, fixed_edges=fixed, relax=relax)
         info["split_rounds"] += more["split_rounds"]
         info["swaps"] += more["swaps"]
     return V, F, scale, info

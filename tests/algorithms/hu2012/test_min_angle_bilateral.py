@@ -646,13 +646,14 @@ def test_warm_up_loads_every_kernel_of_the_filter():
     from numba.core.registry import CPUDispatcher
 
     from meshlab_holefill.algorithms.hu2012 import _bilateral_kernels, _min_angle_kernels, _sector_kernels
-    from meshlab_holefill.algorithms.hu2012 import _projection_kernels, _smoothing_kernels, min_angle_bilateral
+    from meshlab_holefill.algorithms.hu2012 import _projection_kernels, _relax_kernels, _smoothing_kernels
+    from meshlab_holefill.algorithms.hu2012 import min_angle_bilateral
     from meshlab_holefill.geometry import _flip_kernels, _quality_kernels, _refine_kernels
 
     min_angle_bilateral.warm_up()
     assert min_angle_bilateral.WARM_UP is min_angle_bilateral.warm_up
-    for module in (_bilateral_kernels, _min_angle_kernels, _sector_kernels, _projection_kernels, _smoothing_kernels,
-                   _flip_kernels, _refine_kernels):
+    for module in (_bilateral_kernels, _min_angle_kernels, _sector_kernels, _projection_kernels, _relax_kernels,
+                   _smoothing_kernels, _flip_kernels, _refine_kernels):
         for name in module.__all__:
             kernel = getattr(module, name)
             if isinstance(kernel, CPUDispatcher):
