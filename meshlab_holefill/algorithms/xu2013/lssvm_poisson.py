@@ -134,14 +134,16 @@ PREPARE = prepare_boundary
 
 
 def warm_up():
-    """Load the compiled kernels a fill calls: the 3D front's and the edge relaxation's rounds.
+    """Load the compiled kernels a fill calls: the 3D front's, the edge relaxation's rounds and the Laplacian's rows.
 
     Loading them from the disk cache takes a few tenths of a second per process; called
     before holes are filled in forked workers, it lets them inherit the loaded kernels.
     """
     warm_up_front()
     rhombus = np.array([[-1.0, 0.0, 0.0], [0.0, -0.3, 0.0], [1.0, 0.0, 0.0], [0.0, 0.3, 0.0]])
-    relax_edges(rhombus, np.array([[0, 1, 2], [0, 2, 3]]))  # the long diagonal is swapped
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    relax_edges(rhombus, faces)  # the long diagonal is swapped
+    normalized_cotangent_laplacian(rhombus, faces)
 
 
 WARM_UP = warm_up

@@ -13,10 +13,11 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ._laplacian_kernels import edge_weight_rows, with_unit_diagonal
 from .advancing_front import advancing_front_triangulation
 from ...geometry.flips import folds, relax_edges
 from ...geometry.intersections import faces_intersecting
-from ...geometry.laplacian import (cotangent_laplacian, tangential_umbrella_smoothing,
+from ...geometry.laplacian import (cotangent_laplacian, cotangent_weights, tangential_umbrella_smoothing,
                                    vertices_near)
 from ...geometry.quality import triangle_quality, unique_edges, vertex_normals
 from ...geometry.segments import polygon_edges_touch
@@ -48,14 +49,30 @@ def normalized_cotangent_laplacian(V, F, n=None, cotangents=None):
     L : (n, n) CSR float64  (rows of vertices without neighbours are zero)
     """
     n = len(V) if n is None else n
-    C = cotangent_laplacian(V, F, n, cotangents).tocoo()
-    off = C.row != C.col
-    rows, cols, w = C.row[off], C.col[off], 2.0 * C.data[off]
+    C = cotangent_weights(V, F) if cotangents is None else cotangents
+    ok, indptr, cols, half_sums = edge_weight_rows(np.asarray(F, np.int64), 0.5 * C, n)
+    if not ok:
+        return _normalized_from_sparse(V, F, n, cotangents)
+    weights, has = _normalized_weights(np.repeat(np.arange(n), np.diff(indptr)), 2.0 * half_sums, n)
+    indptr, indices, data = with_unit_diagonal(indptr, cols, weights, has)
+    return sp.csr_matrix((data, indices.astype(np.int32), indptr.astype(np.int32)), shape=(n, n))
+
+
+def _normalized_weights(rows, w, n):
+    """w_ij of Eq. 5-6 from omega_ij (entries of row ``rows``), the floor raised; and which rows have a positive sum."""
     floor = 1e-3 * np.abs(w).mean() if len(w) else 0.0
     w = np.maximum(w, floor)
     total = np.bincount(rows, weights=w, minlength=n)
-    has = total > 0
-    W = sp.csr_matrix((w / total[rows], (rows, cols)), shape=(n, n))
+    return w / total[rows], total > 0
+
+
+def _normalized_from_sparse(V, F, n, cotangents):
+    """:func:`normalized_cotangent_laplacian` by scipy's sparse algebra, for meshes the compiled rows refuse."""
+    C = cotangent_laplacian(V, F, n, cotangents).tocoo()
+    off = C.row != C.col
+    rows, cols = C.row[off], C.col[off]
+    weights, has = _normalized_weights(rows, 2.0 * C.data[off], n)
+    W = sp.csr_matrix((weights, (rows, cols)), shape=(n, n))
     return (W - sp.diags(has.astype(np.float64))).tocsr()
 
 

@@ -214,3 +214,11 @@ def test_the_filter_warm_up_also_loads_the_edge_relaxation_rounds():
     lssvm_poisson.WARM_UP()
     assert _front_loop.run_front.signatures
     assert _flip_kernels.swap_candidates.signatures and _flip_kernels.apply_swaps.signatures
+
+
+def test_the_filter_warm_up_loads_the_laplacian_kernels():
+    from meshlab_holefill.algorithms.xu2013 import _laplacian_kernels, lssvm_poisson
+
+    lssvm_poisson.WARM_UP()
+    for name in _laplacian_kernels.__all__:
+        assert getattr(_laplacian_kernels, name).signatures, name
