@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["face_bounds", "boxes_meeting", "candidate_pairs", "box_pairs", "narrow_codes", "NO", "HIT", "FOLD",
+__all__ = ["face_bounds", "common_box", "weld_labels", "boxes_meeting", "candidate_pairs", "box_pairs", "narrow_codes", "NO", "HIT", "FOLD",
            "RADIUS_BINS"]
 
 NO, HIT, FOLD = 0, 1, 2  # narrow_codes: no contact, contact, shared edge whose fold angle decides
@@ -55,6 +55,67 @@ def face_bounds(V, F, faces):
         m = (c[p, 0], c[p, 1], c[p, 2])
         r[p] = _npmax(_npmax(_norm(_sub(A, m)), _norm(_sub(B, m))), _norm(_sub(C, m)))
     return lo, hi, c, r
+
+
+@njit(cache=True)
+def common_box(lo_q, hi_q, lo_a, hi_a):
+    """Corners lo, hi (3,) of the box of all boxes [lo_q, hi_q] and [lo_a, hi_a].
+
+    The values of np.minimum(lo_q.min(0), lo_a.min(0)) and np.maximum(hi_q.max(0), hi_a.max(0))
+    (NaN propagating; a zero may differ in sign only), without numpy's strided reductions, which
+    cost more than the rest of the default tolerance on a ring of a few thousand faces.
+    """
+    lo, hi = np.empty(3), np.empty(3)
+    for k in range(3):
+        lo[k], hi[k] = lo_q[0, k], hi_q[0, k]
+        for i in range(1, lo_q.shape[0]):
+            lo[k] = _npmin(lo[k], lo_q[i, k])
+            hi[k] = _npmax(hi[k], hi_q[i, k])
+        for j in range(lo_a.shape[0]):
+            lo[k] = _npmin(lo[k], lo_a[j, k])
+            hi[k] = _npmax(hi[k], hi_a[j, k])
+    return lo, hi
+
+
+@njit(cache=True)
+def weld_labels(V, F, faces):
+    """Per vertex of V, a label that two vertices of `faces` share iff their coordinates are equal, (n,) int64.
+
+    Equality is ``==`` per coordinate (so -0.0 welds to 0.0 and a NaN coordinate welds to
+    nothing); a vertex's label is the smallest vertex index with its coordinates, and vertices
+    outside `faces` get 0. An open-addressing table of coordinate hashes instead of a
+    lexicographic sort of the rows: only the equality of labels matters to the narrow phase.
+    """
+    n = V.shape[0]
+    label = np.zeros(n, np.int64)
+    used = np.zeros(n, np.bool_)
+    count = 0
+    for p in range(faces.shape[0]):
+        for k in range(3):
+            v = F[faces[p], k]
+            if not used[v]:
+                used[v] = True
+                count += 1
+    size = 16
+    while size < 2 * count:
+        size *= 2
+    table = np.full(size, -1, np.int64)
+    for v in range(n):
+        if not used[v]:
+            continue
+        # + 0.0 turns -0.0 into 0.0, so that equal coordinates hash alike
+        slot = hash((V[v, 0] + 0.0, V[v, 1] + 0.0, V[v, 2] + 0.0)) & (size - 1)
+        while True:
+            w = table[slot]
+            if w < 0:
+                table[slot] = v
+                label[v] = v
+                break
+            if V[w, 0] == V[v, 0] and V[w, 1] == V[v, 1] and V[w, 2] == V[v, 2]:
+                label[v] = w
+                break
+            slot = (slot + 1) & (size - 1)
+    return label
 
 
 @njit(cache=True)
