@@ -136,8 +136,8 @@ def _default_tol(bounds_q, bounds_a):
 
     The box of the used vertices is the box of their faces' boxes.
     """
-    lo, hi = K.common_box(bounds_q[0], bounds_q[1], bounds_a[0], bounds_a[1])
-    return float(1e-9 * np.linalg.norm(hi - lo) + 1e-13 * max(np.abs(lo).max(), np.abs(hi).max()))
+    lo, hi, far = K.common_box(bounds_q[0], bounds_q[1], bounds_a[0], bounds_a[1])
+    return float(1e-9 * np.linalg.norm(hi - lo) + 1e-13 * far)
 
 
 def _candidates(bounds_q, bounds_a, tol, q, a, n_faces):
@@ -152,11 +152,8 @@ def _candidates(bounds_q, bounds_a, tol, q, a, n_faces):
     centroids used; the grid of `_tri_kernels.candidate_pairs` applies it pair by pair). The
     bins take numpy's logarithm here, whose last bits may differ from the compiled one's.
     """
-    rq, ra = bounds_q[3], bounds_a[3]
-    top = max(rq.max(), ra.max(), np.finfo(float).tiny)
-    r = np.maximum(np.concatenate([rq, ra]), 1e-300)
-    bins = -np.clip(np.floor(np.log(r / top) / _LOG4), 1 - K.RADIUS_BINS, 0)
-    return K.candidate_pairs(bounds_q, bounds_a, bins, tol, q, a, n_faces)
+    logs = np.log(K.radius_ratios(bounds_q[3], bounds_a[3]))
+    return K.candidate_pairs(bounds_q, bounds_a, logs, _LOG4, tol, q, a, n_faces)
 
 
 def _sorted_unique(x):

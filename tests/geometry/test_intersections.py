@@ -303,7 +303,7 @@ def test_two_crossing_spheres_meet_along_one_curve():
     assert 0 < len(hits) < len(query)
 
 
-def test_weld_labels_join_exactly_the_equal_used_vertices_and_common_box_equals_numpy():
+def test_weld_labels_join_exactly_the_equal_used_vertices_and_boxes_and_radius_ratios_equal_numpy():
     from meshlab_holefill.geometry import _tri_kernels as K
     from meshlab_holefill.geometry.intersections import _sorted_unique
 
@@ -323,9 +323,14 @@ def test_weld_labels_join_exactly_the_equal_used_vertices_and_common_box_equals_
         lo_q, lo_a = rng.normal(size=(int(rng.integers(1, 9)), 3)), rng.normal(size=(int(rng.integers(1, 9)), 3))
         lo_q[rng.random(lo_q.shape) < 0.02] = np.nan
         hi_q, hi_a = lo_q + 1.0, lo_a + 1.0
-        lo, hi = K.common_box(lo_q, hi_q, lo_a, hi_a)
+        lo, hi, far = K.common_box(lo_q, hi_q, lo_a, hi_a)
         np.testing.assert_array_equal(lo, np.minimum(lo_q.min(0), lo_a.min(0)))
         np.testing.assert_array_equal(hi, np.maximum(hi_q.max(0), hi_a.max(0)))
+        if not np.isnan(lo_q).any():
+            assert far == max(np.abs(lo).max(), np.abs(hi).max())
+        rq, ra = rng.random(len(lo_q)) ** 9, rng.random(len(lo_a)) * (t % 3)  # some all zero
+        top = max(rq.max(), ra.max(), np.finfo(float).tiny)
+        np.testing.assert_array_equal(K.radius_ratios(rq, ra), np.maximum(np.concatenate([rq, ra]), 1e-300) / top)
         x = rng.integers(0, 30, int(rng.integers(0, 20)))
         x = np.unique(x) if t % 2 else x
         np.testing.assert_array_equal(_sorted_unique(x), np.unique(x))
