@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..geometry._tri_kernels import boxes_meeting
 from ..geometry.intersections import intersecting_pairs
 from .holes import nonmanifold_edges
 from ..geometry.sets import isin_ints, positions_ints, unique_ints
@@ -120,7 +121,9 @@ def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, l
     near_all, face_lo, face_hi = candidates
     lo, hi = patch_points.min(axis=0), patch_points.max(axis=0)
     pad = 1e-9 * float(np.linalg.norm(hi - lo))
-    near = near_all[np.all(face_hi >= lo - pad, axis=1) & np.all(face_lo <= hi + pad, axis=1)]
+    # the points as boxes of their own: their union box is (lo, hi), grown by pad, the boxes'
+    # comparisons in one compiled pass over the candidates of all patches
+    near = near_all[boxes_meeting(patch_points, patch_points, face_lo, face_hi, pad)]
     used = unique_ints(mesh_F[near]) if len(near) else np.zeros(0, np.int64)
     # Local vertex array: loop vertices keep their loop-local numbers so shared vertices
     # between patch and mesh faces are recognised as shared.

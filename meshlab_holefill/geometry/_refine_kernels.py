@@ -17,7 +17,7 @@ from numba import njit
 
 from ._tri_kernels import _cross, _dot, _norm, _sub
 
-__all__ = ["split_test", "ANGLE_MARGIN"]
+__all__ = ["split_test", "split_faces", "ANGLE_MARGIN"]
 
 ANGLE_MARGIN = 1e-12
 
@@ -54,3 +54,44 @@ def split_test(V, F, scale, alpha):
             split = split and angle < limit
         mask[f] = split
     return mask, C, sc, True
+
+
+@njit(cache=True)
+def split_faces(V, F, scale, mask, C, sc):
+    """Split each face f with mask[f] at its centroid C[f] into three: (V, F, scale) with s new vertices.
+
+    Face (i, j, k) becomes (c, j, k) in place and (i, c, k), (i, j, c) are appended, all the
+    first of these in face order then all the second; the new vertex c = n + its rank among the
+    split faces has position C[f] and scale sc[f].
+
+    Parameters
+    ----------
+    V : (n, 3) float64, F : (m, 3) int64, scale : (n,) float64
+    mask : (m,) bool, C : (m, 3) float64, sc : (m,) float64
+
+    Returns
+    -------
+    V : (n + s, 3) float64, F : (m + 2 s, 3) int64, scale : (n + s,) float64
+    """
+    n, m = V.shape[0], F.shape[0]
+    s = 0
+    for f in range(m):
+        s += mask[f]
+    V2, F2, scale2 = np.empty((n + s, 3)), np.empty((m + 2 * s, 3), np.int64), np.empty(n + s)
+    for v in range(n):
+        V2[v, 0], V2[v, 1], V2[v, 2] = V[v, 0], V[v, 1], V[v, 2]
+        scale2[v] = scale[v]
+    r = 0
+    for f in range(m):
+        i, j, k = F[f, 0], F[f, 1], F[f, 2]
+        if not mask[f]:
+            F2[f, 0], F2[f, 1], F2[f, 2] = i, j, k
+            continue
+        c = n + r
+        V2[c, 0], V2[c, 1], V2[c, 2] = C[f, 0], C[f, 1], C[f, 2]
+        scale2[c] = sc[f]
+        F2[f, 0], F2[f, 1], F2[f, 2] = c, j, k
+        F2[m + r, 0], F2[m + r, 1], F2[m + r, 2] = i, c, k
+        F2[m + s + r, 0], F2[m + s + r, 1], F2[m + s + r, 2] = i, j, c
+        r += 1
+    return V2, F2, scale2

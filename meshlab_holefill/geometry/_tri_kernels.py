@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["face_bounds", "boxes_meeting", "candidate_pairs", "box_pairs", "narrow_codes", "NO", "HIT", "FOLD",
+__all__ = ["face_bounds", "common_box", "weld_labels", "radius_ratios", "boxes_meeting", "candidate_pairs", "box_pairs", "narrow_codes", "NO", "HIT", "FOLD",
            "RADIUS_BINS"]
 
 NO, HIT, FOLD = 0, 1, 2  # narrow_codes: no contact, contact, shared edge whose fold angle decides
@@ -55,6 +55,90 @@ def face_bounds(V, F, faces):
         m = (c[p, 0], c[p, 1], c[p, 2])
         r[p] = _npmax(_npmax(_norm(_sub(A, m)), _norm(_sub(B, m))), _norm(_sub(C, m)))
     return lo, hi, c, r
+
+
+@njit(cache=True)
+def common_box(lo_q, hi_q, lo_a, hi_a):
+    """Corners lo, hi (3,) of the box of all boxes [lo_q, hi_q] and [lo_a, hi_a], and the largest
+    coordinate magnitude far among them (meaningless when a corner is NaN, whose box has no extent).
+
+    The values of np.minimum(lo_q.min(0), lo_a.min(0)) and np.maximum(hi_q.max(0), hi_a.max(0))
+    (NaN propagating; a zero may differ in sign only), without numpy's strided reductions, which
+    cost more than the rest of the default tolerance on a ring of a few thousand faces.
+    """
+    lo, hi = np.empty(3), np.empty(3)
+    far = 0.0
+    for k in range(3):
+        lo[k], hi[k] = lo_q[0, k], hi_q[0, k]
+        for i in range(1, lo_q.shape[0]):
+            lo[k] = _npmin(lo[k], lo_q[i, k])
+            hi[k] = _npmax(hi[k], hi_q[i, k])
+        for j in range(lo_a.shape[0]):
+            lo[k] = _npmin(lo[k], lo_a[j, k])
+            hi[k] = _npmax(hi[k], hi_a[j, k])
+        far = max(far, abs(lo[k]), abs(hi[k]))
+    return lo, hi, far
+
+
+@njit(cache=True)
+def weld_labels(V, F, faces):
+    """Per vertex of V, a label that two vertices of `faces` share iff their coordinates are equal, (n,) int64.
+
+    Equality is ``==`` per coordinate (so -0.0 welds to 0.0 and a NaN coordinate welds to
+    nothing); a vertex's label is the smallest vertex index with its coordinates, and vertices
+    outside `faces` get 0. An open-addressing table of coordinate hashes instead of a
+    lexicographic sort of the rows: only the equality of labels matters to the narrow phase.
+    """
+    n = V.shape[0]
+    label = np.zeros(n, np.int64)
+    used = np.zeros(n, np.bool_)
+    count = 0
+    for p in range(faces.shape[0]):
+        for k in range(3):
+            v = F[faces[p], k]
+            if not used[v]:
+                used[v] = True
+                count += 1
+    size = 16
+    while size < 2 * count:
+        size *= 2
+    table = np.full(size, -1, np.int64)
+    for v in range(n):
+        if not used[v]:
+            continue
+        # + 0.0 turns -0.0 into 0.0, so that equal coordinates hash alike
+        slot = hash((V[v, 0] + 0.0, V[v, 1] + 0.0, V[v, 2] + 0.0)) & (size - 1)
+        while True:
+            w = table[slot]
+            if w < 0:
+                table[slot] = v
+                label[v] = v
+                break
+            if V[w, 0] == V[v, 0] and V[w, 1] == V[v, 1] and V[w, 2] == V[v, 2]:
+                label[v] = w
+                break
+            slot = (slot + 1) & (size - 1)
+    return label
+
+
+@njit(cache=True)
+def radius_ratios(rq, ra):
+    """Each radius of rq then ra over the largest, (nq + na,): the argument of the radius bins' logarithm.
+
+    np.maximum(np.concatenate([rq, ra]), 1e-300) / max(rq.max(), ra.max(), tiny), bit for bit
+    where no radius is NaN; a NaN radius makes every ratio NaN (the bins refuse them either way).
+    """
+    top = np.finfo(np.float64).tiny
+    for x in rq:
+        top = _npmax(x, top)
+    for x in ra:
+        top = _npmax(x, top)
+    out = np.empty(rq.shape[0] + ra.shape[0])
+    for p in range(rq.shape[0]):
+        out[p] = _npmax(rq[p], 1e-300) / top
+    for p in range(ra.shape[0]):
+        out[rq.shape[0] + p] = _npmax(ra[p], 1e-300) / top
+    return out
 
 
 @njit(cache=True)
@@ -163,12 +247,13 @@ def boxes_meeting(lo_q, hi_q, lo_a, hi_a, tol):
 
 
 @njit(cache=True)
-def candidate_pairs(bounds_q, bounds_a, bins, tol, q, a, n_faces):
+def candidate_pairs(bounds_q, bounds_a, logs, log4, tol, q, a, n_faces):
     """Global face pairs (i, j) worth the narrow test, and the two sets' marks in_q, in_a (n_faces,) bool.
 
-    ``bounds_q``, ``bounds_a`` are :func:`face_bounds` of the face sets q and a; ``bins`` (nq + na,)
-    the radius bins of their faces (0 for the largest radii to ``RADIUS_BINS - 1``, as floats; NaN
-    for a radius that is not a number). Each pair of bins bounds the centroid distance by its
+    ``bounds_q``, ``bounds_a`` are :func:`face_bounds` of the face sets q and a; ``logs`` (nq + na,)
+    the logarithms of their :func:`radius_ratios` (NaN for a radius that is not a number), and
+    ``log4`` that of 4: a face's radius bin is -clip(floor(log / log4), 1 - RADIUS_BINS, 0), 0 for
+    the largest radii to ``RADIUS_BINS - 1``. Each pair of bins bounds the centroid distance by its
     largest radii plus tol, and :func:`box_pairs` keeps the pairs within it whose boxes (query
     boxes grown by tol) overlap, on a grid of cells about the size of a typical face box,
     doubled while there are far more cells than faces (the cell size changes the time only).
@@ -182,9 +267,9 @@ def candidate_pairs(bounds_q, bounds_a, bins, tol, q, a, n_faces):
     bin_q, bin_a = np.empty(nq, np.int64), np.empty(na, np.int64)
     top_q, top_a = np.full(RADIUS_BINS, -np.inf), np.full(RADIUS_BINS, -np.inf)
     for p in range(nq + na):
-        if bins[p] != bins[p]:
+        if logs[p] != logs[p]:
             raise ValueError("face radii are not numbers (infinite coordinates)")
-        b = int(bins[p])
+        b = int(-min(max(np.floor(logs[p] / log4), 1.0 - RADIUS_BINS), 0.0))
         if p < nq:
             bin_q[p] = b
             top_q[b] = max(top_q[b], rq[p])

@@ -102,9 +102,7 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
         a, ba = a[inside], tuple(x[inside] for x in ba)
     i, j, in_q, in_a = _candidates(bq, ba, tol, q, a, len(F))
     if weld:
-        used = _used_vertices(F, np.concatenate([q, a]), len(V))
-        canon = np.zeros(len(V), np.int64)
-        canon[used] = _row_ranks(V[used] + 0.0)  # +0.0 turns -0.0 into 0.0 so that they weld
+        canon = K.weld_labels(V, F, np.concatenate([q, a]))
     else:
         canon = np.arange(len(V), dtype=np.int64)
     code, fy, fx = K.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
@@ -138,9 +136,8 @@ def _default_tol(bounds_q, bounds_a):
 
     The box of the used vertices is the box of their faces' boxes.
     """
-    lo = np.minimum(bounds_q[0].min(0), bounds_a[0].min(0))
-    hi = np.maximum(bounds_q[1].max(0), bounds_a[1].max(0))
-    return float(1e-9 * np.linalg.norm(hi - lo) + 1e-13 * max(np.abs(lo).max(), np.abs(hi).max()))
+    lo, hi, far = K.common_box(bounds_q[0], bounds_q[1], bounds_a[0], bounds_a[1])
+    return float(1e-9 * np.linalg.norm(hi - lo) + 1e-13 * far)
 
 
 def _candidates(bounds_q, bounds_a, tol, q, a, n_faces):
@@ -155,29 +152,8 @@ def _candidates(bounds_q, bounds_a, tol, q, a, n_faces):
     centroids used; the grid of `_tri_kernels.candidate_pairs` applies it pair by pair). The
     bins take numpy's logarithm here, whose last bits may differ from the compiled one's.
     """
-    rq, ra = bounds_q[3], bounds_a[3]
-    top = max(rq.max(), ra.max(), np.finfo(float).tiny)
-    r = np.maximum(np.concatenate([rq, ra]), 1e-300)
-    bins = -np.clip(np.floor(np.log(r / top) / _LOG4), 1 - K.RADIUS_BINS, 0)
-    return K.candidate_pairs(bounds_q, bounds_a, bins, tol, q, a, n_faces)
-
-
-def _row_ranks(P):
-    """Rank of each row of P among its distinct rows in lexicographic order, (n,) int64.
-
-    np.unique(P, axis=0, return_inverse=True)[1] (equal rows get equal ranks), by a lexsort of the
-    columns instead of unique's sort of a structured view, which is several times slower.
-    """
-    if len(P) == 0:
-        return np.zeros(0, np.int64)
-    order = np.lexsort(P.T[::-1])
-    S = P[order]
-    new_row = np.empty(len(P), bool)
-    new_row[0] = True
-    new_row[1:] = np.any(S[1:] != S[:-1], axis=1)
-    ranks = np.empty(len(P), np.int64)
-    ranks[order] = np.cumsum(new_row) - 1
-    return ranks
+    logs = np.log(K.radius_ratios(bounds_q[3], bounds_a[3]))
+    return K.candidate_pairs(bounds_q, bounds_a, logs, _LOG4, tol, q, a, n_faces)
 
 
 def _sorted_unique(x):
@@ -186,9 +162,3 @@ def _sorted_unique(x):
         return x
     return unique_ints(x)
 
-
-def _used_vertices(F, faces, n):
-    """np.unique(F[faces]) by marking the n vertices (sorted, as unique returns them)."""
-    mark = np.zeros(n, bool)
-    mark[F[faces]] = True
-    return np.flatnonzero(mark)

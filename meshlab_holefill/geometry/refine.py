@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._refine_kernels import split_test
+from ._refine_kernels import split_faces, split_test
 from .flips import relax_edges
 from .quality import corner_angles
 
@@ -98,13 +98,8 @@ def refine_patch(V, F, scale, alpha=np.sqrt(2.0), fixed_edges=None, max_iteratio
         if not mask.any():
             rounds -= 1
             break
-        idx = np.flatnonzero(mask)
-        new_ids = len(V) + np.arange(len(idx))
-        i, j, k = F[idx, 0], F[idx, 1], F[idx, 2]
-        V = np.concatenate([V, C[idx]])
-        scale = np.concatenate([scale, sc[idx]])
-        F[idx] = np.stack([new_ids, j, k], axis=1)
-        F = np.concatenate([F, np.stack([i, new_ids, k], axis=1), np.stack([i, j, new_ids], axis=1)])
+        V, F, scale = split_faces(np.ascontiguousarray(V), np.ascontiguousarray(F), np.ascontiguousarray(scale),
+                                  mask, C, sc)
         F, s = relax(V, F)
         swaps += s
     return V, F, scale, {"split_rounds": rounds, "swaps": swaps}

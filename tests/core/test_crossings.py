@@ -65,3 +65,29 @@ def test_the_box_query_is_loaded_for_the_mesh_face_type_before_workers_fork(monk
     from meshlab_holefill.core.crossings import _faces_meeting_boxes
 
     assert any(sig[1].dtype.name == "int32" and sig[1].layout == "C" for sig in _faces_meeting_boxes.signatures)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_a_patch_is_tested_against_exactly_the_faces_whose_box_meets_its_padded_box(seed):
+    from meshlab_holefill.core import crossings
+
+    rng = np.random.default_rng(seed)
+    V = rng.random((80, 3))
+    F = rng.integers(0, 80, (120, 3))
+    loop = np.unique(rng.integers(0, 80, 4))
+    points = np.concatenate([V[loop], rng.random((2, 3)) * 0.5 + 0.25])
+    faces = rng.integers(0, len(points), (3, 3))
+    candidates = face_boxes_near(V, F, np.array([[[-1.0] * 3, [2.0] * 3]]))
+    seen = []
+    real = crossings.intersecting_pairs
+    crossings.intersecting_pairs = lambda X, allF, *args, **kw: seen.append(len(allF)) or real(X, allF, *args, **kw)
+    try:
+        crossings.patch_intersections(points, faces, V, F, candidates, loop)
+    finally:
+        crossings.intersecting_pairs = real
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    pad = 1e-9 * float(np.linalg.norm(hi - lo))
+    corners = V[F]
+    meets = np.all(corners.max(axis=1) >= lo - pad, axis=1) & np.all(corners.min(axis=1) <= hi + pad, axis=1)
+    assert seen == [len(faces) + int(meets.sum())]

@@ -1,5 +1,6 @@
 """Pfeifle-Seidel density refinement of geometry.refine."""
 import numpy as np
+from hypothesis import given, settings, strategies as st
 
 from meshlab_holefill.geometry.quality import triangle_quality
 from meshlab_holefill.geometry.refine import refine_patch, split_condition
@@ -53,3 +54,24 @@ def test_a_corner_angle_at_the_limit_is_left_to_numpy():
     assert not RK.split_test(V, F, np.full(3, 0.01), 1.4)[3]
     for x, y in zip(split_condition(V, F, np.full(3, 0.01), 1.4), split_condition_numpy(V, F, np.full(3, 0.01), 1.4)):
         np.testing.assert_array_equal(x, y)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_split_faces_puts_each_centroid_in_three_faces_that_tile_its_face(seed):
+    from meshlab_holefill.geometry._refine_kernels import split_faces
+
+    rng = np.random.default_rng(seed)
+    n, m = int(rng.integers(3, 20)), int(rng.integers(1, 15))
+    V, scale = rng.random((n, 3)), rng.random(n)
+    F = rng.integers(0, n, (m, 3))
+    mask, C, sc = rng.random(m) < 0.5, rng.random((m, 3)), rng.random(m)
+    V2, F2, scale2 = split_faces(V, F, scale, mask, C, sc)
+    idx = np.flatnonzero(mask)
+    c = n + np.arange(len(idx))  # new vertices in the order of their faces
+    np.testing.assert_array_equal(V2, np.concatenate([V, C[idx]]))
+    np.testing.assert_array_equal(scale2, np.concatenate([scale, sc[idx]]))
+    np.testing.assert_array_equal(F2[~np.concatenate([mask, np.ones(2 * len(idx), bool)])], F[~mask])
+    i, j, k = F[idx].T
+    np.testing.assert_array_equal(F2[idx], np.stack([c, j, k], 1))
+    np.testing.assert_array_equal(F2[m:], np.concatenate([np.stack([i, c, k], 1), np.stack([i, j, c], 1)]))

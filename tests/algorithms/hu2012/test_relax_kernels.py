@@ -142,3 +142,18 @@ def test_refinement_with_the_compiled_rounds_is_the_refinement_with_the_hook(cri
     assert want[3]["swaps"] > 0 and got[3] == want[3]
     for a, b in zip(got[:3], want[:3]):
         np.testing.assert_array_equal(a, b)
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_fixed_keys_are_the_sorted_distinct_undirected_edge_keys(seed):
+    from meshlab_holefill.geometry.sets import unique_ints
+    from meshlab_holefill.geometry.topology import undirected_keys
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 40))
+    E = rng.integers(0, n, (int(rng.integers(0, 30)), 2))
+    E = np.concatenate([E, E[:, ::-1][: len(E) // 2]])  # each edge also the other way round
+    got = R.fixed_keys(np.ascontiguousarray(E), n)
+    np.testing.assert_array_equal(got, unique_ints(undirected_keys(E, n)))
+    assert got.dtype == np.int64
