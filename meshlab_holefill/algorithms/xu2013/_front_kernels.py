@@ -81,13 +81,24 @@ def min_point_triangle_distance(x, V, F, cand, radius):
 _CLEARLY_BEYOND = 1.0 + 1e-12
 
 
+# The scans over the alive nodes read a vertex's coordinates as scalars (P[u, i]), not as a row
+# view P[u]: each view takes and drops a reference on P, two atomic operations per node that
+# would cost more than the node's test.
+
+
 @njit(cache=True)
-def _beyond(X, Y, r2, two):
-    """Is |X - Y|^2 > r2, with the squares as Python's ``(X[i] - Y[i]) ** 2``?"""
-    a, b, c = X[0] - Y[0], X[1] - Y[1], X[2] - Y[2]
+def _beyond_xyz(x0, x1, x2, Y, r2, two):
+    """Is |X - Y|^2 > r2 for X = (x0, x1, x2), with the squares as Python's ``(X[i] - Y[i]) ** 2``?"""
+    a, b, c = x0 - Y[0], x1 - Y[1], x2 - Y[2]
     if a * a + b * b + c * c > r2 * _CLEARLY_BEYOND:
         return True
     return not (a ** two + b ** two + c ** two <= r2)
+
+
+@njit(cache=True)
+def _beyond(X, Y, r2, two):
+    """Is |X - Y|^2 > r2, with the squares as Python's ``(X[i] - Y[i]) ** 2``?"""
+    return _beyond_xyz(X[0], X[1], X[2], Y, r2, two)
 
 
 @njit(cache=True)
@@ -96,10 +107,10 @@ def _cell(x, c):
 
 
 @njit(cache=True)
-def _in_query_cells(X, pos, radius, cell):
-    """Is X in a grid cell of the box pos +- radius (the cells of the grid query the Python reference made)?"""
+def _in_query_cells(x0, x1, x2, pos, radius, cell):
+    """Is (x0, x1, x2) in a grid cell of the box pos +- radius (the cells of the grid query the Python reference made)?"""
     for i in range(3):
-        key = _cell(X[i], cell)
+        key = _cell(x0 if i == 0 else (x1 if i == 1 else x2), cell)
         if key < _cell(pos[i] - radius, cell) or key > _cell(pos[i] + radius, cell):
             return False
     return True
@@ -122,11 +133,11 @@ def merge_target(pos, radius, v, p, q, label, P, node_vertex, node_front, alive,
         u = node_vertex[n]
         if u == v or u == p or u == q:
             continue
-        X = P[u]
-        if _beyond(X, pos, r2, two):
+        x0, x1, x2 = P[u, 0], P[u, 1], P[u, 2]
+        if _beyond_xyz(x0, x1, x2, pos, r2, two):
             continue
-        d = (X[0] - pos[0]) ** two + (X[1] - pos[1]) ** two + (X[2] - pos[2]) ** two
-        if (d < best_d or (d == best_d and u < best_u)) and _in_query_cells(X, pos, radius, cell):
+        d = (x0 - pos[0]) ** two + (x1 - pos[1]) ** two + (x2 - pos[2]) ** two
+        if (d < best_d or (d == best_d and u < best_u)) and _in_query_cells(x0, x1, x2, pos, radius, cell):
             best_d, best_u = d, u
     return best_u
 
@@ -207,15 +218,15 @@ def front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_
     for t in range(n_alive):
         n = alive[t]
         x = node_vertex[n]
-        X = P[x]
-        if _beyond(X, V, r2_reach, two) or not _in_query_cells(X, V, reach, cell):
+        x0, x1, x2 = P[x, 0], P[x, 1], P[x, 2]
+        if _beyond_xyz(x0, x1, x2, V, r2_reach, two) or not _in_query_cells(x0, x1, x2, V, reach, cell):
             continue
         y = node_vertex[node_next[n]]
-        Y = P[y]
-        fx0 = X[0] * e1[0] + X[1] * e1[1] + X[2] * e1[2]
-        fx1 = X[0] * e2[0] + X[1] * e2[1] + X[2] * e2[2]
-        fy0 = Y[0] * e1[0] + Y[1] * e1[1] + Y[2] * e1[2]
-        fy1 = Y[0] * e2[0] + Y[1] * e2[1] + Y[2] * e2[2]
+        y0, y1, y2 = P[y, 0], P[y, 1], P[y, 2]
+        fx0 = x0 * e1[0] + x1 * e1[1] + x2 * e1[2]
+        fx1 = x0 * e2[0] + x1 * e2[1] + x2 * e2[2]
+        fy0 = y0 * e1[0] + y1 * e1[1] + y2 * e1[2]
+        fy1 = y0 * e2[0] + y1 * e2[1] + y2 * e2[2]
         if max(fx0, fy0) < lo_x or min(fx0, fy0) > hi_x or max(fx1, fy1) < lo_y or min(fx1, fy1) > hi_y:
             continue
         for s in range(ne):
