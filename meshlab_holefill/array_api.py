@@ -9,7 +9,7 @@ from .core.parameters import resolve_params
 from .core.pipeline import COMMON_PARAMS, fill_mesh_holes
 from .errors import FilterParameterError
 
-__all__ = ["algorithm_names", "compile_kernels", "fill_holes"]
+__all__ = ["algorithm_names", "compile_kernels", "fill_holes", "refresh_kernel_cache"]
 
 #: The option sets :func:`compile_kernels` runs beyond each algorithm's defaults (their own kernels).
 COMPILE_OPTION_SETS = (("min_angle_bilateral", (("fairing", "thinplate"), ("iterations", 0), ("smoothing", 10))),)
@@ -136,12 +136,68 @@ def _compile_one(algorithm, params):
     return time.process_time() - start
 
 
+def refresh_kernel_cache(root=None):
+    """Drop numba's cached kernels when a kernel source of the package changed since they were cached.
+
+    numba checks only the source file a cached function is defined in, while a compiled
+    function carries the kernels it calls from other files inlined: after an update of those
+    files alone it would load stale code. A fingerprint of every source file that uses numba
+    is kept beside the cache (``__pycache__/numba-sources.sha1``); when it differs, or is
+    missing, every cached kernel (``*.nbi``, ``*.nbc``) under ``root`` (or in ``NUMBA_CACHE_DIR``
+    when set) is removed, so the next run compiles afresh. Folders that cannot be written are left as they are.
+
+    Parameters
+    ----------
+    root : str, optional
+        The package folder (default: this package's).
+
+    Returns
+    -------
+    bool
+        Whether cached kernels were dropped.
+    """
+    import hashlib
+    import os
+
+    root = root or os.path.dirname(os.path.abspath(__file__))
+    digest = hashlib.sha1()
+    for folder, dirs, files in sorted(os.walk(root)):
+        dirs[:] = sorted(d for d in dirs if d != "__pycache__")
+        for name in sorted(f for f in files if f.endswith(".py")):
+            with open(os.path.join(folder, name), "rb") as fh:
+                text = fh.read()
+            if b"numba" in text:
+                digest.update(os.path.relpath(os.path.join(folder, name), root).encode() + b"\0" + text)
+    # numba caches beside the sources, in __pycache__ folders, unless NUMBA_CACHE_DIR names one folder for all
+    cache = os.environ.get("NUMBA_CACHE_DIR")
+    stamp = os.path.join(cache or os.path.join(root, "__pycache__"), "numba-sources.sha1")
+    try:
+        with open(stamp) as fh:
+            if fh.read().strip() == digest.hexdigest():
+                return False
+    except OSError:
+        pass
+    try:
+        for folder, _, files in os.walk(cache or root):
+            if cache or os.path.basename(folder) == "__pycache__":
+                for name in files:
+                    if name.endswith((".nbi", ".nbc")):
+                        os.remove(os.path.join(folder, name))
+        os.makedirs(os.path.dirname(stamp), exist_ok=True)
+        with open(stamp, "w") as fh:
+            fh.write(digest.hexdigest() + "\n")
+    except OSError:
+        return False
+    return True
+
+
 def compile_kernels(processes=None):
     """Compile (or load from numba's on-disk cache) every filter's kernels ahead of first use.
 
     The filters' compiled kernels (numba, ``cache=True``) are compiled the first time they run
     after an install or an update, which makes that first fill slow; later processes load them
-    from the cache. This runs each algorithm, and the option sets in ``COMPILE_OPTION_SETS``,
+    from the cache. This first drops a cache made from other kernel sources
+    (:func:`refresh_kernel_cache`), then runs each algorithm, and the option sets in ``COMPILE_OPTION_SETS``,
     once on a small example mesh, in parallel processes, so that cost is paid here.
 
     Parameters
@@ -165,6 +221,7 @@ def compile_kernels(processes=None):
     import os
     from concurrent.futures import ProcessPoolExecutor
 
+    refresh_kernel_cache()
     jobs = [(name, ()) for name in algorithm_names()] + list(COMPILE_OPTION_SETS)
     processes = max(1, min(int(processes or os.cpu_count() or 1), len(jobs)))
     labels = [name + (f" ({', '.join(f'{k}={v}' for k, v in params)})" if params else "") for name, params in jobs]

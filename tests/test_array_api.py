@@ -99,3 +99,29 @@ def test_kernel_example_has_two_holes_every_filter_closes():
     for name in meshlab_holefill.algorithm_names():
         _, _, result = meshlab_holefill.fill_holes(V, F, name, workers=1)
         assert result["closed_holes"] == 2, (name, result["holes"])
+
+
+def test_kernel_cache_is_dropped_when_a_kernel_source_changes(tmp_path, monkeypatch):
+    from meshlab_holefill.array_api import refresh_kernel_cache
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    package = tmp_path / "pkg"
+    (package / "sub" / "__pycache__").mkdir(parents=True)
+    kernel = package / "sub" / "kernels.py"
+    kernel.write_text("import numba\n")
+    (package / "plain.py").write_text("x = 1\n")
+    cached = package / "sub" / "__pycache__" / "kernels.f-3.py311.nbi"
+
+    def cache_files():
+        cached.write_text("index")
+        (package / "sub" / "__pycache__" / "kernels.f-3.py311.1.nbc").write_text("code")
+
+    cache_files()
+    assert refresh_kernel_cache(str(package))  # no fingerprint yet: the cache's sources are unknown
+    assert not cached.exists() and not list((package / "sub" / "__pycache__").glob("*.nbc"))
+    cache_files()
+    assert not refresh_kernel_cache(str(package)) and cached.exists()  # same sources: kept
+    (package / "plain.py").write_text("x = 2\n")
+    assert not refresh_kernel_cache(str(package)) and cached.exists()  # a file without numba does not count
+    kernel.write_text("import numba\n# changed\n")
+    assert refresh_kernel_cache(str(package)) and not cached.exists()
