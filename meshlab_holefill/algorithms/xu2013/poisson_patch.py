@@ -19,7 +19,8 @@ from ...geometry.flips import folds, relax_edges
 from ...geometry.intersections import faces_intersecting
 from ...geometry.laplacian import (cotangent_laplacian, cotangent_weights, tangential_umbrella_smoothing,
                                    vertices_near)
-from ...geometry.quality import triangle_quality, unique_edges, vertex_normals
+from ...geometry.quality import triangle_quality, unique_edges
+from ...geometry.refine import refine_patch
 from ...geometry.segments import polygon_edges_touch
 from ...errors import HoleFillError
 
@@ -214,10 +215,7 @@ def refine_layout(D, F, k, forbidden_edges, edge_length):
     D : (n2, 3) float64  (``D`` first)
     F : (m2, 3) int64
     """
-    from ...geometry.refine import refine_patch
-
-    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
-    fixed = np.concatenate([loop_edges, np.asarray(forbidden_edges, np.int64).reshape(-1, 2)])
+    fixed = boundary_edges_and_chords(k, forbidden_edges)
     D2, F2, _, _ = refine_patch(D, F, np.full(len(D), float(edge_length)), fixed_edges=fixed)
     return D2, F2
 
@@ -277,18 +275,14 @@ def initial_patches(ctx, merge_factor, failures):
             X = harmonic_lift(layout, F, P)
             stats.update(lift_stretch=stretch, lift_refined=len(layout) - before)
         yield X, F, stats, layout
-    from ...geometry.refine import refine_patch
     from ..hu2012.min_angle_triangulation import min_angle_triangulation
 
-    k = ctx.size
     try:
         F0 = min_angle_triangulation(P, ctx.loop_normals, ctx.forbidden_edges)
     except HoleFillError as exc:
         failures.append(f"ear cutting: {exc}")
         return
-    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
-    fixed = np.concatenate([loop_edges, np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2)])
-    X, F, _, info = refine_patch(P, F0, ctx.edge_scale, fixed_edges=fixed)
+    X, F, _, info = refine_patch(P, F0, ctx.edge_scale, fixed_edges=_fixed_edges(ctx))
     yield X, F, {"domain": "ears", **info}, None
 
 
@@ -353,11 +347,15 @@ def relax_patch(X, F, ctx):
     return relax_edges(X, F, _fixed_edges(ctx), allowed=_ear_guard(ctx.size))
 
 
+def boundary_edges_and_chords(k, forbidden_edges):
+    """(k + p, 2) int64: the loop's edges (i, i + 1) and the boundary pairs already joined by the mesh."""
+    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    return np.concatenate([loop_edges, np.asarray(forbidden_edges, np.int64).reshape(-1, 2)])
+
+
 def _fixed_edges(ctx):
     """Edges no swap may touch: the hole boundary and the mesh's chords between boundary vertices."""
-    k = ctx.size
-    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
-    return np.concatenate([loop_edges, np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2)])
+    return boundary_edges_and_chords(ctx.size, ctx.forbidden_edges)
 
 
 def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3):
