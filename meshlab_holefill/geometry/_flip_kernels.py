@@ -22,7 +22,7 @@ from numba import njit
 from ._tri_kernels import _cross, _dot, _norm, _sub
 
 # The kernels of the compiled rounds (pair_angle_parts serves flips.min_angle_scores, the scored rounds).
-__all__ = ["swap_candidates", "apply_swaps", "NO_EDGES", "NO_FAILING", "CANDIDATES", "UNSURE", "ANGLE_MARGIN"]
+__all__ = ["swap_candidates", "apply_swaps", "fixed_keys", "NO_EDGES", "NO_FAILING", "CANDIDATES", "UNSURE", "ANGLE_MARGIN"]
 
 NO_EDGES, NO_FAILING, CANDIDATES, UNSURE = 0, 1, 2, 3
 ANGLE_MARGIN = 1e-12
@@ -352,3 +352,24 @@ def pair_angle_parts(V, faces):
                 sines[a, i, k], cosines[a, i, k] = _angle_parts(V, faces[a, i, k], faces[a, i, (k + 1) % 3],
                                                                 faces[a, i, (k + 2) % 3])
     return sines, cosines
+
+
+@njit(cache=True)
+def fixed_keys(E, n):
+    """Sorted distinct keys min * n + max of the edges E (e, 2) int64, (k,) int64.
+
+    ``unique_ints(undirected_keys(E, n))`` in one call, the fixed-edge table of the relaxations
+    (:func:`..flips.relax_edges`, hu2012's compiled rounds): a refinement relaxes a few hundred
+    times, each time with the keys for its current vertex count, and numpy's calls cost more
+    than the sort of a hole's few dozen edges.
+    """
+    keys = np.empty(E.shape[0], np.int64)
+    for r in range(E.shape[0]):
+        keys[r] = min(E[r, 0], E[r, 1]) * n + max(E[r, 0], E[r, 1])
+    keys.sort()
+    k = 0
+    for r in range(keys.shape[0]):
+        if r == 0 or keys[r] != keys[k - 1]:
+            keys[k] = keys[r]
+            k += 1
+    return keys[:k].copy()

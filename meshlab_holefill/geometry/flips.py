@@ -5,8 +5,8 @@ import numpy as np
 
 from . import _flip_kernels as K
 from .quality import cross_rows, face_normals
-from .sets import isin_ints, unique_ints
-from .topology import interior_edges, undirected_keys
+from .sets import isin_ints
+from .topology import interior_edges
 
 __all__ = ["circumcenters", "folds", "min_angle_scores", "relax_edges"]
 
@@ -67,6 +67,12 @@ def min_angle_scores(V, old1, old2, new1, new2):
     sines, cosines = K.pair_angle_parts(np.ascontiguousarray(V, np.float64), faces)
     smallest = np.arctan2(sines, cosines).min(axis=2)
     return np.minimum(smallest[0], smallest[1]), np.minimum(smallest[2], smallest[3])
+
+
+def fixed_edge_keys(fixed_edges, n):
+    """Sorted distinct undirected keys (k,) int64 of the edges no swap may touch ((p, 2) int or None)."""
+    E = np.ascontiguousarray(np.asarray(() if fixed_edges is None else fixed_edges, np.int64).reshape(-1, 2))
+    return K.fixed_keys(E, n)
 
 
 def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion="sphere", normal_cos=0.0, *,
@@ -131,7 +137,7 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
     """
     F = np.array(F, np.int64)
     n = len(V)
-    fixed = unique_ints(undirected_keys(() if fixed_edges is None else fixed_edges, n))
+    fixed = fixed_edge_keys(fixed_edges, n)
     scorer = min_angle_scores if criterion == "min_angle" else criterion if callable(criterion) else None
     if compiled and isinstance(criterion, str) and criterion in ("angles", "sphere") and normal_cos == 0.0:
         V = np.ascontiguousarray(V, np.float64)

@@ -21,29 +21,9 @@ from ...geometry._flip_kernels import (_contains, _interior_edges, _keeps_orient
                                        swap_faces)
 from ._sector_kernels import new_edge_in_sectors
 
-__all__ = ["relax_rounds", "fixed_keys", "STOPPED", "UNDECIDED", "REFUSED"]
+__all__ = ["relax_rounds", "STOPPED", "UNDECIDED", "REFUSED"]
 
 STOPPED, UNDECIDED, REFUSED = 0, 1, 2
-
-
-@njit(cache=True)
-def fixed_keys(E, n):
-    """Sorted distinct keys min * n + max of the edges E (e, 2) int64, (k,) int64.
-
-    ``unique_ints(undirected_keys(E, n))``, the ``fixed`` of :func:`relax_rounds`, in one call:
-    a refinement relaxes a few hundred times, each time with the keys for its current vertex
-    count, and numpy's calls cost more than the sort of a hole's few dozen edges.
-    """
-    keys = np.empty(E.shape[0], np.int64)
-    for r in range(E.shape[0]):
-        keys[r] = min(E[r, 0], E[r, 1]) * n + max(E[r, 0], E[r, 1])
-    keys.sort()
-    k = 0
-    for r in range(keys.shape[0]):
-        if r == 0 or keys[r] != keys[k - 1]:
-            keys[k] = keys[r]
-            k += 1
-    return keys[:k].copy()
 
 
 @njit(cache=True)

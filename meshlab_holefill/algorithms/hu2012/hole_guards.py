@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...geometry.flips import relax_edges
+from ...geometry.flips import fixed_edge_keys, relax_edges
 from ...geometry.sets import unique_ints
 from ...geometry.intersections import intersecting_pairs
 from ...geometry.quality import cross_rows
-from ._relax_kernels import STOPPED, fixed_keys, relax_rounds
+from ._relax_kernels import STOPPED, relax_rounds
 from ._sector_kernels import sector_contains, swaps_in_sectors
 
 __all__ = ["sector_angle", "inside_hole_sector", "LoopSectors", "patch_crossings", "patch_guard", "swaps_crossing",
@@ -214,8 +214,7 @@ def relax_in_sectors(sectors, V, F, fixed_edges=None, criterion="sphere", refuse
     guard = refused if refused is not None else (lambda V, F, A, B, replaced: sectors.swaps_allowed(V, B))
     if criterion not in ("sphere", "angles") or F.ndim != 2 or F.shape[1] != 3 or V.ndim != 2 or V.shape[1] != 3:
         return relax_edges(V, F, fixed_edges, max_rounds=max_rounds, allowed=guard, criterion=criterion)
-    fixed = fixed_keys(np.ascontiguousarray(np.asarray(() if fixed_edges is None else fixed_edges, np.int64)
-                                            .reshape(-1, 2)), len(V))
+    fixed = fixed_edge_keys(fixed_edges, len(V))
     total, left = 0, max_rounds
     while left > 0:
         status, swaps, rounds = relax_rounds(V, F, fixed, criterion == "sphere", left, sectors.points, sectors.u,

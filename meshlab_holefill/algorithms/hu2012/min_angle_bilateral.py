@@ -185,13 +185,13 @@ def _refine(ctx, F0, alpha, fixed, max_passes=4, criterion="sphere"):
     def relax(V, F):
         return relax_in_sectors(sectors, V, F, fixed, criterion)
 
-    V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed, relax=relax)
+    V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, relax=relax)
     for _ in range(max_passes):
         F, swaps = relax_in_sectors(sectors, V, F, fixed, criterion, refused=exact)
         info["swaps"] += swaps
         if swaps == 0:
             break
-        V, F, scale, more = refine_patch(V, F, scale, alpha=alpha, fixed_edges=fixed, relax=relax)
+        V, F, scale, more = refine_patch(V, F, scale, alpha=alpha, relax=relax)
         info["split_rounds"] += more["split_rounds"]
         info["swaps"] += more["swaps"]
     return V, F, scale, info

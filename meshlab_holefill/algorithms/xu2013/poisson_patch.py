@@ -53,7 +53,7 @@ def normalized_cotangent_laplacian(V, F, n=None, cotangents=None):
     C = cotangent_weights(V, F) if cotangents is None else cotangents
     ok, indptr, cols, half_sums = edge_weight_rows(np.asarray(F, np.int64), 0.5 * C, n)
     if not ok:
-        return _normalized_from_sparse(V, F, n, cotangents)
+        return _normalized_from_sparse(V, F, n, C)
     weights, has = _normalized_weights(np.repeat(np.arange(n), np.diff(indptr)), 2.0 * half_sums, n)
     indptr, indices, data = with_unit_diagonal(indptr, cols, weights, has)
     return sp.csr_matrix((data, indices.astype(np.int32), indptr.astype(np.int32)), shape=(n, n))

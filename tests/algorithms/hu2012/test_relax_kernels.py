@@ -6,6 +6,7 @@ from hypothesis import strategies as st
 
 from meshlab_holefill.algorithms.hu2012 import _relax_kernels as R
 from meshlab_holefill.algorithms.hu2012.hole_guards import LoopSectors, relax_in_sectors
+from meshlab_holefill.geometry._flip_kernels import fixed_keys
 from meshlab_holefill.geometry.flips import relax_edges
 from meshlab_holefill.geometry.topology import interior_edges
 
@@ -154,6 +155,6 @@ def test_fixed_keys_are_the_sorted_distinct_undirected_edge_keys(seed):
     n = int(rng.integers(1, 40))
     E = rng.integers(0, n, (int(rng.integers(0, 30)), 2))
     E = np.concatenate([E, E[:, ::-1][: len(E) // 2]])  # each edge also the other way round
-    got = R.fixed_keys(np.ascontiguousarray(E), n)
+    got = fixed_keys(np.ascontiguousarray(E), n)
     np.testing.assert_array_equal(got, unique_ints(undirected_keys(E, n)))
     assert got.dtype == np.int64
