@@ -143,8 +143,9 @@ def refresh_kernel_cache(root=None):
     function carries the kernels it calls from other files inlined: after an update of those
     files alone it would load stale code. A fingerprint of every source file that uses numba
     is kept beside the cache (``__pycache__/numba-sources.sha1``); when it differs, or is
-    missing, every cached kernel (``*.nbi``, ``*.nbc``) under ``root`` (or in ``NUMBA_CACHE_DIR``
-    when set) is removed, so the next run compiles afresh. Folders that cannot be written are left as they are.
+    missing, every cached kernel (``*.nbi``, ``*.nbc``) under ``root`` is removed, so the next
+    run compiles afresh. Folders that cannot be written are left as they are, and so is a cache
+    in ``NUMBA_CACHE_DIR`` (one folder shared by every package's kernels).
 
     Parameters
     ----------
@@ -161,16 +162,15 @@ def refresh_kernel_cache(root=None):
 
     root = root or os.path.dirname(os.path.abspath(__file__))
     digest = hashlib.sha1()
-    for folder, dirs, files in sorted(os.walk(root)):
-        dirs[:] = sorted(d for d in dirs if d != "__pycache__")
+    for folder, _, files in sorted(os.walk(root)):
         for name in sorted(f for f in files if f.endswith(".py")):
             with open(os.path.join(folder, name), "rb") as fh:
                 text = fh.read()
             if b"numba" in text:
                 digest.update(os.path.relpath(os.path.join(folder, name), root).encode() + b"\0" + text)
-    # numba caches beside the sources, in __pycache__ folders, unless NUMBA_CACHE_DIR names one folder for all
-    cache = os.environ.get("NUMBA_CACHE_DIR")
-    stamp = os.path.join(cache or os.path.join(root, "__pycache__"), "numba-sources.sha1")
+    if os.environ.get("NUMBA_CACHE_DIR"):  # one folder for every package's kernels: the user's to clear
+        return False
+    stamp = os.path.join(root, "__pycache__", "numba-sources.sha1")
     try:
         with open(stamp) as fh:
             if fh.read().strip() == digest.hexdigest():
@@ -178,8 +178,8 @@ def refresh_kernel_cache(root=None):
     except OSError:
         pass
     try:
-        for folder, _, files in os.walk(cache or root):
-            if cache or os.path.basename(folder) == "__pycache__":
+        for folder, _, files in os.walk(root):
+            if os.path.basename(folder) == "__pycache__":
                 for name in files:
                     if name.endswith((".nbi", ".nbc")):
                         os.remove(os.path.join(folder, name))

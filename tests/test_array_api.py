@@ -125,3 +125,17 @@ def test_kernel_cache_is_dropped_when_a_kernel_source_changes(tmp_path, monkeypa
     assert not refresh_kernel_cache(str(package)) and cached.exists()  # a file without numba does not count
     kernel.write_text("import numba\n# changed\n")
     assert refresh_kernel_cache(str(package)) and not cached.exists()
+
+
+def test_a_shared_numba_cache_folder_is_left_alone(tmp_path, monkeypatch):
+    from meshlab_holefill.array_api import refresh_kernel_cache
+
+    shared = tmp_path / "numba-cache"
+    shared.mkdir()
+    (shared / "other_package.f-1.py311.nbi").write_text("index")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(shared))
+    package = tmp_path / "pkg"
+    package.mkdir()
+    (package / "kernels.py").write_text("import numba\n")
+    assert not refresh_kernel_cache(str(package))
+    assert (shared / "other_package.f-1.py311.nbi").exists()
