@@ -5,6 +5,7 @@ import numpy as np
 
 from .algorithms import ALGORITHMS, find_algorithm
 from .core.attributes import MeshArrays
+from .core.kernel_cache import refresh_kernel_cache
 from .core.parameters import resolve_params
 from .core.pipeline import COMMON_PARAMS, fill_mesh_holes
 from .errors import FilterParameterError
@@ -134,61 +135,6 @@ def _compile_one(algorithm, params):
     if result["closed_holes"] == 0:
         raise RuntimeError(f"{algorithm}: the kernel example closed no hole ({result['holes']})")
     return time.process_time() - start
-
-
-def refresh_kernel_cache(root=None):
-    """Drop numba's cached kernels when a kernel source of the package changed since they were cached.
-
-    numba checks only the source file a cached function is defined in, while a compiled
-    function carries the kernels it calls from other files inlined: after an update of those
-    files alone it would load stale code. A fingerprint of every source file that uses numba
-    is kept beside the cache (``__pycache__/numba-sources.sha1``); when it differs, or is
-    missing, every cached kernel (``*.nbi``, ``*.nbc``) under ``root`` is removed, so the next
-    run compiles afresh. Folders that cannot be written are left as they are, and so is a cache
-    in ``NUMBA_CACHE_DIR`` (one folder shared by every package's kernels).
-
-    Parameters
-    ----------
-    root : str, optional
-        The package folder (default: this package's).
-
-    Returns
-    -------
-    bool
-        Whether cached kernels were dropped.
-    """
-    import hashlib
-    import os
-
-    root = root or os.path.dirname(os.path.abspath(__file__))
-    digest = hashlib.sha1()
-    for folder, _, files in sorted(os.walk(root)):
-        for name in sorted(f for f in files if f.endswith(".py")):
-            with open(os.path.join(folder, name), "rb") as fh:
-                text = fh.read()
-            if b"numba" in text:
-                digest.update(os.path.relpath(os.path.join(folder, name), root).encode() + b"\0" + text)
-    if os.environ.get("NUMBA_CACHE_DIR"):  # one folder for every package's kernels: the user's to clear
-        return False
-    stamp = os.path.join(root, "__pycache__", "numba-sources.sha1")
-    try:
-        with open(stamp) as fh:
-            if fh.read().strip() == digest.hexdigest():
-                return False
-    except OSError:
-        pass
-    try:
-        for folder, _, files in os.walk(root):
-            if os.path.basename(folder) == "__pycache__":
-                for name in files:
-                    if name.endswith((".nbi", ".nbc")):
-                        os.remove(os.path.join(folder, name))
-        os.makedirs(os.path.dirname(stamp), exist_ok=True)
-        with open(stamp, "w") as fh:
-            fh.write(digest.hexdigest() + "\n")
-    except OSError:
-        return False
-    return True
 
 
 def compile_kernels(processes=None):

@@ -8,6 +8,7 @@ Imports ``errors`` and ``geometry`` only (no pymeshlab). Modules:
 - ``attributes``: :class:`MeshArrays`, attributes of new elements and of refined borders.
 - ``crossings``: patches against the mesh near them, against each other, at shared vertices.
 - ``parallel``: holes filled by this process and forked children at once, with a time limit per hole.
+- ``kernel_cache``: numba's on-disk kernels dropped when the package's kernel sources change.
 - ``pipeline``: :func:`fill_mesh_holes`, what every filter does around its algorithm.
 """
 from .attributes import MeshArrays

@@ -21,6 +21,7 @@ from .attributes import MeshArrays, check_manifold_edges, extend_attributes, ref
 from .crossings import (clashing_patches, crossing_patches, face_boxes_near, load_face_boxes_kernel, patch_box,
                         patch_intersections)
 from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
+from .kernel_cache import refresh_kernel_cache_once
 from .holes import (boundary_loops, edge_summary, hole_context, hole_measures, is_outline, outline_ratio,
                     vertex_face_incidence)
 from .parameters import ParamSpec, Percentage
@@ -161,6 +162,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     base = (arrays, list(loops), [dict(entry) for entry in report], incidence)
     fills = {}  # hole -> outcome of its fill, reused by a later pass while its surroundings are the same
     if todo:  # kernels the fills use, loaded before any worker forks
+        refresh_kernel_cache_once()
         load_validation_kernel()
         if warm_up is not None:
             warm_up()

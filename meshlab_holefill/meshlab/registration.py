@@ -16,6 +16,7 @@ import pymeshlab
 
 from ..core import parameters as _parameters
 from ..core.parameters import MLX_TYPES, FilterParameterError, ParamSpec, Percentage  # noqa: F401 (re-exported)
+from ..core.kernel_cache import refresh_kernel_cache_once
 from .exceptions import pymeshlab_filter_list, raises_meshset_errors
 from .meshset_io import current_mesh_exists, filter_record
 
@@ -143,6 +144,7 @@ def load_filter_kernels(name):
         return
     warm_up = getattr(importlib.import_module(spec.extra["module"]), "WARM_UP", None)
     if warm_up is not None:
+        refresh_kernel_cache_once()
         warm_up()
 
 
