@@ -194,11 +194,15 @@ def run_jobs(job, items, workers=1, progress=None):
     # A job's time limit is a SIGALRM, which only a main thread gets: elsewhere this process only collects.
     children = workers - 1 if workers == 1 or _can_time() else workers
     results, done = [None] * len(items), [False] * len(items)
+
+    def record(position, value):
+        results[position], done[position] = value, True
+        if progress:
+            progress(position)
+
     if children == 0:
         for position, item in enumerate(items):
-            results[position] = job(item)
-            if progress:
-                progress(position)
+            record(position, job(item))
         return results
     fork = multiprocessing.get_context("fork")
     counter = fork.Value("q", 0)
@@ -221,17 +225,13 @@ def run_jobs(job, items, workers=1, progress=None):
             position, value = message
             if isinstance(value, _Raised):
                 raise value.exc from RuntimeError(f"in a worker process:\n{value.trace}")
-            results[position], done[position] = value, True
-            if progress:
-                progress(position)
+            record(position, value)
 
     try:
         _fork_children(children, fork, (job, items, counter), inbox, procs)
         if children < workers:
             while (position := _take(counter, len(items))) is not None:
-                results[position], done[position] = job(items[position]), True
-                if progress:
-                    progress(position)
+                record(position, job(items[position]))
                 collect(block=False)
         collect(block=True)
         finished = True
