@@ -421,12 +421,13 @@ def _beyond(d, deg, tol):
 def _step(c0, c1, ok, t0, t1):
     """One Liang-Barsky constraint of intersections._clip (inside where c0 + t (c1 - c0) >= 0)."""
     ok = ok and (c0 >= 0 or c1 >= 0)
-    den = c0 - c1
-    t = c0 / (1.0 if den == 0 else den)
+    # the division only where a bound moves: most constraints hold at both ends
     if c0 < 0 and c1 >= 0:
-        t0 = _npmax(t0, t)
-    if c0 >= 0 and c1 < 0:
-        t1 = _npmin(t1, t)
+        den = c0 - c1
+        t0 = _npmax(t0, c0 / (1.0 if den == 0 else den))
+    elif c0 >= 0 and c1 < 0:
+        den = c0 - c1
+        t1 = _npmin(t1, c0 / (1.0 if den == 0 else den))
     return ok, t0, t1
 
 
@@ -481,21 +482,28 @@ def _frame_row(frame, t, k):
 
 
 @njit(cache=True)
-def _clip(P0, P1, h0, h1, Tt, ms, us, grow, tol):
-    """intersections._clip of the segment P0P1 (heights h0, h1 above T): (ok, t0, t1).
+def _slab(h0, h1, tol):
+    """The slab's two constraints of intersections._clip for a segment with heights h0, h1: (ok, t0, t1).
 
-    Its constraints in its order (the slab's two, then per target edge its edge normal's and its
-    bisector's); it stops at the first one negative (or NaN) at both ends, which leaves ``ok``
-    False whatever the others give.
+    ``ok`` is False when both ends lie more than tol to one side, the usual verdict for two
+    faces of a patch that share a vertex; the target's edge constraints are then not needed.
     """
     ok, t0, t1 = True, 0.0, 1.0
     if not (tol - h0 >= 0 or tol - h1 >= 0) or not (tol + h0 >= 0 or tol + h1 >= 0):
         return False, t0, t1
     ok, t0, t1 = _step(tol - h0, tol - h1, ok, t0, t1)
     ok, t0, t1 = _step(tol + h0, tol + h1, ok, t0, t1)
+    return ok, t0, t1
+
+
+@njit(cache=True)
+def _clip_edges(P0, P1, Tt, frame, ft, grow, ok, t0, t1):
+    """The rest of intersections._clip after :func:`_slab`: per target edge its edge normal's and
+    its bisector's constraint (frame row ft), in its order, stopping at the first one negative
+    (or NaN) at both ends, which leaves ``ok`` False whatever the others give."""
     for e in range(3):
         a = Tt[e]
-        for direction in (ms[e], us[e]):
+        for direction in (_frame_row(frame, ft, e), _frame_row(frame, ft, 3 + e)):
             c0, c1 = _dot(_sub(P0, a), direction) + grow, _dot(_sub(P1, a), direction) + grow
             if not (c0 >= 0 or c1 >= 0):
                 return False, t0, t1
@@ -504,22 +512,26 @@ def _clip(P0, P1, h0, h1, Tt, ms, us, grow, tol):
 
 
 @njit(cache=True)
-def _edges_meet(S0, S1, S2, T0, T1, T2, d, frame, ft, shs, degs, degt, one, S, tol):
+def _edges_meet(S0, S1, S2, T0, T1, T2, d, frame, done, ft, nt, shs, degs, degt, one, S, tol):
     """intersections._edges_meet for one pair: some edge of triangle S0S1S2 meets T0T1T2
-    (whose clipping frame is row ft of `frame`; d: S's :func:`_heights` above T)."""
+    (unit normal nt; its clipping frame is row ft of `frame`, filled on first use, see
+    :func:`_ensure_frame`; d: S's :func:`_heights` above T)."""
     if degt:
         return False
     Ts = (S0, S1, S2)
     Tt = (T0, T1, T2)
-    ms = (_frame_row(frame, ft, 0), _frame_row(frame, ft, 1), _frame_row(frame, ft, 2))
-    us = (_frame_row(frame, ft, 3), _frame_row(frame, ft, 4), _frame_row(frame, ft, 5))
     for k in range(3):
         incident = shs[k] or shs[(k + 1) % 3]
         if one and incident and not degs:
             continue
         P0, P1 = Ts[k], Ts[(k + 1) % 3]
+        ok, t0, t1 = _slab(d[k], d[(k + 1) % 3], tol)
+        # the edge constraints only narrow [t0, t1] (or give up): an empty one stays empty
+        if not (ok and t0 <= t1):
+            continue
+        _ensure_frame(frame, done, ft, T0, T1, T2, nt)
         grow = 0.0 if (one and degs) else tol
-        ok, t0, t1 = _clip(P0, P1, d[k], d[(k + 1) % 3], Tt, ms, us, grow, tol)
+        ok, t0, t1 = _clip_edges(P0, P1, Tt, frame, ft, grow, ok, t0, t1)
         if not (ok and t0 <= t1):
             continue
         if not one:
@@ -594,11 +606,7 @@ def narrow_codes(V, F, canon, I, J, in_q, in_a, tol):
             one = nsh == 1
             s = 0 if sh1[0] else (1 if sh1[1] else (2 if sh1[2] else 0))  # argmax of sh1
             S = A0 if s == 0 else (A1 if s == 1 else A2)
-            if not deg2:
-                _ensure_frame(frame, done, sj, B0, B1, B2, n2)
-            if not deg1:
-                _ensure_frame(frame, done, si, A0, A1, A2, n1)
-            if (_edges_meet(A0, A1, A2, B0, B1, B2, dA, frame, sj, sh1, deg1, deg2, one, S, tol)
-                    or _edges_meet(B0, B1, B2, A0, A1, A2, dB, frame, si, sh2, deg2, deg1, one, S, tol)):
+            if (_edges_meet(A0, A1, A2, B0, B1, B2, dA, frame, done, sj, n2, sh1, deg1, deg2, one, S, tol)
+                    or _edges_meet(B0, B1, B2, A0, A1, A2, dB, frame, done, si, n1, sh2, deg2, deg1, one, S, tol)):
                 code[p] = HIT
     return code, fy, fx

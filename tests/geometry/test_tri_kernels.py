@@ -214,3 +214,38 @@ def test_radii_that_are_not_numbers_are_refused():
     T = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 0, 0], [np.inf, 0, 0], [0, 1, 0]]], float)
     with pytest.raises(ValueError, match="not numbers"):
         I._candidates(_bounds(T[:1]), _bounds(T[1:]), 1e-9, np.arange(1), np.arange(1, 2), 2)
+
+
+
+def _far_edge_straddles(V, F, i, j, tol):
+    """Per pair of faces sharing one vertex: whether the edge of F[i] opposite it has ends on both
+    sides of (or within tol of) the plane of F[j], so that the slab alone cannot reject it."""
+    A, B = V[F[i]], V[F[j]]
+    n = np.cross(B[:, 1] - B[:, 0], B[:, 2] - B[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    h = np.einsum("kij,kj->ki", A - B[:, :1], n)
+    far = ~(F[i][:, :, None] == F[j][:, None, :]).any(2)
+    h = np.where(far, h, np.nan)
+    return ~((np.nan_to_num(h, nan=np.inf) > tol).all(1) | (np.nan_to_num(h, nan=-np.inf) < -tol).all(1))
+
+
+@pytest.mark.parametrize("jitter", [0.0, 0.05, 0.5])
+def test_fan_pairs_sharing_one_vertex_equal_numpy(jitter):
+    """Faces of a jittered fan, and of a second fan lifted over it, meet pairwise at the centre; the
+    far edge of one face lies wholly to one side of the other's plane (the slab decides) or crosses
+    it (the edge constraints decide)."""
+    rng = np.random.default_rng(1)
+    angles = np.sort(rng.uniform(0, 2 * np.pi, 24))
+    rim = np.stack([np.cos(angles), np.sin(angles), jitter * rng.normal(size=24)], axis=1)
+    V = np.concatenate([np.zeros((1, 3)), rim, rim[::3] * 0.9 + [0.0, 0.0, 0.2]])
+    F = np.array([[0, 1 + t, 1 + (t + 1) % 24] for t in range(24)] + [[0, 25 + t, 26 + t] for t in range(7)])
+    i, j = (x.ravel() for x in np.meshgrid(np.arange(len(F)), np.arange(len(F))))
+    shared = (F[i][:, :, None] == F[j][:, None, :]).any(2).sum(1)
+    i, j = i[shared == 1], j[shared == 1]
+    in_all = np.ones(len(F), bool)
+    canon = np.arange(len(V))
+    ref = _reference_codes(V, F, canon, i, j, in_all, in_all, 1e-9, 1e-3)
+    assert np.array_equal(_kernel_hits(V, F, canon, i, j, in_all, in_all, 1e-9, 1e-3), ref)
+    straddles = _far_edge_straddles(V, F, i, j, 1e-9)
+    assert straddles.any() and not straddles.all()
+    assert ref.any() == (jitter == 0.5)

@@ -21,9 +21,9 @@ from ...geometry._flip_kernels import (_contains, _interior_edges, _keeps_orient
                                        swap_faces)
 from ._sector_kernels import new_edge_in_sectors
 
-__all__ = ["relax_rounds", "STOPPED", "UNDECIDED", "REFUSED"]
+__all__ = ["relax_rounds", "STOPPED", "UNDECIDED", "REFUSED", "SETTLED"]
 
-STOPPED, UNDECIDED, REFUSED = 0, 1, 2
+STOPPED, UNDECIDED, REFUSED, SETTLED = 0, 1, 2, 3
 
 
 @njit(cache=True)
@@ -149,8 +149,11 @@ def relax_rounds(V, F, fixed, sphere, max_rounds, points, u, w, limit, margin, s
 
     Returns
     -------
-    status : STOPPED (as relax_edges stops, or after max_rounds), UNDECIDED (a test of the next
-        round could not be decided here) or REFUSED (the sector test refuses a swap of the next round)
+    status : STOPPED (as relax_edges stops, or after max_rounds), SETTLED (stopped, and the sector
+        test refused no swap of the last round tested: run again on the result, with any veto that
+        agrees with it where it allows every candidate, relax_edges makes no swap), UNDECIDED (a
+        test of the next round could not be decided here) or REFUSED (the sector test refuses a
+        swap of the next round)
     swaps : int  made in the rounds run
     rounds : int  rounds run (each made swaps)
     """
@@ -186,8 +189,8 @@ def relax_rounds(V, F, fixed, sphere, max_rounds, points, u, w, limit, margin, s
                 cand[count] = h
                 count += 1
         if edges == 0 or failing == 0:
-            return STOPPED, total, rounds
-        kept = 0
+            return SETTLED, total, rounds
+        kept, refusals = 0, 0
         for r in range(count):
             a, b, c, d, _, _ = _corners(F, twin, cand[r])
             if _adjacent(nbr, deg, c, d) or _contains(fixed, min(a, b) * n + max(a, b)) or \
@@ -199,11 +202,12 @@ def relax_rounds(V, F, fixed, sphere, max_rounds, points, u, w, limit, margin, s
             if verdict == 0:
                 if stop_on_refusal:
                     return REFUSED, total, rounds
+                refusals += 1
                 continue
             cand[kept] = cand[r]
             kept += 1
         if kept == 0:
-            return STOPPED, total, rounds
+            return (STOPPED if refusals else SETTLED), total, rounds
         made, nbr = _make_swaps(F, twin, known, nbr, deg, cand[:kept], n)
         total += made
     return STOPPED, total, max_rounds

@@ -16,7 +16,7 @@ from ...geometry.flips import fixed_edge_keys, relax_edges
 from ...geometry.sets import unique_ints
 from ...geometry.intersections import intersecting_pairs
 from ...geometry.quality import cross_rows
-from ._relax_kernels import STOPPED, relax_rounds
+from ._relax_kernels import SETTLED, STOPPED, relax_rounds
 from ._sector_kernels import sector_contains, swaps_in_sectors
 
 __all__ = ["sector_angle", "inside_hole_sector", "LoopSectors", "patch_crossings", "patch_guard", "swaps_crossing",
@@ -208,25 +208,28 @@ def relax_in_sectors(sectors, V, F, fixed_edges=None, criterion="sphere", refuse
     -------
     F : (m, 3) int64
     swaps : int
+    settled : bool
+        The last round was a compiled one in which the sector test refused nothing: relaxing
+        ``F`` again, with the sector test or a ``refused`` hook, makes no swap.
     """
     V = np.ascontiguousarray(V, np.float64)
     F = np.array(F, np.int64)
     guard = refused if refused is not None else (lambda V, F, A, B, replaced: sectors.swaps_allowed(V, B))
     if criterion not in ("sphere", "angles") or F.ndim != 2 or F.shape[1] != 3 or V.ndim != 2 or V.shape[1] != 3:
-        return relax_edges(V, F, fixed_edges, max_rounds=max_rounds, allowed=guard, criterion=criterion)
+        return (*relax_edges(V, F, fixed_edges, max_rounds=max_rounds, allowed=guard, criterion=criterion), False)
     fixed = fixed_edge_keys(fixed_edges, len(V))
     total, left = 0, max_rounds
     while left > 0:
         status, swaps, rounds = relax_rounds(V, F, fixed, criterion == "sphere", left, sectors.points, sectors.u,
                                              sectors.w, sectors.limit, 1e-9, refused is not None)
         total, left = total + swaps, left - rounds
-        if status == STOPPED:
-            break
+        if status in (STOPPED, SETTLED):
+            return F, total, status == SETTLED
         F, swaps = relax_edges(V, F, fixed_edges, max_rounds=1, allowed=guard, criterion=criterion)
         total, left = total + swaps, left - 1
         if swaps == 0:
             break
-    return F, total
+    return F, total, False
 
 
 def swaps_crossing(ctx, V, F, A, B, replaced):

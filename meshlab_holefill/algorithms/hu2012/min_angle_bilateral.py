@@ -178,16 +178,22 @@ def _refine(ctx, F0, alpha, fixed, max_passes=4, criterion="sphere"):
     reconsidered with :func:`relaxation_guard` (an exact intersection check, too slow to run
     in every round), and when any of them is made, refinement resumes from the relaxed patch,
     since the new triangles may need splitting. Both relax by :func:`.hole_guards.relax_in_sectors`.
+    A refinement whose last relaxation ended with the sector test refusing nothing has no swap
+    to reconsider (the patch refine_patch returns is the one it last relaxed).
     """
     sectors = LoopSectors(ctx.points, ctx.loop_normals)
     exact = relaxation_guard(ctx, patch_guard(ctx, sectors=sectors))
+    settled = [False]  # of the last relaxation refine_patch ran
 
     def relax(V, F):
-        return relax_in_sectors(sectors, V, F, fixed, criterion)
+        F, swaps, settled[0] = relax_in_sectors(sectors, V, F, fixed, criterion)
+        return F, swaps
 
     V, F, scale, info = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, relax=relax)
     for _ in range(max_passes):
-        F, swaps = relax_in_sectors(sectors, V, F, fixed, criterion, refused=exact)
+        if settled[0]:
+            break
+        F, swaps, _ = relax_in_sectors(sectors, V, F, fixed, criterion, refused=exact)
         info["swaps"] += swaps
         if swaps == 0:
             break
