@@ -8,6 +8,10 @@ kernels without pickling them (closures and monkeypatched functions work too); o
 job's result travels back. This process takes jobs too, so ``workers`` processes means
 ``workers - 1`` forks. Where fork is not available, or inside a daemonic process (a Dask or
 multiprocessing worker, which may not have children), jobs run in this process.
+
+While several processes fill holes, each keeps OpenBLAS to one thread, set once before the
+forks (:mod:`.blas_threads`): a child that set it itself would first start a pool of threads
+that busy-wait beside its fill.
 """
 from __future__ import annotations
 
@@ -23,6 +27,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from ..errors import HoleFillError
+from .blas_threads import single_blas_thread
 from .patch import validate_patch
 
 __all__ = ["FILL_ERRORS", "HoleTimeLimit", "available_workers", "fill_one", "limit_workers", "reason_of", "run_jobs",
@@ -62,11 +67,15 @@ def worker_count(workers, jobs):
 
 @contextmanager
 def limit_workers(count):
-    """Fill holes with at most ``count`` processes inside the block (a batch task already runs one file per core)."""
+    """Fill holes with at most ``count`` processes, each with one BLAS thread, inside the block.
+
+    A batch task runs where the batch already keeps every core busy with one file each.
+    """
     global _WORKER_CAP
     previous, _WORKER_CAP = _WORKER_CAP, max(1, int(count))
     try:
-        yield
+        with single_blas_thread():
+            yield
     finally:
         _WORKER_CAP = previous
 
@@ -227,22 +236,23 @@ def run_jobs(job, items, workers=1, progress=None):
                 raise value.exc from RuntimeError(f"in a worker process:\n{value.trace}")
             record(position, value)
 
-    try:
-        _fork_children(children, fork, (job, items, counter), inbox, procs)
-        if children < workers:
-            while (position := _take(counter, len(items))) is not None:
-                record(position, job(items[position]))
-                collect(block=False)
-        collect(block=True)
-        finished = True
-    finally:
-        if not finished:  # this process raised: the children's work is not wanted
-            with counter.get_lock():
-                counter.value = len(items)
+    with single_blas_thread():  # before the forks: the children inherit the count and the open block
+        try:
+            _fork_children(children, fork, (job, items, counter), inbox, procs)
+            if children < workers:
+                while (position := _take(counter, len(items))) is not None:
+                    record(position, job(items[position]))
+                    collect(block=False)
+            collect(block=True)
+            finished = True
+        finally:
+            if not finished:  # this process raised: the children's work is not wanted
+                with counter.get_lock():
+                    counter.value = len(items)
+                for proc in procs:
+                    proc.terminate()
             for proc in procs:
-                proc.terminate()
-        for proc in procs:
-            proc.join()
+                proc.join()
     codes = ", ".join(sorted({str(p.exitcode) for p in procs if p.exitcode}))
     for position in range(len(items)):
         if not done[position]:

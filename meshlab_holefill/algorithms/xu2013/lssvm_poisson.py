@@ -31,10 +31,10 @@ import time
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from ._blas_threads import single_blas_thread
 from .advancing_front import warm_up as warm_up_front
 from .border_split import split_long_boundary_edges
 from ...geometry.laplacian import cotangent_weights, tangential_umbrella_smoothing
+from ...core.blas_threads import single_blas_thread
 from ...core.holes import boundary_halfedges
 from ...core.patch import Patch
 from ...errors import HoleFillError
@@ -540,7 +540,7 @@ def reposition(ctx, X, F, regressors, iterations, relax, poisson_boundary="lapla
 
 
 def _one_blas_thread(fill_function):
-    """Fill with one BLAS thread (:mod:`._blas_threads`: a hole's dense systems are too small to share)."""
+    """Fill with one BLAS thread (:mod:`..core.blas_threads`: a hole's dense systems are too small to share)."""
     @functools.wraps(fill_function)
     def wrapped(*args, **kwargs):
         with single_blas_thread():

@@ -1,10 +1,16 @@
-"""The per-hole single BLAS thread: one thread inside, the previous count restored after the last block, results unchanged."""
+"""The single BLAS thread: one thread inside, the previous count restored after the last block, results unchanged;
+no thread pool started in run_jobs' children."""
+import os
+import sys
 import threading
+import time
 
 import numpy as np
+import pytest
 import scipy.linalg as sla
 
-from meshlab_holefill.algorithms.xu2013._blas_threads import _thread_local_setters, single_blas_thread
+from meshlab_holefill.core import parallel
+from meshlab_holefill.core.blas_threads import _thread_local_setters, single_blas_thread
 
 
 def local_threads():
@@ -40,6 +46,37 @@ def test_concurrent_blocks_restore_the_count_once_the_last_ends():
     assert all(n == 1 for n in local_threads())  # the worker's block is still running
     release.set()
     worker.join()
+    assert local_threads() == before
+
+
+def _threads_of_this_process():
+    return len(os.listdir("/proc/self/task"))
+
+
+def _blas_job(item):
+    """A fill's shape: a block of its own around dense algebra; (pid, threads before, threads after, BLAS counts)."""
+    threads = _threads_of_this_process()
+    rng = np.random.default_rng(item)
+    A = rng.normal(size=(200, 200))
+    with single_blas_thread():
+        sla.cho_factor(A @ A.T + 200 * np.eye(200))
+        time.sleep(0.02)  # long enough for the forked child to take some items too
+    after = _threads_of_this_process()
+    return os.getpid(), threads, after, local_threads()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux") or not _thread_local_setters()
+                    or parallel.available_workers() < 2, reason="needs Linux, OpenBLAS, two CPUs and fork")
+def test_run_jobs_children_have_one_blas_thread_and_start_no_thread_pool():
+    # A child that set the count itself would start OpenBLAS's pool (threads busy-waiting beside the fill).
+    before = local_threads()
+    results = parallel.run_jobs(_blas_job, list(range(8)), workers=2)
+    children = [r for r in results if r[0] != os.getpid()]
+    assert children, "the forked child took no job"
+    for _, threads, after, counts in results:
+        assert counts == [1] * len(before)
+    for _, threads, after, _ in children:
+        assert after == threads
     assert local_threads() == before
 
 
