@@ -437,6 +437,59 @@ def speed_table(result, anchor="cgal_liepa"):
     return (["filler", "holes", "seconds", f"`{anchor}` seconds", "× CGAL", "slowest hole"], out)
 
 
+# --------------------------------------------------------------------------- one core each
+
+def one_core_speed(cases, holes, seed, repeats=3, anchor="cgal_liepa"):
+    """Per-hole seconds of each filter (defaults, ``workers=1``) and of the anchor on the same holes, one core each.
+
+    The anchor fills one hole at a time in one thread. With one worker per core two holes are
+    filled at once and share the machine, which makes each one's seconds longer (on the suite's
+    holes the min-angle filter's sum grows about 1.5x), so here the filters too fill one hole at
+    a time, in this process, on the cases with ground truth (cut and given holes). The fillers
+    alternate ``repeats`` times (the order rotated each time); per filler, the median of its
+    totals over the holes that it and the anchor both closed, and the ratio of the medians.
+
+    Returns
+    -------
+    (header, rows) for :func:`markdown_table`, or None when the anchor is not installed
+    """
+    from meshlab_holefill.array_api import algorithm_names, fill_holes
+    from meshlab_holefill.evaluation.anchors import missing_package, run_anchor
+
+    if missing_package(anchor):
+        return None
+    prepared = [pc for pc in (prepare_case(c, holes=holes, seed=seed) for c in cases)
+                if pc.holes and all(h.ground_truth is not None for h in pc.holes)]
+    names = algorithm_names()
+    warm_V, warm_F = prepared[0].V0, prepared[0].F0
+    for name in names:  # kernels loaded before the first timing
+        fill_holes(warm_V, warm_F, name, workers=1)
+
+    def per_hole(name, pc):
+        """{hole index: seconds} of the holes ``name`` closed in case ``pc``."""
+        everything = max(h.boundary_edges for h in pc.holes) + 1
+        if name == anchor:
+            result = run_anchor(anchor, pc.V0, pc.F0, {"maxholesize": everything})[2]
+        else:
+            result = fill_holes(pc.V0, pc.F0, name, workers=1, maxholesize=everything)[2]
+        return {i: h["seconds"] for i, h in enumerate(result["holes"]) if h.get("status") == "closed"}
+
+    fillers = names + [anchor]
+    times = {name: [] for name in fillers}  # per repeat: {(case, hole): seconds}
+    for r in range(repeats):
+        for name in fillers[r % len(fillers):] + fillers[:r % len(fillers)]:
+            times[name].append({(k, i): t for k, pc in enumerate(prepared) for i, t in per_hole(name, pc).items()})
+    both = {name: set(times[name][0]) & set(times[anchor][0]) for name in names}
+    rows = []
+    for name in names:
+        mine = float(np.median([sum(run[h] for h in both[name]) for run in times[name]]))
+        base = float(np.median([sum(run[h] for h in both[name]) for run in times[anchor]]))
+        rows.append([f"`{name}`", str(len(both[name])), f"{mine:.2f}", f"{base:.2f}", f"{mine / base:.2f}"])
+    header = ["filter", "holes", f"seconds (median of {repeats})", f"`{anchor}` seconds (median of {repeats})",
+              "× CGAL"]
+    return header, rows
+
+
 # ------------------------------------------------------------------------ holes on all cores
 
 def workers_speedup(filters=("meshing_close_holes_min_angle_bilateral", "meshing_close_holes_curve_unfolding",
@@ -568,6 +621,8 @@ def main(argv=None):
     ap.add_argument("--batch", action="store_true",
                     help="also batch throughput (files per minute) with 1 and 2 dask workers, and the speed-up")
     ap.add_argument("--workers", action="store_true", help="also face000.ply with workers=1 and 2")
+    ap.add_argument("--one-core", action="store_true",
+                    help="also every filter against CGAL's Liepa fill on the suite's cut holes, one hole at a time each")
     ap.add_argument("--compile-cost", action="store_true",
                     help="also the one-time cost of compiling the kernels (cold, empty numba cache) and the warm load")
     ap.add_argument("--refusals", action="store_true",
@@ -596,7 +651,13 @@ def main(argv=None):
         speed = speed_table(result)
         if speed is not None:
             text += ("\n\n**Speed against CGAL** (the filters' own per-hole seconds on the cut holes that both they and "
-                     "`cgal_liepa` closed, same run and workers):\n\n" + markdown_table(*speed) + "\n")
+                     "`cgal_liepa` closed, same run; the filters with `workers` = one per core, two holes at once):\n\n" + markdown_table(*speed) + "\n")
+        if args.one_core:
+            single = one_core_speed(cases, args.holes, args.seed)
+            if single is not None:
+                text += ("\n**One core each** (the same holes, every filter with its defaults and `workers=1` in one "
+                         "process, CGAL's Liepa fill one hole at a time, alternating three times; per-hole seconds "
+                         "summed, medians):\n\n" + markdown_table(*single) + "\n")
     # timing runs: each filter once, with its defaults (variants only change accuracy)
     plain = [f for f in fillers if not f.params or f.filter == BASELINE]
     if args.scaling:
