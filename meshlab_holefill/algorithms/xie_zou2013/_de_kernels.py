@@ -6,15 +6,16 @@ for bit those of the numpy code (tests/algorithms/xie_zou2013/test_de_kernels.py
 against the numpy reference kept there). The transcendental step (arctan2 of the turning
 angles) stays in numpy, whose SIMD arctan2 differs from libm's in the last bits, and so does the
 sum of squares (numpy's einsum accumulates with fused multiply-adds): a generation of the Eq. 14
-objective is one kernel for the trial vectors and their turning terms, numpy's arctan2, sum and
-einsum, then one kernel for the selection, the reflection and the terms of the reflected ones.
+objective is one kernel for the trial vectors and the turning terms their crossover changed,
+numpy's arctan2 of those, sum and einsum, then one kernel for the selection, the reflection and
+the terms of the reflected ones.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-__all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms", "trial_turning_terms",
+__all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms", "trial_changed_terms",
            "select_variation", "reflect_gather_terms", "renew_variation", "masked_row_sums"]
 
 
@@ -137,11 +138,61 @@ def mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR):
 
 
 @njit(cache=True)
-def trial_turning_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y_add):
-    """(U, cross, dot): the trial vectors of :func:`mutate_crossover` and their :func:`turning_terms`."""
+def trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y_add):
+    """(U, changed, cross, dot): the trial vectors of :func:`mutate_crossover` and the turning terms they change.
+
+    Turning term k of :func:`turning_terms` reads components k - 2, k - 1 and k of its
+    candidate (those within 0..n-1) and nothing else of it. A trial vector U[b, i] copies
+    every component but its crossover ones (Eq. 3) from its parent X[b, i], so its terms
+    are its parent's except those within two places after a crossover component: only
+    these are computed (the same operations as :func:`turning_terms`, so the same numbers).
+
+    Returns
+    -------
+    U : (B, N, n) float64
+    changed : (c,) int64  flat indices into (B, N, n + 2), ascending
+    cross, dot : (c,) float64  the terms there
+    """
+    B, N, n = X.shape
+    K = n + 2
     U = mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR)
-    cross, dot = turning_terms(U, seg_x, seg_y_add)
-    return U, cross, dot
+    changed = np.empty(B * N * K, np.int64)
+    cr = np.empty(B * N * K)
+    dt = np.empty(B * N * K)
+    sy = np.empty(n + 3)
+    mark = np.zeros(K, np.bool_)
+    c = 0
+    for b in range(B):
+        for i in range(N):
+            r = np.int64(np.floor(u_rn[b, i] * np.float64(dims[b])))  # rn_i, as mutate_crossover draws it
+            any_taken = False
+            for j in range(n):
+                if u_take[b, i, j] <= CR or j == r:
+                    mark[j] = True
+                    mark[j + 1] = True
+                    mark[j + 2] = True
+                    any_taken = True
+            if not any_taken:
+                continue
+            prev = 0.0
+            sy[0] = 0.0 + seg_y_add[b, 0]
+            for j in range(n):
+                y = U[b, i, j]
+                sy[j + 1] = (y - prev) + seg_y_add[b, j + 1]
+                prev = y
+            sy[n + 1] = (0.0 - prev) + seg_y_add[b, n + 1]
+            sy[n + 2] = 0.0 + seg_y_add[b, n + 2]
+            base = (b * N + i) * K
+            for k in range(K):
+                if mark[k]:
+                    mark[k] = False
+                    x0, x1 = seg_x[b, k], seg_x[b, k + 1]
+                    y0, y1 = sy[k], sy[k + 1]
+                    changed[c] = base + k
+                    cr[c] = x0 * y1 - y0 * x1
+                    dt[c] = x0 * x1 + y0 * y1
+                    c += 1
+    return U, changed[:c], cr[:c], dt[:c]
 
 
 @njit(cache=True)
@@ -155,16 +206,22 @@ def _variation(square_sum, total, count):
 
 @njit(cache=True)
 def select_variation(X, fX, U, square_sum, total, count, active):
-    """Eq. 4 in place with f(U) from its turning-angle sums (:func:`_variation`; count (B,) angles per problem)."""
+    """Eq. 4 in place with f(U) from its turning-angle sums (:func:`_variation`; count (B,) angles per problem).
+
+    Returns the (B, N) rows where U was taken.
+    """
     B, N, n = X.shape
+    taken = np.zeros((B, N), np.bool_)
     for b in range(B):
         for i in range(N):
             if active[b, i]:
                 f = _variation(square_sum[b, i], total[b, i], count[b])
                 if f <= fX[b, i]:
                     fX[b, i] = f
+                    taken[b, i] = True
                     for j in range(n):
                         X[b, i, j] = U[b, i, j]
+    return taken
 
 
 @njit(cache=True)

@@ -283,7 +283,14 @@ class AngleVariation:
 
     def square_sums(self, cross, dot):
         """(sum of squared angles, sum of angles), (p, N) each, of the turning terms of :func:`turning_angles`."""
-        beta = np.arctan2(cross, dot)
+        return self.angle_sums(np.arctan2(cross, dot))
+
+    def angle_sums(self, beta):
+        """(sum of squared angles, sum of angles) of turning angles beta (p, N, K), masked in place to the valid ones.
+
+        Masking is idempotent (a masked angle times its 0 or 1 is itself, bit for bit), so
+        beta may hold angles masked before.
+        """
         if beta.shape[2] <= PAIRWISE_BLOCK:
             total = masked_row_sums(beta, self.valid[:, 0, :])  # beta * valid, beta.sum(axis=2): numpy's order
         else:

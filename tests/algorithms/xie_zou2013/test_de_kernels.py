@@ -86,6 +86,28 @@ def test_mutate_crossover_equals_distinct_triples_and_numpy_trial():
     assert U.tobytes() == np.where(take, V, X).tobytes()
 
 
+def test_trial_changed_terms_are_the_trial_terms_that_differ_from_the_parents():
+    # Only the terms next to crossover components are computed; every other term of the trial
+    # is its parent's, bit for bit, so the DE run can keep the parent's angle there.
+    rng = np.random.default_rng(14)
+    X, _, _ = _problem(rng, B=4, N=9, n=6)
+    B, N, n = X.shape
+    pop = np.array([9, 3, 5, 8], np.int64)
+    dims = np.array([6, 1, 4, 6], np.int64)
+    seg_x = rng.normal(size=(B, n + 3))
+    seg_y_add = rng.normal(size=(B, n + 3))
+    u_index, u_rn, u_take = rng.random((3, B, N)), rng.random((B, N)), rng.random((B, N, n))
+    U, changed, cross, dot = K.trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05, seg_x, seg_y_add)
+    assert U.tobytes() == K.mutate_crossover(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05).tobytes()
+    cross_U, dot_U = K.turning_terms(U, seg_x, seg_y_add)
+    cross_X, dot_X = K.turning_terms(X, seg_x, seg_y_add)
+    assert np.all(np.diff(changed) > 0) and 0 < len(changed) < cross_U.size
+    assert cross.tobytes() == cross_U.ravel()[changed].tobytes() and dot.tobytes() == dot_U.ravel()[changed].tobytes()
+    rest = np.setdiff1d(np.arange(cross_U.size), changed)
+    assert cross_U.ravel()[rest].tobytes() == cross_X.ravel()[rest].tobytes()
+    assert dot_U.ravel()[rest].tobytes() == dot_X.ravel()[rest].tobytes()
+
+
 def test_uniform_blocks_equal_per_generation_draws():
     import importlib
 
