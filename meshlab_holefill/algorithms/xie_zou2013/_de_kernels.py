@@ -205,23 +205,21 @@ def _variation(square_sum, total, count):
 
 
 @njit(cache=True)
-def select_variation(X, fX, U, square_sum, total, count, active):
+def select_variation(X, fX, U, square_sum, total, count, active, angles, trial_angles):
     """Eq. 4 in place with f(U) from its turning-angle sums (:func:`_variation`; count (B,) angles per problem).
 
-    Returns the (B, N) rows where U was taken.
+    Where U[b, i] is taken, its turning angles trial_angles[b, i] replace angles[b, i] too.
     """
     B, N, n = X.shape
-    taken = np.zeros((B, N), np.bool_)
     for b in range(B):
         for i in range(N):
             if active[b, i]:
                 f = _variation(square_sum[b, i], total[b, i], count[b])
                 if f <= fX[b, i]:
                     fX[b, i] = f
-                    taken[b, i] = True
                     for j in range(n):
                         X[b, i, j] = U[b, i, j]
-    return taken
+                    angles[b, i] = trial_angles[b, i]
 
 
 @njit(cache=True)
@@ -265,11 +263,15 @@ def reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add):
 
 
 @njit(cache=True)
-def renew_variation(fX, order, counts, square_sum, total, count):
-    """Algorithm 1, step 9: fX[b, order[b, r]] = f of the r-th reflected individual, r < counts[b]."""
+def renew_variation(fX, order, counts, square_sum, total, count, angles, reflected_angles):
+    """Algorithm 1, step 9: fX[b, order[b, r]] = f of the r-th reflected individual, r < counts[b].
+
+    Its turning angles reflected_angles[b, r] replace angles[b, order[b, r]] too.
+    """
     for b in range(len(counts)):
         for r in range(counts[b]):
             fX[b, order[b, r]] = _variation(square_sum[b, r], total[b, r], count[b])
+            angles[b, order[b, r]] = reflected_angles[b, r]
 
 
 # numpy sums blocks of up to this many numbers with 8 accumulators; longer rows it halves

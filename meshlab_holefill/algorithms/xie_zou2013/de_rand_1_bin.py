@@ -209,8 +209,7 @@ def _turning_generation(objective, state, draws, F, CR):
     angles = state.angles.copy()
     angles.ravel()[changed] = np.arctan2(cross, dot)
     square_sum, total = objective.angle_sums(angles)
-    taken = select_variation(state.X, state.fX, U, square_sum, total, count, state.active)
-    state.angles[taken] = angles[taken]
+    select_variation(state.X, state.fX, U, square_sum, total, count, state.active, state.angles, angles)
     Xr, order, counts, cross, dot = reflect_gather_terms(state.X, state.lower, state.upper, state.active, seg_x,
                                                          seg_y_add)
     if order.shape[1] == 0:
@@ -218,9 +217,7 @@ def _turning_generation(objective, state, draws, F, CR):
     state.X = Xr
     reflected = np.arctan2(cross, dot)
     square_sum, total = objective.angle_sums(reflected)
-    renew_variation(state.fX, order, counts, square_sum, total, count)
-    rows = np.arange(order.shape[1])[None, :] < counts[:, None]  # (B, K): the moved rows of ``order``
-    state.angles[np.nonzero(rows)[0], order[rows]] = reflected[rows]
+    renew_variation(state.fX, order, counts, square_sum, total, count, state.angles, reflected)
 
 
 def _population_spread_within(state, tol):
