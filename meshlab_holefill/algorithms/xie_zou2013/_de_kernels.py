@@ -76,6 +76,20 @@ def select(X, fX, U, fU, active):
 
 
 @njit(cache=True)
+def _chain_ys(sy, Y, a, i, seg_y_add):
+    """sy (m + 3) = [0, diff((0, Y[a, i], 0)), 0] + seg_y_add[a]: the y of candidate (a, i)'s chain segments."""
+    m = Y.shape[2]
+    prev = 0.0
+    sy[0] = 0.0 + seg_y_add[a, 0]
+    for j in range(m):
+        y = Y[a, i, j]
+        sy[j + 1] = (y - prev) + seg_y_add[a, j + 1]
+        prev = y
+    sy[m + 1] = (0.0 - prev) + seg_y_add[a, m + 1]
+    sy[m + 2] = 0.0 + seg_y_add[a, m + 2]
+
+
+@njit(cache=True)
 def turning_terms(Y, seg_x, seg_y_add):
     """Arguments (cross, dot) of the turning angles' arctan2 for candidates Y (p, N, m) (see turning_angles)."""
     p, N, m = Y.shape
@@ -85,15 +99,7 @@ def turning_terms(Y, seg_x, seg_y_add):
     sy = np.empty(m + 3)
     for a in range(p):
         for i in range(N):
-            # sy = [0, diff((0, Y, 0)), 0] + seg_y_add
-            prev = 0.0
-            sy[0] = 0.0 + seg_y_add[a, 0]
-            for j in range(m):
-                y = Y[a, i, j]
-                sy[j + 1] = (y - prev) + seg_y_add[a, j + 1]
-                prev = y
-            sy[m + 1] = (0.0 - prev) + seg_y_add[a, m + 1]
-            sy[m + 2] = 0.0 + seg_y_add[a, m + 2]
+            _chain_ys(sy, Y, a, i, seg_y_add)
             for k in range(K):
                 x0, x1 = seg_x[a, k], seg_x[a, k + 1]
                 y0, y1 = sy[k], sy[k + 1]
@@ -174,14 +180,7 @@ def trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y
                     any_taken = True
             if not any_taken:
                 continue
-            prev = 0.0
-            sy[0] = 0.0 + seg_y_add[b, 0]
-            for j in range(n):
-                y = U[b, i, j]
-                sy[j + 1] = (y - prev) + seg_y_add[b, j + 1]
-                prev = y
-            sy[n + 1] = (0.0 - prev) + seg_y_add[b, n + 1]
-            sy[n + 2] = 0.0 + seg_y_add[b, n + 2]
+            _chain_ys(sy, U, b, i, seg_y_add)
             base = (b * N + i) * K
             for k in range(K):
                 if mark[k]:

@@ -64,17 +64,25 @@ def test_turning_terms_equal_numpy():
     assert cross.tobytes() == cross_ref.tobytes() and dot.tobytes() == dot_ref.tobytes()
 
 
+def _sized_batch(rng):
+    """(X, pop, dims) of four problems of different population sizes and used components (one of dimension 1)."""
+    X, _, _ = _problem(rng, B=4, N=9, n=6)
+    return X, np.array([9, 3, 5, 8], np.int64), np.array([6, 1, 4, 6], np.int64)
+
+
+def _generation_draws(rng, shape):
+    """u_index (3, B, N), u_rn (B, N), u_take (B, N, n): one generation's uniforms, in _Uniforms' order."""
+    B, N, n = shape
+    return rng.random((3, B, N)), rng.random((B, N)), rng.random((B, N, n))
+
+
 def test_mutate_crossover_equals_distinct_triples_and_numpy_trial():
     from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import _distinct_triples
 
-    rng = np.random.default_rng(4)
-    X, _, _ = _problem(rng, B=4, N=9, n=6)
+    X, pop, dims = _sized_batch(np.random.default_rng(4))
     B, N, n = X.shape
-    pop = np.array([9, 3, 5, 8], np.int64)
-    dims = np.array([6, 1, 4, 6], np.int64)
     F, CR = 0.8, 0.05
-    draws = np.random.default_rng(7)
-    u_index, u_rn, u_take = draws.random((3, B, N)), draws.random((B, N)), draws.random((B, N, n))
+    u_index, u_rn, u_take = _generation_draws(np.random.default_rng(7), X.shape)
     r1, r2, r3 = _distinct_triples(np.random.default_rng(7), pop, (B, N))  # the same first 3 B N numbers
     assert np.all((r1 != r2) & (r2 != r3) & (r1 != r3))
     assert np.all((r1 < pop[:, None]) & (r2 < pop[:, None]) & (r3 < pop[:, None]))
@@ -90,13 +98,11 @@ def test_trial_changed_terms_are_the_trial_terms_that_differ_from_the_parents():
     # Only the terms next to crossover components are computed; every other term of the trial
     # is its parent's, bit for bit, so the DE run can keep the parent's angle there.
     rng = np.random.default_rng(14)
-    X, _, _ = _problem(rng, B=4, N=9, n=6)
+    X, pop, dims = _sized_batch(rng)
     B, N, n = X.shape
-    pop = np.array([9, 3, 5, 8], np.int64)
-    dims = np.array([6, 1, 4, 6], np.int64)
     seg_x = rng.normal(size=(B, n + 3))
     seg_y_add = rng.normal(size=(B, n + 3))
-    u_index, u_rn, u_take = rng.random((3, B, N)), rng.random((B, N)), rng.random((B, N, n))
+    u_index, u_rn, u_take = _generation_draws(rng, X.shape)
     U, changed, cross, dot = K.trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05, seg_x, seg_y_add)
     assert U.tobytes() == K.mutate_crossover(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05).tobytes()
     cross_U, dot_U = K.turning_terms(U, seg_x, seg_y_add)
