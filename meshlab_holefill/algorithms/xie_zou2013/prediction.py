@@ -268,7 +268,7 @@ class AngleVariation:
 
     Also exposes its parts to the fused DE generation of :func:`.de_rand_1_bin.de_rand_1_bin`:
     ``turning_chain`` (the chain constants of :func:`turning_angles` and the number of angles
-    per plane) and :meth:`square_sums`; :func:`_de_kernels.select_variation` finishes
+    per plane) and :meth:`angle_sums`; :func:`_de_kernels.select_variation` finishes
     ``np.maximum(square_sum - total * total / count, 0)`` as :func:`angle_variation` does.
     """
 
@@ -281,14 +281,11 @@ class AngleVariation:
     def __call__(self, Y):
         return angle_variation(self.problem, Y)
 
-    def square_sums(self, cross, dot):
-        """(sum of squared angles, sum of angles), (p, N) each, of the turning terms of :func:`turning_angles`."""
-        return self.angle_sums(np.arctan2(cross, dot))
-
     def angle_sums(self, beta):
-        """(sum of squared angles, sum of angles) of turning angles beta (p, N, K), masked in place to the valid ones.
+        """(sum of squared angles, sum of angles), (p, N) each, of turning angles beta (p, N, K).
 
-        Masking is idempotent (a masked angle times its 0 or 1 is itself, bit for bit), so
+        beta = arctan2 of the turning terms of :func:`turning_angles`, masked here in place to
+        the valid ones. Masking is idempotent (a masked angle times its 0 or 1 is itself, bit for bit), so
         beta may hold angles masked before.
         """
         if beta.shape[2] <= PAIRWISE_BLOCK:
