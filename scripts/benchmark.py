@@ -479,7 +479,7 @@ def one_core_speed(cases, holes, seed, repeats=3, anchor="cgal_liepa"):
     for r in range(repeats):
         for name in fillers[r % len(fillers):] + fillers[:r % len(fillers)]:
             times[name].append({(k, i): t for k, pc in enumerate(prepared) for i, t in per_hole(name, pc).items()})
-    both = {name: set(times[name][0]) & set(times[anchor][0]) for name in names}
+    both = {name: set.intersection(*(set(run) for run in times[name] + times[anchor])) for name in names}  # closed in every run
     rows = []
     for name in names:
         mine = float(np.median([sum(run[h] for h in both[name]) for run in times[name]]))

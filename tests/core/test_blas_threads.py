@@ -73,10 +73,8 @@ def test_run_jobs_children_have_one_blas_thread_and_start_no_thread_pool():
     results = parallel.run_jobs(_blas_job, list(range(8)), workers=2)
     children = [r for r in results if r[0] != os.getpid()]
     assert children, "the forked child took no job"
-    for _, threads, after, counts in results:
-        assert counts == [1] * len(before)
-    for _, threads, after, _ in children:
-        assert after == threads
+    assert all(counts == [1] * len(before) for *_, counts in results)
+    assert all(after == threads for _, threads, after, _ in children)
     assert local_threads() == before
 
 
