@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms", "trial_changed_terms",
-           "select_variation", "reflect_gather_terms", "renew_variation", "masked_row_sums"]
+           "trial_changed_terms_into", "select_variation", "reflect_gather_terms", "renew_variation", "masked_row_sums"]
 
 
 @njit(cache=True)
@@ -128,19 +128,26 @@ def mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR):
         Nb = np.float64(pop[b])
         db = np.float64(dims[b])
         for i in range(N):
-            r1 = np.int64(np.floor(u_index[0, b, i] * Nb))
-            r2 = np.int64(np.floor(u_index[1, b, i] * (Nb - 1.0)))
-            if r2 >= r1:
-                r2 += 1
-            lo, hi = min(r1, r2), max(r1, r2)
-            r3 = np.int64(np.floor(u_index[2, b, i] * (Nb - 2.0)))
-            if r3 >= lo:
-                r3 += 1
-            if r3 >= hi:
-                r3 += 1
+            r1, r2, r3 = _distinct_triple(u_index, b, i, Nb)
             r = np.int64(np.floor(u_rn[b, i] * db))
             _trial_row(U, X, u_take, b, i, r1, r2, r3, r, F, CR)
     return U
+
+
+@njit(cache=True)
+def _distinct_triple(u_index, b, i, Nb):
+    """r1, r2, r3 of individual i of problem b (population Nb) from its three uniforms, as in mutate_crossover."""
+    r1 = np.int64(np.floor(u_index[0, b, i] * Nb))
+    r2 = np.int64(np.floor(u_index[1, b, i] * (Nb - 1.0)))
+    if r2 >= r1:
+        r2 += 1
+    lo, hi = min(r1, r2), max(r1, r2)
+    r3 = np.int64(np.floor(u_index[2, b, i] * (Nb - 2.0)))
+    if r3 >= lo:
+        r3 += 1
+    if r3 >= hi:
+        r3 += 1
+    return r1, r2, r3
 
 
 @njit(cache=True)
@@ -152,6 +159,7 @@ def trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y
     every component but its crossover ones (Eq. 3) from its parent X[b, i], so its terms
     are its parent's except those within two places after a crossover component: only
     these are computed (the same operations as :func:`turning_terms`, so the same numbers).
+    :func:`trial_changed_terms_into` with new arrays.
 
     Returns
     -------
@@ -160,38 +168,63 @@ def trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y
     cross, dot : (c,) float64  the terms there
     """
     B, N, n = X.shape
+    size = B * N * (n + 2)
+    U = np.empty_like(X)
+    changed = np.empty(size, np.int64)
+    cross = np.empty(size)
+    dot = np.empty(size)
+    c = trial_changed_terms_into(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y_add, U, changed, cross,
+                                 dot)
+    return U, changed[:c], cross[:c], dot[:c]
+
+
+@njit(cache=True)
+def trial_changed_terms_into(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y_add, U, changed, cross, dot):
+    """:func:`trial_changed_terms` written into U (B, N, n) and the first c entries of changed, cross, dot; returns c.
+
+    The arrays are the DE run's own, reused every generation: fresh ones of a large batch
+    (41 sections of 51 components, 153 individuals) cost as much in first-touch page faults
+    as the arithmetic. One pass per individual copies its parent, lists its crossover
+    components (ascending), computes those by Eq. 2 and then the terms at j, j + 1, j + 2 of
+    each (each term once, ascending): the same numbers as :func:`mutate_crossover` and
+    :func:`turning_terms`.
+    """
+    B, N, n = X.shape
     K = n + 2
-    U = mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR)
-    changed = np.empty(B * N * K, np.int64)
-    cr = np.empty(B * N * K)
-    dt = np.empty(B * N * K)
     sy = np.empty(n + 3)
-    mark = np.zeros(K, np.bool_)
+    taken = np.empty(n, np.int64)
     c = 0
     for b in range(B):
+        Nb = np.float64(pop[b])
+        db = np.float64(dims[b])
         for i in range(N):
-            r = np.int64(np.floor(u_rn[b, i] * np.float64(dims[b])))  # rn_i, as mutate_crossover draws it
-            any_taken = False
+            r1, r2, r3 = _distinct_triple(u_index, b, i, Nb)
+            r = np.int64(np.floor(u_rn[b, i] * db))
+            t = 0
             for j in range(n):
+                U[b, i, j] = X[b, i, j]
                 if u_take[b, i, j] <= CR or j == r:
-                    mark[j] = True
-                    mark[j + 1] = True
-                    mark[j + 2] = True
-                    any_taken = True
-            if not any_taken:
+                    taken[t] = j
+                    t += 1
+            if t == 0:
                 continue
+            for q in range(t):
+                j = taken[q]
+                U[b, i, j] = X[b, r1, j] + F * (X[b, r2, j] - X[b, r3, j])
             _chain_ys(sy, U, b, i, seg_y_add)
             base = (b * N + i) * K
-            for k in range(K):
-                if mark[k]:
-                    mark[k] = False
+            after = 0  # terms before this one are already out
+            for q in range(t):
+                j = taken[q]
+                for k in range(max(j, after), j + 3):
                     x0, x1 = seg_x[b, k], seg_x[b, k + 1]
                     y0, y1 = sy[k], sy[k + 1]
                     changed[c] = base + k
-                    cr[c] = x0 * y1 - y0 * x1
-                    dt[c] = x0 * x1 + y0 * y1
+                    cross[c] = x0 * y1 - y0 * x1
+                    dot[c] = x0 * x1 + y0 * y1
                     c += 1
-    return U, changed[:c], cr[:c], dt[:c]
+                after = j + 3
+    return c
 
 
 @njit(cache=True)

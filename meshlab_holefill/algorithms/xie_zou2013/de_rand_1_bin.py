@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._de_kernels import (mutate_crossover, reflect_gather_terms, reflect_moved, renew_variation, select,
-                          select_variation, trial_changed_terms, turning_terms)
+                          select_variation, trial_changed_terms_into, turning_terms)
 
 __all__ = ["reflect_into_bounds", "de_rand_1_bin"]
 
@@ -87,6 +87,23 @@ class _Population:
     lower: np.ndarray  # (B, n) contiguous bounds
     upper: np.ndarray
     angles: np.ndarray = None  # (B, N, n + 2) masked turning angles of X (fused turning-angle runs)
+    trial: "_TrialArrays" = None  # the fused generations' working arrays
+
+
+@dataclass
+class _TrialArrays:
+    """What a fused generation writes and then reads once, kept for the next: the trials, their changed terms, angles."""
+
+    U: np.ndarray  # (B, N, n) trial vectors
+    changed: np.ndarray  # (B N (n + 2),) flat indices of the terms a crossover changed (the first c)
+    cross: np.ndarray  # (B N (n + 2),) their arctan2 arguments
+    dot: np.ndarray
+    angles: np.ndarray  # (B, N, n + 2) the trials' masked angles
+
+    @classmethod
+    def like(cls, X, angles):
+        size = angles.size
+        return cls(np.empty_like(X), np.empty(size, np.int64), np.empty(size), np.empty(size), np.empty_like(angles))
 
 
 def _problem_sizes(lower, upper, pop_size, dims, bounds):
@@ -196,17 +213,19 @@ def _turning_generation(objective, state, draws, F, CR):
     the trial vectors and their turning terms in one kernel, the selection (Eq. 4), the
     reflection (Eq. 5) and the terms of the reflected individuals in another. A trial's
     angles are its parent's except next to its crossover components (Eq. 3,
-    :func:`._de_kernels.trial_changed_terms`); only those go through arctan2 (the same numbers,
+    :func:`._de_kernels.trial_changed_terms_into`); only those go through arctan2 (the same numbers,
     so the same angles: numpy's arctan2 was 2.9 of 7.0 s on bunny_212k's large holes, under cProfile).
     """
     seg_x, seg_y_add, count = objective.turning_chain
     u_index, u_rn, u_take = draws.next()
-    U, changed, cross, dot = trial_changed_terms(state.X, u_index, u_rn, u_take, state.pop, state.dims, float(F),
-                                                 float(CR), seg_x, seg_y_add)
-    angles = state.angles.copy()
-    angles.ravel()[changed] = np.arctan2(cross, dot)
+    trial = state.trial
+    c = trial_changed_terms_into(state.X, u_index, u_rn, u_take, state.pop, state.dims, float(F), float(CR), seg_x,
+                                 seg_y_add, trial.U, trial.changed, trial.cross, trial.dot)
+    angles = trial.angles
+    np.copyto(angles, state.angles)
+    angles.ravel()[trial.changed[:c]] = np.arctan2(trial.cross[:c], trial.dot[:c])
     square_sum, total = objective.angle_sums(angles)
-    select_variation(state.X, state.fX, U, square_sum, total, count, state.active, state.angles, angles)
+    select_variation(state.X, state.fX, trial.U, square_sum, total, count, state.active, state.angles, angles)
     Xr, order, counts, cross, dot = reflect_gather_terms(state.X, state.lower, state.upper, state.active, seg_x,
                                                          seg_y_add)
     if order.shape[1] == 0:
@@ -281,6 +300,7 @@ def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0
     if fused:
         state.angles = np.arctan2(*turning_terms(state.X, *objective.turning_chain[:2]))
         objective.angle_sums(state.angles)  # masked, as the generations keep them
+        state.trial = _TrialArrays.like(state.X, state.angles)
     for g in range(1, generations + 1):
         if fused:
             _turning_generation(objective, state, draws, F, CR)

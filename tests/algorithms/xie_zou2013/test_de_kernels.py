@@ -114,6 +114,27 @@ def test_trial_changed_terms_are_the_trial_terms_that_differ_from_the_parents():
     assert dot_U.ravel()[rest].tobytes() == dot_X.ravel()[rest].tobytes()
 
 
+def test_trial_changed_terms_into_reused_arrays_gives_the_fresh_result():
+    # The DE run hands the same arrays to every generation: what an earlier generation left
+    # in them must not show through.
+    rng = np.random.default_rng(15)
+    X, pop, dims = _sized_batch(rng)
+    B, N, n = X.shape
+    seg_x = rng.normal(size=(B, n + 3))
+    seg_y_add = rng.normal(size=(B, n + 3))
+    size = B * N * (n + 2)
+    U, changed, cross, dot = np.full_like(X, np.nan), np.full(size, -7, np.int64), np.full(size, np.nan), \
+        np.full(size, np.nan)
+    for _ in range(2):
+        draws = _generation_draws(rng, X.shape)
+        fresh = K.trial_changed_terms(X, *draws, pop, dims, 0.8, 0.05, seg_x, seg_y_add)
+        c = K.trial_changed_terms_into(X, *draws, pop, dims, 0.8, 0.05, seg_x, seg_y_add, U, changed, cross, dot)
+        assert c == len(fresh[1])
+        assert U.tobytes() == fresh[0].tobytes()
+        assert changed[:c].tobytes() == fresh[1].tobytes()
+        assert cross[:c].tobytes() == fresh[2].tobytes() and dot[:c].tobytes() == fresh[3].tobytes()
+
+
 def test_uniform_blocks_equal_per_generation_draws():
     import importlib
 
