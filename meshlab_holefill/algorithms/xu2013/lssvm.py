@@ -24,6 +24,11 @@ __all__ = ["rbf_kernel", "LSSVMRegressor", "lssvm_fit", "kkt_matrix"]
 def rbf_kernel(X, Z, width):
     """RBF kernel matrix K_ij = exp(-|X_i - Z_j|^2 / (2 width^2)).
 
+    The squared distances are summed from the differences, not expanded as
+    |X_i|^2 + |Z_j|^2 - 2 X_i . Z_j: far from the origin (a scan in georeferenced coordinates,
+    1e6 away) the expansion cancels to noise, H of :func:`lssvm_fit` is then not positive
+    definite and every hole failed; the kernel depends on X - Z only, as it should.
+
     Parameters
     ----------
     X : (l,) or (l, d) float64
@@ -37,8 +42,9 @@ def rbf_kernel(X, Z, width):
     """
     X = np.asarray(X, np.float64).reshape(len(X), -1)
     Z = np.asarray(Z, np.float64).reshape(len(Z), -1)
-    d2 = (X * X).sum(axis=1)[:, None] + (Z * Z).sum(axis=1)[None, :] - 2.0 * X @ Z.T
-    return np.exp(-np.maximum(d2, 0.0) / (2.0 * width * width))
+    diff = X[:, None, :] - Z[None, :, :]  # (l, r, d)
+    d2 = np.einsum("lrd,lrd->lr", diff, diff)
+    return np.exp(-d2 / (2.0 * width * width))
 
 
 @dataclass

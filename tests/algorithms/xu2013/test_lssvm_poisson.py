@@ -413,6 +413,31 @@ def test_lssvm_solves_the_kkt_system_of_eq_14():
     assert np.allclose(rbf_kernel(x, x, 0.3).diagonal(), 1.0)
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.floats(-1e7, 1e7, allow_nan=False), st.floats(0.05, 2.0))
+def test_rbf_kernel_depends_on_differences_only(offset, width):
+    # Far from the origin (georeferenced scans) the kernel must still see the distances.
+    x = np.random.default_rng(3).uniform(-1.0, 1.0, (40, 2))
+    K = rbf_kernel(x, x, width)
+    assert np.allclose(rbf_kernel(x + offset, x + offset, width), K, rtol=0.0, atol=1e-6)
+    lssvm_fit(x[:, 0] + offset, np.sin(x[:, 0]), gamma=10.0, width=width)  # H stays positive definite
+
+
+def test_mesh_far_from_the_origin_is_filled_as_well_as_at_the_origin():
+    from meshlab_holefill import array_api
+    from conftest import sphere_with_holes
+
+    V, F, _ = sphere_with_holes()
+    offset = np.array([1e7, -2e7, 5e6])  # UTM-like coordinates
+    errors = []
+    for shift in (np.zeros(3), offset):
+        V1, F1, result = array_api.fill_holes(V + shift, F, "lssvm_poisson", workers=1)
+        assert result["closed_holes"] == 2, [h.get("reason") for h in result["holes"]]
+        assert_filled_cleanly(V + shift, F, V1, F1)
+        errors.append(np.abs(np.linalg.norm(V1[len(V):] - shift, axis=1) - 1.0).max())
+    assert errors[1] <= 1.01 * errors[0] + 1e-9
+
+
 def test_lssvm_learns_a_known_function():
     x = np.linspace(-2, 2, 80)
     model = lssvm_fit(x, np.sin(2 * x), gamma=1e4, width=0.3)
