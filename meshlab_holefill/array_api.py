@@ -5,6 +5,7 @@ import numpy as np
 
 from .algorithms import ALGORITHMS, find_algorithm
 from .core.attributes import MeshArrays
+from .core.face_grid import load_face_grid_kernels
 from .core.kernel_cache import refresh_kernel_cache
 from .core.parameters import resolve_params
 from .core.pipeline import COMMON_PARAMS, fill_mesh_holes
@@ -144,6 +145,7 @@ def _compile_one(algorithm, params):
         _, _, result = _fill_holes(V, F, algorithm, None, dict(params, workers=1), face_dtype)
         if result["closed_holes"] == 0:
             raise RuntimeError(f"{algorithm}: the kernel example closed no hole ({result['holes']})")
+        load_face_grid_kernels(face_dtype)  # built before workers fork, which the example does not
     return time.process_time() - start
 
 

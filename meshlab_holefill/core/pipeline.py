@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
 from .crossings import (clashing_patches, crossing_patches, face_boxes_near, load_face_boxes_kernel, patch_box,
                         patch_intersections)
+from .face_grid import face_grid
 from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .kernel_cache import refresh_kernel_cache_once
 from .holes import (boundary_loops, edge_summary, hole_context, hole_measures, is_outline, outline_ratio,
@@ -249,6 +250,12 @@ def _context_key(ctx):
     return digest.digest()
 
 
+# Building a face grid takes about as long as 9 scans of the faces for one patch box (measured at
+# 0.9M faces: 35-45 ms against 4-5 ms), and it is built before the workers fork while the scans
+# are shared among them: with workers checking their own patches it pays from 9 holes per worker.
+GRID_SCANS = 9
+
+
 def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, progress=None):
     """One pass of :func:`close_holes` over the holes ``todo``: refine, fill, check, merge.
 
@@ -280,7 +287,10 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     workers = worker_count(params["workers"], len(order))
     # With workers each checks its own patches against the mesh, instead of waiting for every fill here.
     check_in_job = params["selfintersection"] and workers > 1
-    if check_in_job:
+    grid = None
+    if check_in_job and len(order) >= GRID_SCANS * workers:
+        grid = face_grid(V, F)  # the workers inherit it, and its kernels
+    elif check_in_job:
         load_face_boxes_kernel(F)  # the workers inherit the loaded kernel
 
     def fill_hole(i):
@@ -294,7 +304,7 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
         outcome, seconds = fill_one(fill, ctx, fill_kwargs, params["timelimit"])
         crossed = None
         if check_in_job and not isinstance(outcome, str):
-            crossed = _mesh_crossings(V, F, ctx.loop, outcome)
+            crossed = _mesh_crossings(V, F, ctx.loop, outcome, grid=grid)
         return _context_key(ctx), outcome, context_seconds + seconds, crossed
 
     def filled_one(position):  # run_jobs counts positions in ``order``; the caller wants hole ids
@@ -354,18 +364,19 @@ def _key_here(V, F, loop, incidence, rings, index):
         return None
 
 
-def _mesh_crossings(V, F, loop, patch, candidates=None):
+def _mesh_crossings(V, F, loop, patch, candidates=None, grid=None):
     """(mesh faces the patch of the hole with ``loop`` crosses, seconds): the self-intersection check of one patch.
 
     ``candidates`` are :func:`.crossings.face_boxes_near` of a union of patch boxes holding
-    this patch's; without them (in a job, for its own patch) they are found for this
-    patch's box alone. Either way the faces tested are those overlapping the patch's box,
-    so the answer is the same.
+    this patch's; without them (in a job, for its own patch) they are those of this patch's
+    box alone, from the :class:`.face_grid.FaceGrid` ``grid`` or, without one, a scan of the
+    faces. Either way the faces tested are those overlapping the patch's box, so the answer is the same.
     """
     t0 = time.perf_counter()
     points = patch.all_points(V[loop])
     if candidates is None:
-        candidates = face_boxes_near(V, F, patch_box(points)[None])
+        box = patch_box(points)
+        candidates = face_boxes_near(V, F, box[None]) if grid is None else grid.near(box)
     hits = patch_intersections(points, patch.faces, V, F, candidates, loop)
     return len(hits), time.perf_counter() - t0
 
