@@ -589,10 +589,8 @@ def outline_ratios(V, F, loops):
     ratios = np.zeros(len(loops))
     for i, loop in enumerate(loops):
         ids = np.asarray(getattr(loop, "vertices", loop), np.int64)
-        P = V[ids]
-        vector_area = 0.5 * np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0))
         area = component_area[label[ids[0]]]
-        ratios[i] = vector_area / area if area > 0 else np.inf
+        ratios[i] = vector_area(V[ids]) / area if area > 0 else np.inf
     return ratios
 
 
@@ -608,6 +606,10 @@ def vector_area(points):
     float
     """
     P = np.asarray(points, np.float64)
+    # Relative to a vertex of the loop (the vector area of a closed loop does not depend on the
+    # origin): far from the origin the products of raw coordinates cancel to noise (at 1e8 from
+    # it a 1-unit mesh had every hole taken for an island outline).
+    P = P - P[:1]
     # cross_rows: np.cross's arithmetic (the same bits) without its axis handling, 0.3 ms a call here
     return float(0.5 * np.linalg.norm(cross_rows(P, np.roll(P, -1, axis=0)).sum(axis=0)))
 

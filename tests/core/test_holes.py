@@ -303,6 +303,27 @@ def test_vector_area_has_np_cross_bits_and_is_exact_for_a_planar_square():
     rng = np.random.default_rng(3)
     for k in (3, 17, 400):
         P = rng.normal(size=(k, 3)) * 10.0 ** rng.integers(-3, 4)
-        assert vector_area(P) == float(0.5 * np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)))
+        Q = P - P[0]  # taken about the loop's first vertex
+        assert vector_area(P) == float(0.5 * np.linalg.norm(np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)))
     square = np.array([[0.0, 0, 1], [2, 0, 1], [2, 2, 1], [0, 2, 1]])
     assert vector_area(square) == 4.0
+
+
+@settings(max_examples=30, deadline=None)
+@given(offset=st.floats(-1e9, 1e9), scale=st.sampled_from([1e-3, 1.0, 1e3]))
+def test_far_from_the_origin_holes_keep_their_area_and_are_not_taken_for_outlines(offset, scale):
+    # Georeferenced scans: a 1-unit model 1e8 from the origin had every hole taken for an
+    # island outline (the vector area of raw coordinates cancelled to noise).
+    from meshlab_holefill.core.holes import OUTLINE_RATIO, is_outline, outline_ratios, vector_area
+
+    V, F = _islands_and_holes()
+    loops = boundary_loops(F)
+    incidence = vertex_face_incidence(F, len(V))
+    expected = [is_outline(V, F, loop, incidence) for loop in loops]
+    areas = [vector_area(V[loop.vertices]) for loop in loops]
+    W = V * scale + offset
+    assert [is_outline(W, F, loop, incidence) for loop in loops] == expected
+    assert (outline_ratios(W, F, loops) >= OUTLINE_RATIO).tolist() == expected
+    rounding = np.spacing(abs(offset)) / scale  # the coordinates themselves are rounded by this much (per unit)
+    for loop, area in zip(loops, areas):
+        assert vector_area(W[loop.vertices]) == pytest.approx(area * scale**2, rel=1e-9 + 100 * rounding)
