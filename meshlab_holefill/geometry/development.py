@@ -98,7 +98,8 @@ def developed_area(P, gap_angles):
     float
     """
     P = np.asarray(P, np.float64)
-    vector_area = 0.5 * float(np.linalg.norm(np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)))
+    Q = P - P[0]  # about a loop vertex: raw coordinates far from the origin cancel to noise
+    vector_area = 0.5 * float(np.linalg.norm(np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)))
     D = develop_loop(P, gap_angles)
     if not np.all(np.isfinite(D)):
         return vector_area

@@ -89,7 +89,7 @@ def reference_normals(ctx):
     -------
     (k, 3) float64 unit vectors
     """
-    P = ctx.points
+    P = ctx.points - ctx.points[0]  # about a loop vertex: raw coordinates far from the origin cancel to noise
     vector_area = 0.5 * np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)
     norm = np.linalg.norm(vector_area)
     N = ctx.loop_normals + (vector_area / norm if norm > 0 else 0.0)

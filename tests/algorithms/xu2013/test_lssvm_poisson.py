@@ -428,7 +428,7 @@ def test_mesh_far_from_the_origin_is_filled_as_well_as_at_the_origin():
     from conftest import sphere_with_holes
 
     V, F, _ = sphere_with_holes()
-    offset = np.array([1e7, -2e7, 5e6])  # UTM-like coordinates
+    offset = np.array([1e8, -2e7, 5e6])  # georeferenced coordinates of a unit-sized model
     errors = []
     for shift in (np.zeros(3), offset):
         V1, F1, result = array_api.fill_holes(V + shift, F, "lssvm_poisson", workers=1)
