@@ -548,7 +548,8 @@ def oracle_triangulation(points, forbidden_edges=(), merge_factor=0.75, max_face
     k = len(P)
     if k < 3:
         raise HoleFillError("a hole needs at least 3 boundary vertices")
-    vector_area = 0.5 * np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)
+    Q = P - P[0]  # about a loop vertex, as advancing_front_triangulation
+    vector_area = 0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
     area = float(np.linalg.norm(vector_area))
     if reference_normal is None:
         if area <= 0.0:
