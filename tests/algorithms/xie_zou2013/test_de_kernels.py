@@ -94,14 +94,18 @@ def test_mutate_crossover_equals_distinct_triples_and_numpy_trial():
     assert U.tobytes() == np.where(take, V, X).tobytes()
 
 
+def _chained_batch(rng):
+    """A sized batch (:func:`_sized_batch`) with the chain segments of its turning terms: seg_x, seg_y_add (B, n + 3)."""
+    X, pop, dims = _sized_batch(rng)
+    B, _, n = X.shape
+    return X, pop, dims, rng.normal(size=(B, n + 3)), rng.normal(size=(B, n + 3))
+
+
 def test_trial_changed_terms_are_the_trial_terms_that_differ_from_the_parents():
     # Only the terms next to crossover components are computed; every other term of the trial
     # is its parent's, bit for bit, so the DE run can keep the parent's angle there.
     rng = np.random.default_rng(14)
-    X, pop, dims = _sized_batch(rng)
-    B, N, n = X.shape
-    seg_x = rng.normal(size=(B, n + 3))
-    seg_y_add = rng.normal(size=(B, n + 3))
+    X, pop, dims, seg_x, seg_y_add = _chained_batch(rng)
     u_index, u_rn, u_take = _generation_draws(rng, X.shape)
     U, changed, cross, dot = K.trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05, seg_x, seg_y_add)
     assert U.tobytes() == K.mutate_crossover(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05).tobytes()
@@ -118,10 +122,8 @@ def test_trial_changed_terms_into_reused_arrays_gives_the_fresh_result():
     # The DE run hands the same arrays to every generation: what an earlier generation left
     # in them must not show through.
     rng = np.random.default_rng(15)
-    X, pop, dims = _sized_batch(rng)
+    X, pop, dims, seg_x, seg_y_add = _chained_batch(rng)
     B, N, n = X.shape
-    seg_x = rng.normal(size=(B, n + 3))
-    seg_y_add = rng.normal(size=(B, n + 3))
     size = B * N * (n + 2)
     U, changed, cross, dot = np.full_like(X, np.nan), np.full(size, -7, np.int64), np.full(size, np.nan), \
         np.full(size, np.nan)
