@@ -6,9 +6,10 @@ with 115 small holes, two workers spent more time scanning than filling and ran 
 one. The grid is built once, before the workers fork (they inherit it), in O(m) and with
 8 or 16 bytes per face; a query visits the cells of its box only.
 
-A face whose box is at most one cell wide on every axis is filed in the cell of its lower
+A face whose box is at most half a cell wide on every axis is filed in the cell of its lower
 corner, the others in a list every query visits. A small face meeting a box [lo, hi] then has
-its lower corner in [lo - cell, hi] on every axis, and rounding keeps that order (x <= y gives
+its lower corner in [lo - cell / 2, hi] on every axis (the half cell to spare covers the rounding
+of the widths and of lo - cell), and rounding keeps that order (x <= y gives
 floor((x - o) / c) <= floor((y - o) / c)), so the cells of [lo - cell, hi] hold every such face:
 after testing the boxes of those, :meth:`FaceGrid.near` returns exactly the faces
 :func:`.crossings.face_boxes_near` returns for the one box, in the same (increasing) order.
@@ -35,7 +36,7 @@ class FaceGrid:
     dims : (3,) int64  cells per axis
     starts : (c + 1,) int64  faces of cell k (linear index) are order[starts[k]:starts[k + 1]]
     order : (s,) int64  the small faces, by cell
-    large : (t,) int64  faces wider than a cell on some axis, ascending
+    large : (t,) int64  faces wider than half a cell on some axis, ascending
     """
 
     def __init__(self, V, F, origin, cell, dims, starts, order, large):
@@ -136,7 +137,7 @@ def _file_faces(V, F, origin, cell, dims):
         for axis in range(3):
             a, b, c = V[F[f, 0], axis], V[F[f, 1], axis], V[F[f, 2], axis]
             lo = min(a, min(b, c))
-            if max(a, max(b, c)) - lo > cell:
+            if max(a, max(b, c)) - lo > 0.5 * cell:
                 small = False
             k = k * dims[axis] + _cell_of(lo, origin, cell, dims, axis)
         key[f] = k if small else -1

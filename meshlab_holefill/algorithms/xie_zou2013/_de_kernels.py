@@ -128,15 +128,14 @@ def mutate_crossover(X, u_index, u_rn, u_take, pop, dims, F, CR):
         Nb = np.float64(pop[b])
         db = np.float64(dims[b])
         for i in range(N):
-            r1, r2, r3 = _distinct_triple(u_index, b, i, Nb)
-            r = np.int64(np.floor(u_rn[b, i] * db))
+            r1, r2, r3, r = _individual_draws(u_index, u_rn, b, i, Nb, db)
             _trial_row(U, X, u_take, b, i, r1, r2, r3, r, F, CR)
     return U
 
 
 @njit(cache=True)
-def _distinct_triple(u_index, b, i, Nb):
-    """r1, r2, r3 of individual i of problem b (population Nb) from its three uniforms, as in mutate_crossover."""
+def _individual_draws(u_index, u_rn, b, i, Nb, db):
+    """r1, r2, r3 and rn_i of individual i of problem b (population Nb, db used components), as in mutate_crossover."""
     r1 = np.int64(np.floor(u_index[0, b, i] * Nb))
     r2 = np.int64(np.floor(u_index[1, b, i] * (Nb - 1.0)))
     if r2 >= r1:
@@ -147,7 +146,7 @@ def _distinct_triple(u_index, b, i, Nb):
         r3 += 1
     if r3 >= hi:
         r3 += 1
-    return r1, r2, r3
+    return r1, r2, r3, np.int64(np.floor(u_rn[b, i] * db))
 
 
 @njit(cache=True)
@@ -198,8 +197,7 @@ def trial_changed_terms_into(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, 
         Nb = np.float64(pop[b])
         db = np.float64(dims[b])
         for i in range(N):
-            r1, r2, r3 = _distinct_triple(u_index, b, i, Nb)
-            r = np.int64(np.floor(u_rn[b, i] * db))
+            r1, r2, r3, r = _individual_draws(u_index, u_rn, b, i, Nb, db)
             t = 0
             for j in range(n):
                 U[b, i, j] = X[b, i, j]
