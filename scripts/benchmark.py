@@ -55,11 +55,11 @@ REAL_SIZE = ["bunny_212k"]
 CASES = CLOSED + NATURAL + CREASED + REAL_SIZE
 REAL_SIZE_HOLES = ("irregular", "large", "irregular")  # targets 250, 150, 250 boundary edges
 # Ours with defaults; three measured variants (Xu et al.'s Table 1 membrane comparison, Hu's optional
-# fairing, curve unfolding on the surface's development: the filters/ presets); MeshLab's Close Holes
+# fairing as in its filters/ preset, curve unfolding on the paper's unfolded domain alone); MeshLab's Close Holes
 # with its defaults and with every hole allowed.
 # CGAL's Liepa fill and MeshFix as open anchors (skipped with a note when not installed).
 DEFAULT_FILTERS = ("ours,lssvm_poisson:laplacian_prediction=zero:poisson_boundary=dirichlet,min_angle_bilateral:fairing=thinplate:iterations=0:smoothing=10,"
-                   "curve_unfolding:domain=development,anchors,baseline")
+                   "curve_unfolding:domain=unfolding,anchors,baseline")
 
 
 def load_case(name):

@@ -614,6 +614,16 @@ def vector_area(points):
     return float(0.5 * np.linalg.norm(cross_rows(P, np.roll(P, -1, axis=0)).sum(axis=0)))
 
 
+def outlines_one_face(loop):
+    """Whether a 3-edge loop runs round one face (a triangle attached by its corners only, or alone).
+
+    Its one triangulation is that face again, reversed: a duplicate face that no crossing test
+    sees (it crosses nothing, it coincides). The filters refuse such a loop, and report it as an
+    outline: it outlines its whole edge-connected component, the face.
+    """
+    return len(loop) == 3 and loop.closed and len(np.unique(loop.border_faces)) == 1
+
+
 def is_outline(V, F, loop, incidence):
     """Whether a loop outlines its whole connected component: :func:`outline_ratios` >= OUTLINE_RATIO.
 

@@ -327,3 +327,18 @@ def test_far_from_the_origin_holes_keep_their_area_and_are_not_taken_for_outline
     rounding = np.spacing(abs(offset)) / scale  # the coordinates themselves are rounded by this much (per unit)
     for loop, area in zip(loops, areas):
         assert vector_area(W[loop.vertices]) == pytest.approx(area * scale**2, rel=1e-9 + 100 * rounding)
+
+
+def test_a_three_edge_loop_outlines_one_face_only_when_one_face_holds_all_its_edges():
+    from meshlab_holefill.core.holes import outlines_one_face
+
+    V, F = grid(5, 5)
+    lone = np.concatenate([F, [[len(V), len(V) + 1, len(V) + 2]]])
+    triangle = [lp for lp in boundary_loops(lone) if len(lp) == 3]
+    assert len(triangle) == 1 and outlines_one_face(triangle[0])
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=2)
+    Vs, Fs = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    (hole,) = boundary_loops(np.delete(Fs, 0, axis=0))  # one face removed: its three neighbours hold the edges
+    assert len(hole) == 3 and not outlines_one_face(hole)
+    assert not any(outlines_one_face(lp) for lp in boundary_loops(F))

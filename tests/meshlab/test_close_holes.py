@@ -53,23 +53,50 @@ def test_selfintersection_off_fills_the_pierced_hole():
     assert res["failed_holes"] == 0 and res["closed_holes"] == 2
 
 
-def test_island_outline_is_skipped_by_default_and_named_when_filled():
+def test_a_lone_triangle_is_an_outline_whose_one_fill_is_refused():
     """A lone triangle's border is a 3-edge loop; capping it would duplicate the triangle."""
     V, F = grid(8, 8)
     k = len(V)
     V = np.concatenate([V, [[3.0, 0, 0], [4.0, 0, 0], [3.0, 1.0, 0]]])
     F = np.concatenate([F, [[k, k + 1, k + 2]]])
     ms = meshset_from_arrays(V, F)
-    res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=10)
-    (entry,) = [h for h in res["holes"] if h["boundary_edges"] == 3]
-    assert (entry["status"], entry["size_class"]) == ("skipped", "outline") and "island outline" in entry["reason"]
-    assert len(mesh_arrays(ms)[1]) == len(F)
-    res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=10, filloutlines=True)
-    (entry,) = [h for h in res["holes"] if h["boundary_edges"] == 3]
-    assert entry["status"] == "failed"
-    assert "intersect" in entry["reason"] and "island" in entry["reason"]
+    for filloutlines in (False, True):
+        res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=10, filloutlines=filloutlines)
+        (entry,) = [h for h in res["holes"] if h["boundary_edges"] == 3]
+        assert (entry["status"], entry["size_class"]) == ("skipped", "outline")
+        assert "outlines a single face" in entry["reason"]
+        assert len(mesh_arrays(ms)[1]) == len(F)
+
+
+def _hole_with_a_hanging_triangle():
+    """A sphere with the fan of one vertex removed, and a triangle in the hole held by one rim vertex."""
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = mesh_arrays(ms)
+    fan = np.flatnonzero((F == 5).any(axis=1))
+    rim = np.setdiff1d(np.unique(F[fan]), [5])
+    centre, corner = V[5], V[rim[0]]
+    k = len(V)
+    V = np.concatenate([V, [centre * 0.98 + (corner - centre) * 0.2,
+                            centre * 0.98 + np.cross(centre, corner - centre) * 0.3]])
+    F = np.concatenate([np.delete(F, fan, axis=0), [[rim[0], k, k + 1]]])
+    return V, F
+
+
+@pytest.mark.parametrize("selfintersection", [True, False])
+@pytest.mark.parametrize("name", FILTERS)
+def test_a_pinched_triangle_outline_is_refused_and_the_hole_around_it_closed(name, selfintersection):
+    """The hanging triangle's loop touches the mesh at one vertex: not an island, yet its only fill is that
+    triangle again, which no crossing test sees; it is refused by name, and no face is doubled."""
+    V, F = _hole_with_a_hanging_triangle()
+    assert sorted(len(loop) for loop in boundary_loops(F)) == [3, 6]
+    ms = meshset_from_arrays(V, F)
+    res = getattr(ms, name)(selfintersection=selfintersection)
+    (outline,) = [h for h in res["holes"] if h["boundary_edges"] == 3]
+    assert outline["status"] == "skipped" and "outlines a single face" in outline["reason"]
     V2, F2 = mesh_arrays(ms)
-    assert len(F2) == len(F)
+    assert len(np.unique(np.sort(F2, axis=1), axis=0)) == len(F2)
+    assert [len(loop) for loop in boundary_loops(F2)] == [3]
 
 
 @pytest.mark.parametrize("name", FILTERS)

@@ -246,11 +246,16 @@ def triangulate_and_embed(ctx, Q, keep, ears, energy, refinement, tangential=Fal
     chords = _sub_loop_chords(ctx.forbidden_edges, keep, k)
     if not refinement:
         points, F = constrained_delaunay(Qs, chords)
-    elif density == "twice":
-        points, F = refine_planar(Qs, None, chords, max_area=area_bound(surrounding_edge_length(ctx), "twice"))
     else:
-        points, F = refine_planar(Qs, float(np.mean(ctx.edge_scale)), chords,
-                                  max_area=area_bound(float(np.mean(ctx.edge_scale)), "equilateral"))
+        # Refined in units of the bound's edge (polygon / e, bound / e^2), as resample_patch does:
+        # Triangle then sees the same numbers in any unit (an absolute bound of 1e-14 refined a
+        # hole of a mesh in kilometres differently from the same hole in metres).
+        e = surrounding_edge_length(ctx) if density == "twice" else float(np.mean(ctx.edge_scale))
+        unit = e if e > 0 else 1.0
+        points, F = refine_planar(Qs / unit, None, chords,
+                                  max_area=area_bound(1.0, "twice" if density == "twice" else "equilateral"))
+        points = points * unit
+        points[:len(Qs)] = Qs  # the polygon's own vertices, unchanged by the round trip
     s = len(points) - len(keep)
     ear_faces = np.asarray(ears, np.int64).reshape(-1, 3)
     X = embed_patch(ctx, s, F, energy=energy, boundary=keep, extra_faces=ear_faces, tangential=tangential)
