@@ -60,9 +60,11 @@ from .tangential_smoothing import tangential_smoothing
 from .min_angle_triangulation import min_angle_triangulation
 from ._projection_kernels import projected_turns
 
-__all__ = ["fill", "PARAMS", "RINGS", "WARM_UP", "warm_up", "relaxation_guard", "embeds_in_projection"]
+__all__ = ["fill", "FAIRED_OPTIONS", "PARAMS", "RINGS", "WARM_UP", "warm_up", "relaxation_guard", "embeds_in_projection"]
 
 RINGS = 2
+# The faired option set (filters/close_holes_min_angle_bilateral_faired.mlx), the fallback's patch.
+FAIRED_OPTIONS = {"fairing": "thinplate", "iterations": 0, "smoothing": 10}
 
 PARAMS = [
     ParamSpec("alpha", "float", float(np.sqrt(2.0)),
@@ -100,6 +102,11 @@ PARAMS = [
               "point within rho = 2 sigma_c (Eq. 4, after Fleishman et al.), the surrounding mesh's vertices "
               "included (with sigma_c = 0.1 no point is that close: use sigma_c >= 0.5 with it).",
               choices=("ring", "radius")),
+    ParamSpec("fallback", "bool", True,
+              "Beyond the paper, used only where the paper's patch would be rejected: when it still crosses the "
+              "mesh after the guarded refinement and fewer filter iterations, the patch of the faired option "
+              "set (fairing=thinplate, iterations=0, smoothing=10) is taken instead if that one crosses nothing; "
+              "otherwise the hole is reported failed as before."),
     ParamSpec("filter_guard", "float", 0.3,
               "Guard on the bilateral step: a move that would leave a new triangle with quality 2r/R below "
               "min(filter_guard, its quality before), or flip it, is undone; 0 turns the guard off.",
@@ -338,7 +345,7 @@ def _crosses_uncached(ctx, V, F):
 
 
 def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairing="none", relaxation="angles",
-         neighbourhood="ring", filter_guard=0.3, smoothing=0):
+         neighbourhood="ring", filter_guard=0.3, smoothing=0, fallback=True):
     """Fill one hole by Hu et al.'s three steps (Sec. III.B-III.D).
 
     The modified minimum-angle triangulation (:func:`.min_angle_triangulation.min_angle_triangulation`),
@@ -366,6 +373,9 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
         Quality below which a bilateral move is undone (0: off).
     smoothing : int
         Beyond the paper: rounds of tangential smoothing of the new vertices.
+    fallback : bool
+        Beyond the paper: a patch that still crosses the mesh is replaced by the
+        :data:`FAIRED_OPTIONS` patch when that one crosses nothing.
 
     Returns
     -------
@@ -431,5 +441,13 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     V, F = Vb, Fb
     t3 = time.perf_counter()
     info.update(initial_faces=len(F0), triangulation_seconds=t1 - t0, refinement_seconds=t2 - t1,
-                filter_seconds=t3 - t2)
+                filter_seconds=t3 - t2, fallback=None)
+    if fallback and (fairing, iterations, smoothing) != tuple(FAIRED_OPTIONS.values()) and _crosses(ctx, V, F):
+        # A large, strongly curved hole: the flat minimum-angle surface and the filter's moves along
+        # the normals keep crossing the mesh, where a faired patch bends away from it.
+        faired = fill(ctx, alpha=alpha, sigma_c=sigma_c, sigma_s=sigma_s, relaxation=relaxation,
+                      neighbourhood=neighbourhood, filter_guard=filter_guard, fallback=False, **FAIRED_OPTIONS)
+        if not _crosses(ctx, np.concatenate([ctx.points, faired.vertices]), faired.faces):
+            faired.info["fallback"] = "faired"
+            return faired
     return Patch(vertices=V[k:], faces=F, info=info)

@@ -718,3 +718,40 @@ def test_a_loop_that_cannot_be_closed_still_raises():
     collinear = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], float)
     with pytest.raises(HoleFillError, match="no valid ear left"):
         min_angle_triangulation_python(collinear, np.tile(UP, (4, 1)))
+
+
+# ----------------------------------------------------------------------------- fallback (beyond the paper)
+
+@pytest.mark.parametrize("share", [0.1, 0.3])
+def test_a_paper_patch_crossing_the_mesh_falls_back_to_the_faired_patch(share):
+    """The bunny's bottom cut off by height: a 271- or 292-edge loop whose minimum-angle surface, filtered
+    along its normals, crosses the bunny's feet; the faired option set's patch crosses nothing."""
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import FAIRED_OPTIONS, RINGS, _crosses
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("bunny.obj"))
+    V, F = mesh_arrays(ms)
+    height = V[F].mean(axis=1)[:, 1]
+    F = F[height > np.quantile(height, share)]
+    loop = max(boundary_loops(F), key=len)
+    assert len(loop) > 250
+    ctx = hole_context(V, F, loop, rings=RINGS)
+    paper = fill(ctx, fallback=False)
+    assert _crosses(ctx, paper.all_points(ctx.points), paper.faces)
+    patch = fill(ctx)
+    assert patch.info["fallback"] == "faired"
+    faired = fill(ctx, **FAIRED_OPTIONS)
+    assert np.array_equal(patch.vertices, faired.vertices) and np.array_equal(patch.faces, faired.faces)
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral(maxholesize=400)
+    assert res["closed_holes"] == 1 and res["failed_holes"] == 0
+    res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral(maxholesize=400, fallback=False)
+    assert res["closed_holes"] == 0 and "intersect" in res["holes"][0]["reason"]
+
+
+def test_a_patch_that_crosses_nothing_is_the_papers():
+    V, F, _ = sphere_with_holes(subdiv=3)
+    ctx = hole_context(V, F, boundary_loops(F)[0], rings=2)
+    patch, paper = fill(ctx), fill(ctx, fallback=False)
+    assert patch.info["fallback"] is None
+    assert np.array_equal(patch.vertices, paper.vertices) and np.array_equal(patch.faces, paper.faces)
