@@ -499,7 +499,7 @@ def test_record_write_run_gives_the_same_mesh(tmp_path):
         "NewFaceSelected": "RichBool", "SelfIntersection": "RichBool", "FillOutlines": "RichBool", "Workers": "RichInt",
         "TimeLimit": "RichFloat", "alpha": "RichFloat", "sigma_c": "RichFloat", "sigma_s": "RichFloat",
         "iterations": "RichInt", "fairing": "RichEnum", "smoothing": "RichInt", "relaxation": "RichEnum",
-        "neighbourhood": "RichEnum", "filter_guard": "RichFloat"}
+        "neighbourhood": "RichEnum", "fallback": "RichBool", "filter_guard": "RichFloat"}
     assert params["alpha"].get("value") == "1.3"
     assert (params["fairing"].get("value"), params["fairing"].get("enum_cardinality")) == ("1", "3")
     pymeshlab.MeshSet().load_filter_script(first)  # MeshLab's reader accepts it
