@@ -191,7 +191,7 @@ def _hole_status_table(result):
 
 
 def cmd_holes(args, extra):
-    from .core.holes import boundary_loops, hole_measures, is_outline, outlines_one_face, vertex_face_incidence
+    from .core.holes import boundary_loops, hole_measures, loop_class, outlines_one_face, vertex_face_incidence
 
     ms = load_meshset(args.input)
     m = ms.current_mesh()
@@ -210,9 +210,8 @@ def cmd_holes(args, extra):
             print(f"{i:>4} {loop.edge_count:>6} {'':>7} {'':>11} {'':>10} {'':>10} {'':>9} {'':>32}  {', '.join(notes)}")
             continue
         meas = hole_measures(V, loop)
-        one_face = outlines_one_face(loop)
-        outline = one_face or is_outline(V, F, loop, incidence)
-        if one_face:
+        outline = loop_class(V, F, loop, incidence) == "outline"
+        if outlines_one_face(loop):
             notes.append("outline of a single face (its three edges are border edges, not a hole)")
         elif outline:
             notes.append("outline of a whole component (island or outer border, not a hole)")

@@ -624,6 +624,11 @@ def outlines_one_face(loop):
     return len(loop) == 3 and loop.closed and len(np.unique(loop.border_faces)) == 1
 
 
+def loop_class(V, F, loop, incidence):
+    """'outline' for a loop round one face (:func:`outlines_one_face`) or its whole component (:func:`is_outline`), else 'hole'."""
+    return "outline" if outlines_one_face(loop) or is_outline(V, F, loop, incidence) else "hole"
+
+
 def is_outline(V, F, loop, incidence):
     """Whether a loop outlines its whole connected component: :func:`outline_ratios` >= OUTLINE_RATIO.
 

@@ -23,8 +23,8 @@ from .crossings import (clashing_patches, crossing_patches, face_boxes_near, loa
 from .face_grid import face_grid
 from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .kernel_cache import refresh_kernel_cache_once
-from .holes import (boundary_loops, edge_summary, hole_context, hole_measures, is_outline, outline_ratio,
-                    outlines_one_face, vertex_face_incidence)
+from .holes import (boundary_loops, edge_summary, hole_context, hole_measures, loop_class,
+                    outline_ratio, outlines_one_face, vertex_face_incidence)
 from .parameters import ParamSpec, Percentage
 from .patch import load_validation_kernel, merge_patches, validate_patch
 
@@ -214,7 +214,7 @@ def _select_holes(V, F, loops, params, selected_faces, incidence):
         entry = {"hole": i, "boundary_edges": loop.edge_count, "pinched": bool(loop.pinched)}
         if loop.closed and len(loop) >= 3:
             entry.update(hole_measures(V, loop))
-            entry["size_class"] = "outline" if outlines_one_face(loop) or is_outline(V, F, loop, incidence) else "hole"
+            entry["size_class"] = loop_class(V, F, loop, incidence)
         if not loop.closed:
             entry.update(status="skipped", reason="open boundary chain (inconsistent face orientation)")
         elif len(loop) < 3:

@@ -55,15 +55,15 @@ def smoothest_patch(ctx, fill_on):
     if not patches:
         raise errors[0]
     bends = {domain: border_bend(ctx, p.vertices, p.faces) for domain, p in patches.items()}
+    bends = {domain: bend if bend == bend else None for domain, bend in bends.items()}  # NaN: no border edge
 
     def rank(domain):
         bend = bends[domain]
-        return patches[domain].info.get("crossing_faces", 0) > 0, bend if bend == bend else float("inf")
+        return patches[domain].info.get("crossing_faces", 0) > 0, float("inf") if bend is None else bend
 
     best = min(patches, key=rank)  # dicts keep DOMAINS' order and min the first of equals
     patch = patches[best]
-    finite = {domain: bend for domain, bend in bends.items() if bend == bend}  # NaN: no border edge in the patch
-    patch.info.update(domain=best, border_bends={domain: finite.get(domain) for domain in DOMAINS})
+    patch.info.update(domain=best, border_bends={domain: bends.get(domain) for domain in DOMAINS})
     return patch
 
 

@@ -442,12 +442,13 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     t3 = time.perf_counter()
     info.update(initial_faces=len(F0), triangulation_seconds=t1 - t0, refinement_seconds=t2 - t1,
                 filter_seconds=t3 - t2, fallback=None)
-    if fallback and (fairing, iterations, smoothing) != tuple(FAIRED_OPTIONS.values()) and _crosses(ctx, V, F):
+    faired_already = {"fairing": fairing, "iterations": iterations, "smoothing": smoothing} == FAIRED_OPTIONS
+    if fallback and not faired_already and _crosses(ctx, V, F):
         # A large, strongly curved hole: the flat minimum-angle surface and the filter's moves along
         # the normals keep crossing the mesh, where a faired patch bends away from it.
         faired = fill(ctx, alpha=alpha, sigma_c=sigma_c, sigma_s=sigma_s, relaxation=relaxation,
                       neighbourhood=neighbourhood, filter_guard=filter_guard, fallback=False, **FAIRED_OPTIONS)
-        if not _crosses(ctx, np.concatenate([ctx.points, faired.vertices]), faired.faces):
+        if not _crosses(ctx, faired.all_points(ctx.points), faired.faces):
             faired.info["fallback"] = "faired"
             return faired
     return Patch(vertices=V[k:], faces=F, info=info)
