@@ -244,12 +244,16 @@ def intersects_surroundings(ctx, V, F):
     return len(faces_intersecting(X, allF, np.arange(len(F)), np.arange(len(allF)))) > 0
 
 
-def boundary_ears(F, k):
-    """Faces made of three consecutive loop vertices (i - 1, i, i + 1), (m,) bool."""
+def boundary_ears(F, k, span=2):
+    """Faces of loop vertices only that lie within a stretch of at most ``span`` loop edges, (m,) bool.
+
+    ``span=2``: the ears, three consecutive loop vertices (i - 1, i, i + 1). A larger span
+    also takes the triangles that close a short notch of the loop among themselves.
+    """
     on_loop = np.all(F < k, axis=1)
     s = np.sort(np.where(on_loop[:, None], F, 0), axis=1)
-    gaps = np.sort(np.stack([s[:, 1] - s[:, 0], s[:, 2] - s[:, 1], s[:, 0] + k - s[:, 2]], axis=1), axis=1)
-    return on_loop & (gaps[:, 0] == 1) & (gaps[:, 1] == 1)
+    gaps = np.stack([s[:, 1] - s[:, 0], s[:, 2] - s[:, 1], s[:, 0] + k - s[:, 2]], axis=1)
+    return on_loop & (k - gaps.max(axis=1) <= span)
 
 
 def border_normals(ctx):

@@ -409,7 +409,13 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
 
 
 def context_hits(X, F, ctx):
-    """Patch faces (indices into F) intersecting the HoleContext's surrounding faces.
+    """Patch faces (indices into F) intersecting the HoleContext's surrounding faces or another patch face.
+
+    The patch's own crossings count: a solve that continues a steep wall into the hole can
+    fold the patch over itself near the border without folding any triangle pair (bunny.obj
+    with its lowest tenth cut off by height, a nearly planar 231-edge loop: 149 crossing pairs
+    within the patch, none with the mesh), and the filter would only learn of it when the
+    pipeline rejects the patch.
 
     Parameters
     ----------
@@ -423,4 +429,4 @@ def context_hits(X, F, ctx):
     allX = np.concatenate([X, ctx.vertices[k:]])
     context = np.where(ctx.faces >= k, ctx.faces + p, ctx.faces)
     allF = np.concatenate([np.asarray(F, np.int64), context])
-    return faces_intersecting(allX, allF, np.arange(len(F)), np.arange(len(F), len(allF)))
+    return faces_intersecting(allX, allF, np.arange(len(F)), np.arange(len(allF)))

@@ -1249,3 +1249,17 @@ def test_warm_up_loads_every_kernel_a_fill_calls():
                _smoothing_kernels.umbrella_passes, _flip_kernels.pair_angle_parts,
                _quality_kernels.triangle_quality_kernel]
     assert all(kernel.signatures for kernel in kernels), [k.__name__ for k in kernels if not k.signatures]
+
+
+def test_triangles_closing_a_short_notch_of_the_loop_count_as_the_loop_s_own():
+    from meshlab_holefill.algorithms.xie_zou2013.folds import boundary_ears
+
+    k = 20
+    F = np.array([[0, 1, 2],  # an ear
+                  [19, 0, 1],  # an ear across the loop's start
+                  [0, 2, 4],  # a notch of 4 loop edges
+                  [17, 1, 3],  # across the start: 6 edges
+                  [0, 5, 10],  # a chord across 10 edges
+                  [0, 1, 20]])  # a new vertex
+    assert boundary_ears(F, k).tolist() == [True, True, False, False, False, False]
+    assert boundary_ears(F, k, 8).tolist() == [True, True, True, True, False, False]

@@ -50,3 +50,18 @@ def test_a_vertex_pressed_over_the_border_is_spread_again_by_the_relaxation():
     assert np.linalg.norm(Z[v] - X[v]) < np.linalg.norm(Y[v] - X[v])  # back towards its place
     # Without the relaxation (relax off) the fold discards the solve.
     assert xu.unfold(Y, F, fixed)[0] is None
+
+
+def test_a_patch_crossing_itself_counts_as_a_hit_of_the_context():
+    # Two triangles of new vertices, hanging below the bowl's hole far from every mesh face,
+    # pierce each other: the mesh is not crossed, the patch is.
+    from meshlab_holefill.algorithms.xu2013.poisson_patch import context_hits
+
+    ctx, X, F = bowl_patch()
+    assert len(context_hits(X, F, ctx)) == 0
+    c = ctx.points.mean(axis=0) - np.array([0.0, 0.0, 0.05])
+    cross = c + 0.01 * np.array([[-1, 0, 0], [1, 0, 0], [0, 0, 1], [0, -1, -0.5], [0, 1, -0.5], [0, 0, 0.5]])
+    base = len(X)
+    X2 = np.concatenate([X, cross])
+    F2 = np.concatenate([F, base + np.array([[0, 1, 2], [3, 4, 5]])])
+    assert context_hits(X2, F2, ctx).tolist() == [len(F), len(F) + 1]
