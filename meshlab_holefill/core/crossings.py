@@ -10,11 +10,11 @@ import numpy as np
 from numba import njit
 
 from ..geometry._tri_kernels import boxes_meeting
-from ..geometry.intersections import intersecting_pairs
+from ..geometry.intersections import faces_intersecting, intersecting_pairs
 from .holes import nonmanifold_edges
 from ..geometry.sets import isin_ints, positions_ints, unique_ints
 
-__all__ = ["clashing_patches", "crossing_patches", "face_boxes_near", "load_face_boxes_kernel", "patch_box",
+__all__ = ["clashing_patches", "context_crossings", "crossing_patches", "face_boxes_near", "load_face_boxes_kernel", "patch_box",
            "patch_intersections", "withdraw"]
 
 
@@ -139,6 +139,29 @@ def patch_intersections(patch_points, patch_faces, mesh_V, mesh_F, candidates, l
     pairs = intersecting_pairs(X, allF, np.arange(q), np.arange(len(allF)), weld=False)
     # faces_intersecting's answer: a pair of two patch faces is listed once, the smaller first.
     return unique_ints(np.concatenate([pairs[:, 0], pairs[pairs[:, 1] < q, 1]]))
+
+
+def context_crossings(ctx, points, faces):
+    """Patch faces crossing another patch face or the HoleContext's surrounding faces, (t,) int64 sorted.
+
+    A filter's own check before the pipeline's whole-mesh one: it sees only the context's
+    rings, so a crossing found here lets the filter try something else instead of failing
+    the hole. The patch's own crossings count: a patch can fold over itself near its border
+    without any pair of neighbouring triangles folding.
+
+    Parameters
+    ----------
+    ctx : HoleContext
+    points : (k + p, 3) float64  the hole boundary first (as ``ctx.points``), then new vertices
+    faces : (q, 3) int  in that numbering
+    """
+    if len(faces) == 0:
+        return np.zeros(0, np.int64)
+    k, p = ctx.size, len(points) - ctx.size
+    X = np.concatenate([points, ctx.vertices[k:]])
+    context = np.where(ctx.faces >= k, ctx.faces + p, ctx.faces)
+    allF = np.concatenate([np.asarray(faces, np.int64), context])
+    return faces_intersecting(X, allF, np.arange(len(faces)), np.arange(len(allF)))
 
 
 def patch_box(points):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...geometry.flips import relax_edges
+from ...core.crossings import context_crossings
 from ...geometry.intersections import faces_intersecting
 from ...geometry.quality import cross_rows, face_normals
 from ...geometry.topology import edge_pair_set, interior_edges
@@ -235,13 +236,10 @@ def intersects_surroundings(ctx, V, F):
     """Whether the patch crosses itself or the surrounding rings of the context.
 
     The filter checks the whole mesh afterwards; testing the rings here lets a crossing
-    attempt give way to the next layout instead of failing the hole.
+    attempt give way to the next layout instead of failing the hole
+    (:func:`meshlab_holefill.core.crossings.context_crossings`).
     """
-    k, p = ctx.size, len(V) - ctx.size
-    X = np.concatenate([V, ctx.vertices[k:]])
-    local = np.where(ctx.faces >= k, ctx.faces + p, ctx.faces)
-    allF = np.concatenate([F, local])
-    return len(faces_intersecting(X, allF, np.arange(len(F)), np.arange(len(allF)))) > 0
+    return len(context_crossings(ctx, V, F)) > 0
 
 
 def boundary_ears(F, k, span=2):

@@ -16,7 +16,7 @@ import scipy.sparse.linalg as spla
 from ._laplacian_kernels import edge_weight_rows, with_unit_diagonal
 from .advancing_front import advancing_front_triangulation
 from ...geometry.flips import folds, relax_edges
-from ...geometry.intersections import faces_intersecting
+from ...core.crossings import context_crossings
 from ...geometry.laplacian import (cotangent_laplacian, cotangent_weights, tangential_umbrella_smoothing,
                                    vertices_near)
 from ...geometry.quality import triangle_quality, unique_edges
@@ -409,13 +409,13 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
 
 
 def context_hits(X, F, ctx):
-    """Patch faces (indices into F) intersecting the HoleContext's surrounding faces or another patch face.
+    """Patch faces (indices into F) crossing another patch face or the HoleContext's surrounding faces.
 
-    The patch's own crossings count: a solve that continues a steep wall into the hole can
-    fold the patch over itself near the border without folding any triangle pair (bunny.obj
-    with its lowest tenth cut off by height, a nearly planar 231-edge loop: 149 crossing pairs
-    within the patch, none with the mesh), and the filter would only learn of it when the
-    pipeline rejects the patch.
+    :func:`meshlab_holefill.core.crossings.context_crossings`. The patch's own crossings count
+    since a solve that continues a steep wall into the hole can fold the patch over itself
+    near the border (bunny.obj with its lowest tenth cut off by height, a nearly planar
+    231-edge loop: 149 crossing pairs within the patch, none with the mesh); the filter
+    would only learn of it when the pipeline rejects the patch.
 
     Parameters
     ----------
@@ -423,10 +423,4 @@ def context_hits(X, F, ctx):
     F : (q, 3) int64        patch faces
     ctx : HoleContext
     """
-    if len(F) == 0:
-        return np.zeros(0, np.int64)
-    k, p = ctx.size, len(X) - ctx.size
-    allX = np.concatenate([X, ctx.vertices[k:]])
-    context = np.where(ctx.faces >= k, ctx.faces + p, ctx.faces)
-    allF = np.concatenate([np.asarray(F, np.int64), context])
-    return faces_intersecting(allX, allF, np.arange(len(F)), np.arange(len(allF)))
+    return context_crossings(ctx, X, F)
