@@ -158,8 +158,9 @@ def context_crossings(ctx, points, faces):
     if len(faces) == 0:
         return np.zeros(0, np.int64)
     k, p = ctx.size, len(points) - ctx.size
-    X = np.concatenate([points, ctx.vertices[k:]])
-    context = np.where(ctx.faces >= k, ctx.faces + p, ctx.faces)
+    surrounding_points, surrounding_faces = ctx.surroundings()
+    X = np.concatenate([points, surrounding_points[k:]])
+    context = np.where(surrounding_faces >= k, surrounding_faces + p, surrounding_faces)
     allF = np.concatenate([np.asarray(faces, np.int64), context])
     return faces_intersecting(X, allF, np.arange(len(faces)), np.arange(len(allF)))
 

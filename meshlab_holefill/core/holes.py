@@ -404,6 +404,12 @@ class HoleContext:
     pinched : bool
     index : int
         Position of the hole in the filter's hole list.
+    obstacle_vertices : (s, 3) float64
+    obstacle_faces : (r, 3) int64
+        Mesh faces beyond the rings that a patch must not cross either (any component), in the
+        numbering of ``vertices`` followed by ``obstacle_vertices``; empty unless
+        :func:`hole_context` was given ``obstacles``. Only the crossing checks see them
+        (:meth:`surroundings`): normals, scales and the rings stay those of the rings.
     """
 
     loop: np.ndarray
@@ -420,6 +426,8 @@ class HoleContext:
     pinched: bool = False
     index: int = 0
     extra: dict = field(default_factory=dict)
+    obstacle_vertices: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    obstacle_faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))
 
     @property
     def size(self):
@@ -430,6 +438,16 @@ class HoleContext:
     def loop_normals(self):
         """(k, 3) vertex normals of the loop vertices."""
         return self.normals[: self.size]
+
+    def surroundings(self):
+        """(vertices (n + s, 3), faces (m + r, 3)): everything a patch must not cross, loop first.
+
+        The rings, then the obstacle faces; the rings' own arrays when there are none.
+        """
+        if len(self.obstacle_faces) == 0:
+            return self.vertices, self.faces
+        return (np.concatenate([self.vertices, self.obstacle_vertices]),
+                np.concatenate([self.faces, self.obstacle_faces]))
 
     def ring_mask(self, max_depth):
         """Boolean mask of local vertices with 0 < depth <= max_depth."""
@@ -461,7 +479,7 @@ def incident_faces(incidence, vertices):
     return unique_ints(incidence.indices[positions])
 
 
-def hole_context(V, F, loop, incidence=None, rings=3, index=0):
+def hole_context(V, F, loop, incidence=None, rings=3, index=0, obstacles=None):
     """Build the HoleContext of one boundary loop.
 
     Cost is proportional to the size of the neighbourhood, not of the mesh, once the
@@ -476,6 +494,11 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
         ``vertex_face_incidence(F, len(V))``, shared between holes.
     rings : int
         Number of face rings around the loop to include (>= 1).
+    index : int
+        Position of the hole in the filter's hole list.
+    obstacles : (r,) int, optional
+        Mesh face indices a patch must not cross beyond the rings (those already in the rings
+        are left out), for :attr:`HoleContext.obstacle_faces`.
     """
     F = np.asarray(F)  # int32 or int64: only the local rows are gathered, never the whole array converted
     if incidence is None:
@@ -517,13 +540,29 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0):
     chord = E[both_loop]
     gap = np.abs(chord[:, 0] - chord[:, 1])
     chord = chord[(gap != 1) & (gap != k - 1)]
+    obstacle_vertices, obstacle_faces = _obstacle_faces(V, F, global_index, local_faces_g, obstacles)
     return HoleContext(
         loop=loop_v, points=verts[:k].copy(), vertices=verts, faces=faces,
         global_index=global_index, depth=depth, normals=normals,
         border_faces=border_faces, edge_scale=edge_scale,
         mean_edge_length=float(lengths.mean()) if len(lengths) else 0.0,
         forbidden_edges=chord, pinched=bool(loop.pinched), index=index,
-        extra={"global_faces": local_faces_g})
+        extra={"global_faces": local_faces_g}, obstacle_vertices=obstacle_vertices, obstacle_faces=obstacle_faces)
+
+
+def _obstacle_faces(V, F, global_index, ring_faces, obstacles):
+    """(vertices (s, 3), faces (r, 3)) of the obstacle faces not in the rings, numbered after the rings' vertices.
+
+    A vertex the rings hold keeps its local number, so that a face touching the rings shares
+    that vertex rather than a copy of it.
+    """
+    if obstacles is None:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    faces = setdiff_ints(np.asarray(obstacles, np.int64), ring_faces)
+    used = unique_ints(F[faces]) if len(faces) else np.zeros(0, np.int64)
+    beyond = setdiff_ints(used, global_index).astype(np.int64)
+    local = positions_ints(np.concatenate([global_index, beyond]), F[faces]).reshape(-1, 3)
+    return np.asarray(V[beyond], np.float64), local
 
 
 def loop_measures(points):

@@ -50,7 +50,8 @@ COMMON_PARAMS = [
               "Select the new faces after filling (the original selection is kept).",
               mlx_name="NewFaceSelected", display="Select the newly created faces"),
     ParamSpec("selfintersection", "bool", True,
-              "Reject a patch that intersects the existing mesh or itself; the hole is then reported failed.",
+              "Reject a patch that intersects the existing mesh or itself; the hole is then reported failed. "
+              "A patch crossing faces beyond the ones its filter looked at is first filled again, avoiding them.",
               mlx_name="SelfIntersection", display="Prevent creation of selfIntersecting faces"),
     ParamSpec("filloutlines", "bool", False,
               "Also cap loops that outline a whole connected component (an island of a range scan, a loose "
@@ -305,10 +306,18 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
             return None, reason_of(exc), time.perf_counter() - t0, None
         context_seconds = time.perf_counter() - t0
         outcome, seconds = fill_one(fill, ctx, fill_kwargs, params["timelimit"])
-        crossed = None
+        key, crossed = _context_key(ctx), None
         if check_in_job and not isinstance(outcome, str):
             crossed = _mesh_crossings(V, F, ctx.loop, outcome, grid=grid)
-        return _context_key(ctx), outcome, context_seconds + seconds, crossed
+            if crossed[0]:
+                key = None  # the fill depends on more of the mesh than the context: never reused
+                outcome, crossed, seconds = refill_clear(i, outcome, crossed, context_seconds + seconds, grid)
+                return key, outcome, seconds, crossed
+        return key, outcome, context_seconds + seconds, crossed
+
+    def refill_clear(i, patch, crossed, seconds, grid=None):
+        return _refill_clear_of_mesh(V, F, loops[i], incidence, rings, i, fill, fill_kwargs, params["timelimit"],
+                                     patch, crossed, seconds, grid)
 
     def filled_one(position):  # run_jobs counts positions in ``order``; the caller wants hole ids
         progress(order[position], len(order))
@@ -328,7 +337,12 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
             continue
         filled.append((i, np.asarray(loops[i].vertices, np.int64), outcome, seconds))
     if params["selfintersection"]:
-        _check_here(V, F, filled, checked)
+        for position in _check_here(V, F, filled, checked):
+            i, loop, patch, seconds = filled[position]
+            if checked[i][0]:
+                fills[i] = (None,) + fills[i][1:]
+                patch, checked[i], seconds = refill_clear(i, patch, checked[i], seconds)
+                filled[position] = (i, loop, patch, seconds)
     done_loops, patches, closed_ids, crossing = [], [], [], []
     for i, loop, patch, seconds in filled:
         entry = report[i]
@@ -385,16 +399,58 @@ def _mesh_crossings(V, F, loop, patch, candidates=None, grid=None):
 
 
 def _check_here(V, F, filled, checked):
-    """Check, in this process, the patches no job checked, adding them to ``checked``.
+    """Check, in this process, the patches no job checked, adding them to ``checked``; their positions in ``filled``.
 
     Their mesh faces are found in one pass over the mesh for the union of their boxes.
     """
-    todo = [(i, loop, patch) for i, loop, patch, _ in filled if i not in checked]
+    todo = [position for position, (i, _, _, _) in enumerate(filled) if i not in checked]
     if not todo:
-        return
-    candidates = face_boxes_near(V, F, np.stack([patch_box(p.all_points(V[loop])) for _, loop, p in todo]))
-    for i, loop, patch in todo:
+        return todo
+    boxes = [patch_box(filled[position][2].all_points(V[filled[position][1]])) for position in todo]
+    candidates = face_boxes_near(V, F, np.stack(boxes))
+    for position in todo:
+        i, loop, patch, _ = filled[position]
         checked[i] = _mesh_crossings(V, F, loop, patch, candidates)
+    return todo
+
+
+# A patch that crosses the mesh beyond its hole's rings is filled once more with the mesh faces
+# near it as obstacles: those overlapping its box grown by this fraction of the box's diagonal
+# on every side, so that a patch of another shape still meets them.
+OBSTACLE_MARGIN = 0.25
+
+
+def _refill_clear_of_mesh(V, F, loop, incidence, rings, index, fill, fill_kwargs, timelimit, patch, crossed, seconds,
+                          grid=None):
+    """Fill a hole again, seeing the mesh faces its patch crossed: (patch, (crossings, seconds), seconds).
+
+    A filter sees only its hole's rings (:class:`.holes.HoleContext`), so its own crossing
+    avoidance cannot act on a face beyond them: a large hole under steep walls, a part of
+    another component. The hole is filled once more with every mesh face near the crossing
+    patch as ``obstacles`` of its context (:attr:`.holes.HoleContext.obstacle_faces`), then
+    checked against the mesh again. Where that fill fails too or still crosses, or the time
+    limit leaves no time for it, the first patch and its crossings are returned, so the
+    hole is reported as it was. ``crossed`` is the first check's (faces crossed, seconds);
+    ``seconds``, the first fill's, and the time returned includes it.
+    """
+    t0 = time.perf_counter()
+    left = timelimit - seconds if timelimit > 0 else 0.0
+    if timelimit > 0 and left <= 0:
+        return patch, crossed, seconds
+    points = patch.all_points(V[loop.vertices])
+    box = patch_box(points)
+    box += np.array([[-1.0], [1.0]]) * OBSTACLE_MARGIN * float(np.linalg.norm(box[1] - box[0]))
+    near = face_boxes_near(V, F, box[None])[0] if grid is None else grid.near(box)[0]
+    try:
+        ctx = hole_context(V, F, loop, incidence, rings=rings, index=index, obstacles=near)
+    except FILL_ERRORS:
+        return patch, crossed, seconds + time.perf_counter() - t0
+    outcome, _ = fill_one(fill, ctx, fill_kwargs, left)
+    if not isinstance(outcome, str):
+        if not _mesh_crossings(V, F, ctx.loop, outcome, grid=grid)[0]:
+            outcome.info["obstacle_faces"] = len(ctx.obstacle_faces)
+            return outcome, (0, crossed[1]), seconds + time.perf_counter() - t0
+    return patch, crossed, seconds + time.perf_counter() - t0
 
 
 def _explain_outlines(V, F, crossing, report, incidence):

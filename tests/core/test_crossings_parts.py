@@ -101,6 +101,44 @@ def test_patch_touching_another_part_at_a_coincident_vertex_is_refused(touching_
     assert hole["status"] == "failed" and "intersect the mesh" in hole["reason"]
 
 
+@pytest.fixture(scope="module")
+def ball_under_the_cap():
+    """A sphere without its cap above z = 0.8 and a small closed ball where the cap was, beyond the hole's rings."""
+    Va, Fa = generated("create_sphere", radius=1.0, subdiv=4)
+    Vb, Fb = generated("create_sphere", radius=0.03, subdiv=2)
+    return merged([(Va, Fa[Va[Fa, 2].max(axis=1) < 0.8]), (Vb + [0.1, 0.0, 0.95], Fb)])
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
+def test_a_part_the_patch_would_cross_beyond_the_rings_is_avoided(ball_under_the_cap, algorithm):
+    # A patch following the sphere passes through the ball, which lies outside the faces a filter
+    # sees around its hole. The hole is filled once more with the faces near that patch as obstacles
+    # of its context: curve unfolding and LS-SVM then close it clear of the ball (before, both failed).
+    V, F = ball_under_the_cap
+    V2, F2, result = fill_holes(V, F, algorithm, maxholesize=1000)
+    hole = result["holes"][0]
+    assert result["closed_holes"] == 1 and hole["status"] == "closed"
+    assert boundary_loops(F2) == []
+    new = np.arange(len(F), len(F2))
+    assert len(faces_intersecting(V2, F2, new, np.arange(len(F2)), weld=False)) == 0
+    assert not np.any(meshlab_crossing_faces(V2, F2) >= len(F))
+    assert np.array_equal(V2[:len(V)], V) and np.array_equal(F2[:len(F)], F)
+    if algorithm in ("curve_unfolding", "lssvm_poisson"):
+        assert hole["obstacle_faces"] > 0
+
+
+def test_the_second_fill_is_the_same_in_a_worker(ball_under_the_cap):
+    V, F = ball_under_the_cap
+    # a second hole, so that two workers fill at once
+    F = F[np.linalg.norm(V[F].mean(axis=1) - [0.0, 0.0, -1.0], axis=1) > 0.3]
+    one = fill_holes(V, F, "lssvm_poisson", workers=1)
+    two = fill_holes(V, F, "lssvm_poisson", workers=2)
+    assert [h["status"] for h in one[2]["holes"]] == ["closed", "closed"]
+    assert sum(h.get("obstacle_faces", 0) > 0 for h in one[2]["holes"]) == 1
+    assert np.array_equal(one[0], two[0]) and np.array_equal(one[1], two[1])
+    assert [h.get("obstacle_faces") for h in one[2]["holes"]] == [h.get("obstacle_faces") for h in two[2]["holes"]]
+
+
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 100_000))
 def test_weld_false_is_the_shared_index_test_and_counts_coincident_contacts(seed):

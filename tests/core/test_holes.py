@@ -108,6 +108,29 @@ def test_hole_context_rings_scale_and_normals():
         assert i in face and (i + 1) % k in face
 
 
+def test_obstacle_faces_beyond_the_rings_share_the_rings_vertices_and_only_the_crossing_checks_see_them():
+    V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.3)
+    loop = boundary_loops(F)[0]
+    incidence = vertex_face_incidence(F, len(V))
+    plain = hole_context(V, F, loop, incidence, rings=2)
+    near = np.flatnonzero(V[F, 2].max(axis=1) > 0.6)  # the rings and faces beyond them
+    ctx = hole_context(V, F, loop, incidence, rings=2, obstacles=near)
+    for name in ("vertices", "faces", "normals", "depth", "edge_scale", "forbidden_edges"):
+        assert np.array_equal(getattr(ctx, name), getattr(plain, name))
+    assert plain.surroundings()[1] is plain.faces and len(plain.obstacle_faces) == 0
+    ring_faces = set(plain.extra["global_faces"].tolist())
+    assert len(ctx.obstacle_faces) == len(set(near.tolist()) - ring_faces) > 0
+    X, S = ctx.surroundings()
+    # every obstacle face is a mesh face, in the local numbering of the rings' vertices then the new ones
+    local_to_global = np.concatenate([ctx.global_index, np.flatnonzero(np.isin(np.arange(len(V)), F[near]) &
+                                                                       ~np.isin(np.arange(len(V)), ctx.global_index))])
+    assert np.array_equal(X, V[local_to_global])
+    beyond = set(map(tuple, np.sort(F[np.setdiff1d(near, plain.extra["global_faces"])], axis=1).tolist()))
+    assert set(map(tuple, np.sort(local_to_global[S[len(ctx.faces):]], axis=1).tolist())) == beyond
+    # faces touching the rings use the rings' vertices, not copies of them
+    assert np.any(S[len(ctx.faces):] < len(ctx.vertices))
+
+
 def test_loop_measures_of_a_planar_circle():
     t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
     P = np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], 1)

@@ -38,10 +38,11 @@ def crossing_faces(ctx, vertices, faces):
     -------
     (h,) int64  indices into ``faces``
     """
-    k, n_ctx = ctx.size, len(ctx.vertices)
-    X = np.concatenate([ctx.vertices, vertices])
+    surrounding_points, surrounding_faces = ctx.surroundings()
+    k, n_ctx = ctx.size, len(surrounding_points)
+    X = np.concatenate([surrounding_points, vertices])
     joint = np.where(faces < k, faces, faces - k + n_ctx)
-    allF = np.concatenate([joint, ctx.faces])
+    allF = np.concatenate([joint, surrounding_faces])
     return faces_intersecting(X, allF, np.arange(len(faces)), np.arange(len(allF)))
 
 

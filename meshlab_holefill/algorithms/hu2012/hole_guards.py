@@ -146,13 +146,14 @@ def patch_crossings(ctx, patch_points, patch_faces, faces=None):
     -------
     (t,) int64 sorted indices into the tested faces
     """
-    k, n_local = ctx.size, len(ctx.vertices)
+    surrounding_points, surrounding_faces = ctx.surroundings()
+    k, n_local = ctx.size, len(surrounding_points)
     test = np.asarray(patch_faces if faces is None else faces, np.int64).reshape(-1, 3)
-    if len(test) == 0 or len(ctx.faces) == 0:
+    if len(test) == 0 or len(surrounding_faces) == 0:
         return np.zeros(0, np.int64)
-    X = np.concatenate([ctx.vertices, np.asarray(patch_points)[k:]])
+    X = np.concatenate([surrounding_points, np.asarray(patch_points)[k:]])
     local = np.where(test >= k, test - k + n_local, test)
-    allF = np.concatenate([local, ctx.faces])
+    allF = np.concatenate([local, surrounding_faces])
     # The two face sets are disjoint, so every pair has its tested face first: faces_intersecting's
     # answer, without its membership tests for pairs listed the other way round.
     pairs = intersecting_pairs(X, allF, np.arange(len(local)), np.arange(len(local), len(allF)))

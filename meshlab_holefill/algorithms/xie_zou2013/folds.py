@@ -35,8 +35,9 @@ def crossing_triangles(ctx, max_size=60):
     if k > max_size or k < 3:
         return set()
     T = np.array([t for t in np.ndindex(k, k, k) if t[0] < t[1] < t[2]], np.int64)
-    X = np.concatenate([ctx.points, ctx.vertices[k:]])
-    allF = np.concatenate([T, ctx.faces])
+    surrounding_points, surrounding_faces = ctx.surroundings()
+    X = np.concatenate([ctx.points, surrounding_points[k:]])
+    allF = np.concatenate([T, surrounding_faces])
     hits = faces_intersecting(X, allF, np.arange(len(T)), np.arange(len(T), len(allF)))
     return set(map(tuple, T[np.asarray(hits, np.int64)].tolist()))
 

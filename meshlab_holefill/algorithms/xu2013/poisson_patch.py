@@ -253,7 +253,7 @@ def initial_patches(ctx, merge_factor, failures):
     try:
         new_vertices, F, stats = advancing_front_triangulation(
             P, ctx.forbidden_edges, merge_factor, reference_normal=reference_normals(ctx),
-            obstacles=(ctx.vertices, ctx.faces))
+            obstacles=ctx.surroundings())
         stats["domain"] = "3d"
         yield np.concatenate([P, new_vertices]), F, stats, None
     except HoleFillError as exc:
