@@ -55,12 +55,14 @@ from ...geometry.refine import refine_patch
 from ...geometry.segments import polygon_edges_touch
 from .hole_guards import LoopSectors, patch_crossings, patch_guard, relax_in_sectors, swaps_crossing
 from ...core.patch import Patch
+from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
 from .tangential_smoothing import tangential_smoothing
 from .min_angle_triangulation import min_angle_triangulation
 from ._projection_kernels import projected_turns
 
-__all__ = ["fill", "FAIRED_OPTIONS", "PARAMS", "RINGS", "WARM_UP", "warm_up", "relaxation_guard", "embeds_in_projection"]
+__all__ = ["fill", "FAIRED_OPTIONS", "PARAMS", "RINGS", "WARM_UP", "warm_up", "hole_plane_triangulation", "relaxation_guard",
+           "embeds_in_projection"]
 
 RINGS = 2
 # The faired option set (filters/close_holes_min_angle_bilateral_faired.mlx), the fallback's patch.
@@ -106,7 +108,8 @@ PARAMS = [
               "Beyond the paper, used only where the paper's patch would be rejected: when it still crosses the "
               "mesh after the guarded refinement and fewer filter iterations, the patch of the faired option "
               "set (fairing=thinplate, iterations=0, smoothing=10) is taken instead if that one crosses nothing; "
-              "otherwise the hole is reported failed as before."),
+              "where the initial triangulation itself crosses, the same steps are tried from a triangulation about "
+              "the hole's own plane; otherwise the hole is reported failed as before."),
     ParamSpec("filter_guard", "float", 0.3,
               "Guard on the bilateral step: a move that would leave a new triangle with quality 2r/R below "
               "min(filter_guard, its quality before), or flip it, is undone; 0 turns the guard off.",
@@ -345,7 +348,7 @@ def _crosses_uncached(ctx, V, F):
 
 
 def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairing="none", relaxation="angles",
-         neighbourhood="ring", filter_guard=0.3, smoothing=0, fallback=True):
+         neighbourhood="ring", filter_guard=0.3, smoothing=0, fallback=True, initial=None):
     """Fill one hole by Hu et al.'s three steps (Sec. III.B-III.D).
 
     The modified minimum-angle triangulation (:func:`.min_angle_triangulation.min_angle_triangulation`),
@@ -375,7 +378,11 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
         Beyond the paper: rounds of tangential smoothing of the new vertices.
     fallback : bool
         Beyond the paper: a patch that still crosses the mesh is replaced by the
-        :data:`FAIRED_OPTIONS` patch when that one crosses nothing.
+        :data:`FAIRED_OPTIONS` patch when that one crosses nothing, and, where the initial
+        triangulation itself crosses the mesh or itself, by the patches grown from
+        :func:`hole_plane_triangulation` (paper's steps, then faired) when one of them crosses nothing.
+    initial : (k - 2, 3) int, optional
+        The initial triangulation to refine instead of Sec. III.B's (the fallbacks' own).
 
     Returns
     -------
@@ -408,7 +415,7 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     """
     k = ctx.size
     t0 = time.perf_counter()
-    F0 = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges)
+    F0 = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges) if initial is None else initial
     t1 = time.perf_counter()
     loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
     fixed = np.concatenate([loop_edges, ctx.forbidden_edges.reshape(-1, 2)])
@@ -442,13 +449,48 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     t3 = time.perf_counter()
     info.update(initial_faces=len(F0), triangulation_seconds=t1 - t0, refinement_seconds=t2 - t1,
                 filter_seconds=t3 - t2, fallback=None)
-    faired_already = {"fairing": fairing, "iterations": iterations, "smoothing": smoothing} == FAIRED_OPTIONS
-    if fallback and not faired_already and _crosses(ctx, V, F):
-        # A large, strongly curved hole: the flat minimum-angle surface and the filter's moves along
-        # the normals keep crossing the mesh, where a faired patch bends away from it.
-        faired = fill(ctx, alpha=alpha, sigma_c=sigma_c, sigma_s=sigma_s, relaxation=relaxation,
-                      neighbourhood=neighbourhood, filter_guard=filter_guard, fallback=False, **FAIRED_OPTIONS)
-        if not _crosses(ctx, faired.all_points(ctx.points), faired.faces):
-            faired.info["fallback"] = "faired"
-            return faired
+    if not fallback or not _crosses(ctx, V, F):
+        return Patch(vertices=V[k:], faces=F, info=info)
+    same = dict(alpha=alpha, sigma_c=sigma_c, sigma_s=sigma_s, relaxation=relaxation, neighbourhood=neighbourhood,
+                filter_guard=filter_guard, fallback=False)
+    options = dict(fairing=fairing, iterations=iterations, smoothing=smoothing)
+    # A large, strongly curved hole: the flat minimum-angle surface and the filter's moves along
+    # the normals keep crossing the mesh, where a faired patch bends away from it.
+    tries = [("faired", F0, FAIRED_OPTIONS)] if options != FAIRED_OPTIONS else []
+    if _crosses(ctx, ctx.points, F0):
+        # The triangulation folds already: a cut across walls standing on the hole's plane.
+        plane = hole_plane_triangulation(ctx.points, ctx.forbidden_edges)
+        tries += [("hole plane", plane, options), ("hole plane, faired", plane, FAIRED_OPTIONS)]
+    for name, initial, chosen in tries:
+        patch = fill(ctx, initial=initial, **same, **chosen)
+        if not _crosses(ctx, patch.all_points(ctx.points), patch.faces):
+            patch.info["fallback"] = name
+            return patch
     return Patch(vertices=V[k:], faces=F, info=info)
+
+
+def hole_plane_triangulation(P, forbidden_edges=()):
+    """Sec. III.B's triangulation with every vertex normal replaced by the loop's own normal (beyond the paper).
+
+    Eq. 2 tells convex from concave boundary vertices by the vertex normals of the mesh. Where
+    the mesh stands on the hole's plane (a model cut across, its walls meeting the cut at right
+    angles), those normals lie in that plane, orthogonal to every ear's normal, and the test
+    decides by noise: the triangulation folds over itself (bone.ply cut at 40 % of its height,
+    85 edges: 67 pairs of its triangles cross) or through the walls (cow.obj at 20 % along x).
+    About the loop's vector-area normal the same procedure is ear cutting in the hole's plane.
+
+    Parameters
+    ----------
+    P : (k, 3) float64  loop points, patch orientation
+    forbidden_edges : (p, 2) int
+
+    Returns
+    -------
+    F : (k - 2, 3) int64
+    """
+    P = np.asarray(P, np.float64)
+    n = np.cross(P - P[0], np.roll(P, -1, axis=0) - P[0]).sum(axis=0)
+    length = np.linalg.norm(n)
+    if not length > 0:
+        raise HoleFillError("the hole's loop encloses no area: it has no plane")
+    return min_angle_triangulation(P, np.tile(n / length, (len(P), 1)), forbidden_edges)

@@ -755,3 +755,49 @@ def test_a_patch_that_crosses_nothing_is_the_papers():
     patch, paper = fill(ctx), fill(ctx, fallback=False)
     assert patch.info["fallback"] is None
     assert np.array_equal(patch.vertices, paper.vertices) and np.array_equal(patch.faces, paper.faces)
+
+
+def cut_across(name, axis, share):
+    """A sample mesh without the faces reaching below ``share`` of its extent along ``axis``, and its largest loop."""
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample(name))
+    V, F = mesh_arrays(ms)
+    h = V[:, axis]
+    F = F[V[F, axis].min(axis=1) > h.min() + share * (h.max() - h.min())]
+    return V, F, max(boundary_loops(F), key=len)
+
+
+@pytest.mark.parametrize("name, axis, share, chosen", [("bone.ply", 2, 0.4, "hole plane, faired"),
+                                                       ("cow.obj", 0, 0.2, "hole plane")])
+def test_a_cut_across_walls_is_triangulated_about_the_holes_plane(name, axis, share, chosen):
+    """Cut across, the mesh stands on the hole's plane: its vertex normals lie in that plane, Eq. 2's
+    convexity test decides by noise and the triangulation folds over itself or through the walls. About
+    the loop's own normal it does not fold, and the patch grown from it crosses nothing (before, the
+    hole failed)."""
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import RINGS, _crosses, hole_plane_triangulation
+    from meshlab_holefill.array_api import fill_holes
+    from meshlab_holefill.geometry.intersections import intersecting_pairs
+
+    V, F, loop = cut_across(name, axis, share)
+    ctx = hole_context(V, F, loop, rings=RINGS)
+    paper = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges)
+    assert _crosses(ctx, ctx.points, paper)  # itself (the bone: 67 pairs of its triangles) or the walls (the cow)
+    plane = hole_plane_triangulation(ctx.points, ctx.forbidden_edges)
+    assert len(intersecting_pairs(ctx.points, plane, np.arange(len(plane)), np.arange(len(plane)))) == 0
+    without = fill(ctx, fallback=False)
+    assert _crosses(ctx, without.all_points(ctx.points), without.faces)
+    patch = fill(ctx)
+    assert patch.info["fallback"] == chosen
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    V2, F2, res = fill_holes(V, F, "min_angle_bilateral", maxholesize=400)
+    assert res["failed_holes"] == 0 and res["holes"][0]["fallback"] == chosen
+    assert_filled_cleanly(V, F, V2, F2)
+
+
+def test_a_loop_without_area_has_no_plane():
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import hole_plane_triangulation
+    from meshlab_holefill.errors import HoleFillError
+
+    there_and_back = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 0, 0.0]])
+    with pytest.raises(HoleFillError, match="encloses no area"):
+        hole_plane_triangulation(there_and_back)
