@@ -13,7 +13,7 @@ import hashlib
 
 import numpy as np
 
-from ...geometry.intersections import faces_intersecting
+from ...core.crossings import context_crossings
 from ...geometry.quality import triangle_quality
 from ...geometry.topology import edge_pair_set
 from .unfolded_triangulation import triangulate_and_embed
@@ -38,12 +38,7 @@ def crossing_faces(ctx, vertices, faces):
     -------
     (h,) int64  indices into ``faces``
     """
-    surrounding_points, surrounding_faces = ctx.surroundings()
-    k, n_ctx = ctx.size, len(surrounding_points)
-    X = np.concatenate([surrounding_points, vertices])
-    joint = np.where(faces < k, faces, faces - k + n_ctx)
-    allF = np.concatenate([joint, surrounding_faces])
-    return faces_intersecting(X, allF, np.arange(len(faces)), np.arange(len(allF)))
+    return context_crossings(ctx, np.concatenate([ctx.points, vertices]), np.asarray(faces, np.int64).reshape(-1, 3))
 
 
 def _corner_angle(P, keep, v):
