@@ -306,14 +306,13 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
             return None, reason_of(exc), time.perf_counter() - t0, None
         context_seconds = time.perf_counter() - t0
         outcome, seconds = fill_one(fill, ctx, fill_kwargs, params["timelimit"])
-        key, crossed = _context_key(ctx), None
+        key, crossed, seconds = _context_key(ctx), None, context_seconds + seconds
         if check_in_job and not isinstance(outcome, str):
             crossed = _mesh_crossings(V, F, ctx.loop, outcome, grid=grid)
             if crossed[0]:
                 key = None  # the fill depends on more of the mesh than the context: never reused
-                outcome, crossed, seconds = refill_clear(i, outcome, crossed, context_seconds + seconds, grid)
-                return key, outcome, seconds, crossed
-        return key, outcome, context_seconds + seconds, crossed
+                outcome, crossed, seconds = refill_clear(i, outcome, crossed, seconds, grid)
+        return key, outcome, seconds, crossed
 
     def refill_clear(i, patch, crossed, seconds, grid=None):
         return _refill_clear_of_mesh(V, F, loops[i], incidence, rings, i, fill, fill_kwargs, params["timelimit"],

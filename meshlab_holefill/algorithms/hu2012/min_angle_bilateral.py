@@ -44,6 +44,7 @@ the benchmark met); the same with alpha=1.55: 0.22 / 2.10 / 4.71, 0.862, 0; Mesh
 """
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -456,13 +457,17 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     options = dict(fairing=fairing, iterations=iterations, smoothing=smoothing)
     # A large, strongly curved hole: the flat minimum-angle surface and the filter's moves along
     # the normals keep crossing the mesh, where a faired patch bends away from it.
-    tries = [("faired", F0, FAIRED_OPTIONS)] if options != FAIRED_OPTIONS else []
+    faired = options == FAIRED_OPTIONS
+    tries = [] if faired else [("faired", lambda: F0, FAIRED_OPTIONS)]
     if _crosses(ctx, ctx.points, F0):
         # The triangulation folds already: a cut across walls standing on the hole's plane.
-        plane = hole_plane_triangulation(ctx.points, ctx.forbidden_edges)
-        tries += [("hole plane", plane, options), ("hole plane, faired", plane, FAIRED_OPTIONS)]
+        plane = functools.cache(lambda: hole_plane_triangulation(ctx.points, ctx.forbidden_edges))
+        tries += [("hole plane", plane, options)] + ([] if faired else [("hole plane, faired", plane, FAIRED_OPTIONS)])
     for name, initial, chosen in tries:
-        patch = fill(ctx, initial=initial, **same, **chosen)
+        try:
+            patch = fill(ctx, initial=initial(), **same, **chosen)
+        except HoleFillError:  # the hole fails for the paper's patch, not for a fallback's
+            continue
         if not _crosses(ctx, patch.all_points(ctx.points), patch.faces):
             patch.info["fallback"] = name
             return patch
