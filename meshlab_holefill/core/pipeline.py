@@ -18,8 +18,8 @@ import numpy as np
 from dataclasses import dataclass
 
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
-from .crossings import (clashing_patches, crossing_patches, face_boxes_near, load_face_boxes_kernel, patch_box,
-                        patch_intersections)
+from .crossings import (clashing_patches, context_crossings, crossing_patches, face_boxes_near, load_face_boxes_kernel,
+                        patch_box, patch_intersections)
 from .face_grid import face_grid
 from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .kernel_cache import refresh_kernel_cache_once
@@ -429,7 +429,8 @@ def _refill_clear_of_mesh(V, F, loop, incidence, rings, index, fill, fill_kwargs
     patch as ``obstacles`` of its context (:attr:`.holes.HoleContext.obstacle_faces`), then
     checked against the mesh again. Where that fill fails too or still crosses, or the time
     limit leaves no time for it, the first patch and its crossings are returned, so the
-    hole is reported as it was. ``crossed`` is the first check's (faces crossed, seconds);
+    hole is reported as it was; so are they, without a second fill, where the patch crosses
+    itself or the faces its filter saw (its avoidance has failed on what it could see). ``crossed`` is the first check's (faces crossed, seconds);
     ``seconds``, the first fill's, and the time returned includes it.
     """
     t0 = time.perf_counter()
@@ -439,8 +440,11 @@ def _refill_clear_of_mesh(V, F, loop, incidence, rings, index, fill, fill_kwargs
     points = patch.all_points(V[loop.vertices])
     box = patch_box(points)
     box += np.array([[-1.0], [1.0]]) * OBSTACLE_MARGIN * float(np.linalg.norm(box[1] - box[0]))
-    near = face_boxes_near(V, F, box[None])[0] if grid is None else grid.near(box)[0]
     try:
+        if len(context_crossings(hole_context(V, F, loop, incidence, rings=rings, index=index), points, patch.faces)):
+            # It crosses faces its filter saw already, or itself: more faces to avoid cannot help it.
+            return patch, crossed, seconds + time.perf_counter() - t0
+        near = face_boxes_near(V, F, box[None])[0] if grid is None else grid.near(box)[0]
         ctx = hole_context(V, F, loop, incidence, rings=rings, index=index, obstacles=near)
     except FILL_ERRORS:
         return patch, crossed, seconds + time.perf_counter() - t0

@@ -349,7 +349,7 @@ def _crosses_uncached(ctx, V, F):
 
 
 def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairing="none", relaxation="angles",
-         neighbourhood="ring", filter_guard=0.3, smoothing=0, fallback=True, initial=None):
+         neighbourhood="ring", filter_guard=0.3, smoothing=0, fallback=True):
     """Fill one hole by Hu et al.'s three steps (Sec. III.B-III.D).
 
     The modified minimum-angle triangulation (:func:`.min_angle_triangulation.min_angle_triangulation`),
@@ -382,8 +382,6 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
         :data:`FAIRED_OPTIONS` patch when that one crosses nothing, and, where the initial
         triangulation itself crosses the mesh or itself, by the patches grown from
         :func:`hole_plane_triangulation` (paper's steps, then faired) when one of them crosses nothing.
-    initial : (k - 2, 3) int, optional
-        The initial triangulation to refine instead of Sec. III.B's (the fallbacks' own).
 
     Returns
     -------
@@ -414,6 +412,14 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
     >>> examples.is_disc_patch(patch, ctx)  # closes the loop exactly once, as a disc
     True
     """
+    return _patch_from(ctx, None, alpha=alpha, sigma_c=sigma_c, sigma_s=sigma_s, iterations=iterations, fairing=fairing,
+                       relaxation=relaxation, neighbourhood=neighbourhood, filter_guard=filter_guard,
+                       smoothing=smoothing, fallback=fallback)
+
+
+def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, relaxation, neighbourhood, filter_guard,
+                smoothing, fallback):
+    """:func:`fill`'s steps from the initial triangulation ``initial`` ((k - 2, 3) int; None: Sec. III.B's)."""
     k = ctx.size
     t0 = time.perf_counter()
     F0 = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges) if initial is None else initial
@@ -465,7 +471,7 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
         tries += [("hole plane", plane, options)] + ([] if faired else [("hole plane, faired", plane, FAIRED_OPTIONS)])
     for name, initial, chosen in tries:
         try:
-            patch = fill(ctx, initial=initial(), **same, **chosen)
+            patch = _patch_from(ctx, initial(), **same, **chosen)
         except HoleFillError:  # the hole fails for the paper's patch, not for a fallback's
             continue
         if not _crosses(ctx, patch.all_points(ctx.points), patch.faces):
