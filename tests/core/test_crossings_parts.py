@@ -5,6 +5,8 @@ torus through them), so many of the mesh's own faces already cross faces of othe
 next to the intersection curves; every filter's result is checked with the index-based test that
 MeshLab's per-face self-intersection test applies (``weld=False``) and with MeshLab's test itself.
 """
+import dataclasses
+
 import numpy as np
 import pymeshlab
 import pytest
@@ -151,3 +153,29 @@ def test_weld_false_is_the_shared_index_test_and_counts_coincident_contacts(seed
     # welded coordinates give the shared-vertex answer, index-only gives a contact
     assert (len(intersecting_pairs(apart_V, apart_F, [0], [1])) > 0) == by_index
     assert len(intersecting_pairs(apart_V, apart_F, [0], [1], weld=False)) == 1
+
+
+def test_a_second_fill_runs_only_for_a_patch_clear_of_what_its_filter_saw():
+    from meshlab_holefill.algorithms.hu2012 import RINGS, fill
+    from meshlab_holefill.core.holes import hole_context, vertex_face_incidence
+    from meshlab_holefill.core.pipeline import _refill_clear_of_mesh
+
+    V, F = generated("create_sphere", radius=1.0, subdiv=3)
+    F = F[V[F, 2].max(axis=1) < 0.8]
+    loop = boundary_loops(F)[0]
+    incidence = vertex_face_incidence(F, len(V))
+    patch = fill(hole_context(V, F, loop, incidence, rings=RINGS))
+    calls = []
+
+    def counted(ctx, **kwargs):
+        calls.append(len(ctx.obstacle_faces))
+        return fill(ctx, **kwargs)
+
+    def second(p):
+        calls.clear()
+        return _refill_clear_of_mesh(V, F, loop, incidence, RINGS, 0, counted, {}, 0.0, p, (5, 0.0), 0.0)[0]
+
+    through = dataclasses.replace(patch, vertices=patch.vertices * [1, 1, -2.5])  # down through the far side
+    assert second(through) is not through and calls[0] > 0  # filled again, with the faces it crossed as obstacles
+    folded = dataclasses.replace(patch, vertices=patch.vertices[::-1].copy())  # its new vertices shuffled: it crosses itself
+    assert second(folded) is folded and calls == []
