@@ -142,7 +142,8 @@ PARAMS = [
     ParamSpec("repair", "bool", True,
               "Beyond the paper: when the patch crosses the surrounding mesh, take the best patch of the loop's "
               "simple developments that crosses nothing; if none does, clip the ears of the boundary vertices "
-              "involved and fill the remaining loop again (up to 4 rounds)."),
+              "involved and fill the remaining loop again (up to 4 rounds); a patch still crossing is replaced "
+              "by the one made without the tangential relaxation if that one crosses nothing."),
     ParamSpec("swaps", "bool", True,
               "Beyond the paper: after the embedding, swap patch edges whose swap raises the lower quality of "
               "the two triangles and solve the energy again on the new connectivity (up to 4 rounds, the best "
@@ -213,7 +214,11 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         Its area bound (:func:`.unfolded_triangulation.triangulate_and_embed`).
     fallback, repair, swaps, tangential, slivers : bool
         Beyond the paper: development fallback, crossing repair, quality swaps, tangential relaxation,
-        sliver repair (:func:`.slivers.repair_slivers`).
+        sliver repair (:func:`.slivers.repair_slivers`). With ``repair`` and ``tangential``, a patch
+        still crossing the mesh or itself is replaced by the patch made without the tangential
+        relaxation when that one crosses nothing (``info['fallback']``): the relaxation can leave a
+        fold the energy's own placement does not make (a 308-edge hole of cow.obj Loop-subdivided
+        twice, ``scripts/large_holes.py``: 146 faces of the patch crossing it, none without).
     seed : int
         Seed of the annealing.
     area_rows : {'mesh', 'interior'}
@@ -256,6 +261,21 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     >>> examples.is_disc_patch(patch, ctx)  # closes the loop exactly once, as a disc
     True
     """
+    params = dict(locals())
+    del params["ctx"]
+    patch = _fill_steps(ctx, **params)
+    if repair and tangential and patch.info["crossing_faces"] and len(crossing_faces(ctx, patch.vertices, patch.faces)):
+        # The tangential relaxation can leave a fold in the patch that the paper's placement does not make.
+        plain = _fill_steps(ctx, **dict(params, tangential=False))
+        if not len(crossing_faces(ctx, plain.vertices, plain.faces)):
+            plain.info["fallback"] = "no tangential relaxation"
+            return plain
+    return patch
+
+
+def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,
+                repair, swaps, tangential, seed, area_rows, max_domain_area, density, slivers, lengths, domain):
+    """The steps of :func:`fill` with its parameters, without its last fallback."""
     P = ctx.points
     m = ctx.size
     rng = np.random.default_rng(seed)
@@ -265,7 +285,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m) if m > 3 else None
     planar_domains = PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
     if domain == "smoothest" and m > 3 and development_domain(planar_domains)[0] is not None:
-        return smoothest_patch(ctx, lambda choice: fill(
+        return smoothest_patch(ctx, lambda choice: _fill_steps(
             ctx, k=k, temperature=temperature, epsilon=epsilon, max_restarts=max_restarts, sa_steps=sa_steps,
             step_bound=step_bound, energy=energy, refinement=refinement, fallback=fallback, repair=repair,
             swaps=swaps, tangential=tangential, seed=seed, area_rows=area_rows, max_domain_area=max_domain_area,

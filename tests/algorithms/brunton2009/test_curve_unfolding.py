@@ -28,7 +28,7 @@ from meshlab_holefill.evaluation.metrics import corner_quality_bound
 from meshlab_holefill.core import examples
 from meshlab_holefill.core.patch import validate_patch
 
-from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+from conftest import assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
 
 
 # ----------------------------------------------------------------------------- shapes
@@ -1056,3 +1056,30 @@ def test_smoothest_prefers_a_patch_that_crosses_nothing_and_survives_one_failed_
 
     with pytest.raises(HoleFillError, match="unfolding failed"):
         smoothest_patch(ctx, both_fail)
+
+
+def test_a_patch_the_tangential_relaxation_folds_is_made_again_without_it():
+    """A 308-edge hole of cow.obj Loop-subdivided twice (``scripts/large_holes.py``, seed 2): with the tangential
+    relaxation the patch crosses itself (146 faces, every domain); without it, it crosses nothing."""
+    from meshlab_holefill.array_api import fill_holes
+    from meshlab_holefill.core.holes import boundary_loops, hole_context
+    from meshlab_holefill.evaluation.cut_holes import cut_holes
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("cow.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    _, holes = cut_holes(V, F, sizes=["irregular", "irregular", "large"], seed=2, strict=False)
+    removed = np.zeros(len(F), bool)
+    removed[holes[0].face_indices] = True
+    F = F[~removed]
+    ctx = hole_context(V, F, max(boundary_loops(F), key=len), rings=cu.RINGS)
+    assert ctx.size == 308
+    relaxed = cu._fill_steps(ctx, **{p.name: p.default for p in cu.PARAMS})  # the filter before its fallback
+    assert len(crossing_repair.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) > 100
+    patch = cu.fill(ctx)
+    assert patch.info["fallback"] == "no tangential relaxation"
+    assert len(crossing_repair.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+    V2, F2, result = fill_holes(V, F, "curve_unfolding")
+    assert result["closed_holes"] == 1 and result["holes"][0]["fallback"] == "no tangential relaxation"
+    assert_filled_cleanly(V, F, V2, F2)
