@@ -261,8 +261,7 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     >>> examples.is_disc_patch(patch, ctx)  # closes the loop exactly once, as a disc
     True
     """
-    params = dict(locals())
-    del params["ctx"]
+    params = {name: value for name, value in locals().items() if name != "ctx"}  # the filter's parameters
     patch = _fill_steps(ctx, **params)
     if repair and tangential and patch.info["crossing_faces"] and len(crossing_faces(ctx, patch.vertices, patch.faces)):
         # The tangential relaxation can leave a fold in the patch that the paper's placement does not make.
