@@ -273,8 +273,14 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
 
 
 def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,
-                repair, swaps, tangential, seed, area_rows, max_domain_area, density, slivers, lengths, domain):
-    """The steps of :func:`fill` with its parameters, without its last fallback."""
+                repair, swaps, tangential, seed, area_rows, max_domain_area, density, slivers, lengths, domain,
+                filled=None):
+    """The steps of :func:`fill` with its parameters, without its last fallback.
+
+    ``filled`` maps (planar domain, its kind, its blend) to the patch made on it: everything after
+    the unfolding depends on these alone, so a domain met again reuses that patch with its own
+    unfolding figures.
+    """
     P = ctx.points
     m = ctx.size
     rng = np.random.default_rng(seed)
@@ -284,11 +290,13 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m) if m > 3 else None
     planar_domains = PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
     if domain == "smoothest" and m > 3 and development_domain(planar_domains)[0] is not None:
+        # Where the annealing gives up, the unfolding is the development: that patch is made once.
+        filled = {}
         return smoothest_patch(ctx, lambda choice: _fill_steps(
             ctx, k=k, temperature=temperature, epsilon=epsilon, max_restarts=max_restarts, sa_steps=sa_steps,
             step_bound=step_bound, energy=energy, refinement=refinement, fallback=fallback, repair=repair,
             swaps=swaps, tangential=tangential, seed=seed, area_rows=area_rows, max_domain_area=max_domain_area,
-            density=density, slivers=slivers, lengths=lengths, domain=choice))
+            density=density, slivers=slivers, lengths=lengths, domain=choice, filled=filled))
     Q, unfold_info = development_domain(planar_domains) if domain == "development" and m > 3 else (None, None)
     if Q is None:
         Q, unfold_info = unfold_loop(P, rng, k=k, temperature=temperature, epsilon=epsilon,
@@ -301,6 +309,14 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     Q, method, used = domains[0]
     if method == "development":
         relax = used
+    unfolding_info = {"restarts": unfold_info["restarts"], "loop_lengths": unfold_info.get("loop_lengths", False),
+                      "sa_steps": unfold_info["sa_steps"], "energy_pe_start": unfold_info.get("energy_pe_start", 0.0),
+                      "energy_pe_end": unfold_info.get("energy_pe_end", 0.0)}
+    key = (np.ascontiguousarray(Q, np.float64).tobytes(), method, used)
+    if filled is not None and key in filled:
+        done = filled[key]
+        return Patch(vertices=done.vertices.copy(), faces=done.faces.copy(),
+                     info={**done.info, **unfolding_info, "unfolding_seconds": time.perf_counter() - t0})
     t1 = time.perf_counter()
     records = []  # planar triangulations of the patches built, for the resampling
     vertices, faces = triangulate_and_embed(ctx, Q, np.arange(m), [], energy, refinement, tangential, density,
@@ -346,11 +362,7 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     t6 = time.perf_counter()
     info = {
         "unfolding": method,
-        "restarts": unfold_info["restarts"],
-        "loop_lengths": unfold_info.get("loop_lengths", False),
-        "sa_steps": unfold_info["sa_steps"],
-        "energy_pe_start": unfold_info.get("energy_pe_start", 0.0),
-        "energy_pe_end": unfold_info.get("energy_pe_end", 0.0),
+        **unfolding_info,
         "development_relax": relax,
         "ears_clipped": clipped,
         "edge_swaps": n_swaps,
@@ -364,7 +376,10 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
         "sliver_rounds": sliver_rounds,
         "sliver_seconds": t6 - t5,
     }
-    return Patch(vertices=vertices, faces=faces, info=info)
+    patch = Patch(vertices=vertices, faces=faces, info=info)
+    if filled is not None:
+        filled[key] = patch
+    return patch
 
 
 _WARM = []  # set once the compiled kernels are loaded in this process

@@ -1083,3 +1083,33 @@ def test_a_patch_the_tangential_relaxation_folds_is_made_again_without_it():
     V2, F2, result = fill_holes(V, F, "curve_unfolding")
     assert result["closed_holes"] == 1 and result["holes"][0]["fallback"] == "no tangential relaxation"
     assert_filled_cleanly(V, F, V2, F2)
+
+
+def test_where_the_unfolding_is_the_development_the_smoothest_domain_fills_the_hole_once(monkeypatch):
+    """A 154-edge hole of bone.ply Loop-subdivided twice (``scripts/large_holes.py``, seed 1): the annealing
+    gives up and falls back to the development, so both domains are one; the second is not filled again."""
+    from meshlab_holefill.core.holes import boundary_loops, hole_context
+    from meshlab_holefill.evaluation.cut_holes import cut_holes
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("bone.ply"))
+    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    _, holes = cut_holes(V, F, sizes=["irregular", "irregular", "large"], seed=1, strict=False)
+    removed = np.zeros(len(F), bool)
+    removed[holes[2].face_indices] = True
+    F = F[~removed]
+    ctx = hole_context(V, F, max(boundary_loops(F), key=len), rings=cu.RINGS)
+    unfolding, development = cu.fill(ctx, domain="unfolding"), cu.fill(ctx, domain="development")
+    assert unfolding.info["unfolding"] == "development"  # the annealing's fallback
+    assert np.array_equal(unfolding.vertices, development.vertices)
+    calls = []
+    embed = cu.triangulate_and_embed
+    monkeypatch.setattr(cu, "triangulate_and_embed", lambda *a, **kw: calls.append(1) or embed(*a, **kw))
+    patch = cu.fill(ctx)
+    once = len(calls)
+    calls.clear()
+    cu.fill(ctx, domain="unfolding")
+    assert once == len(calls) > 0
+    assert np.array_equal(patch.vertices, unfolding.vertices) and np.array_equal(patch.faces, unfolding.faces)
+    assert patch.info["domain"] == "unfolding" and patch.info["sa_steps"] == unfolding.info["sa_steps"]
