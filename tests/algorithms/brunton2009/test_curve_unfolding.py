@@ -1058,22 +1058,28 @@ def test_smoothest_prefers_a_patch_that_crosses_nothing_and_survives_one_failed_
         smoothest_patch(ctx, both_fail)
 
 
-def test_a_patch_the_tangential_relaxation_folds_is_made_again_without_it():
-    """A 308-edge hole of cow.obj Loop-subdivided twice (``scripts/large_holes.py``, seed 2): with the tangential
-    relaxation the patch crosses itself (146 faces, every domain); without it, it crosses nothing."""
-    from meshlab_holefill.array_api import fill_holes
+def large_hole(name, seed, hole):
+    """(V, F, HoleContext) of one hole of ``scripts/large_holes.py``: the sample Loop-subdivided twice, that hole cut."""
     from meshlab_holefill.core.holes import boundary_loops, hole_context
     from meshlab_holefill.evaluation.cut_holes import cut_holes
 
     ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(sample("cow.obj"))
+    ms.load_new_mesh(sample(name))
     ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
     V, F = mesh_arrays(ms)
-    _, holes = cut_holes(V, F, sizes=["irregular", "irregular", "large"], seed=2, strict=False)
+    _, holes = cut_holes(V, F, sizes=["irregular", "irregular", "large"], seed=seed, strict=False)
     removed = np.zeros(len(F), bool)
-    removed[holes[0].face_indices] = True
+    removed[holes[hole].face_indices] = True
     F = F[~removed]
-    ctx = hole_context(V, F, max(boundary_loops(F), key=len), rings=cu.RINGS)
+    return V, F, hole_context(V, F, max(boundary_loops(F), key=len), rings=cu.RINGS)
+
+
+def test_a_patch_the_tangential_relaxation_folds_is_made_again_without_it():
+    """A 308-edge hole of cow.obj Loop-subdivided twice (``scripts/large_holes.py``, seed 2): with the tangential
+    relaxation the patch crosses itself (146 faces, every domain); without it, it crosses nothing."""
+    from meshlab_holefill.array_api import fill_holes
+
+    V, F, ctx = large_hole("cow.obj", seed=2, hole=0)
     assert ctx.size == 308
     relaxed = cu._fill_steps(ctx, **{p.name: p.default for p in cu.PARAMS})  # the filter before its fallback
     assert len(crossing_repair.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) > 100
@@ -1088,18 +1094,7 @@ def test_a_patch_the_tangential_relaxation_folds_is_made_again_without_it():
 def test_where_the_unfolding_is_the_development_the_smoothest_domain_fills_the_hole_once(monkeypatch):
     """A 154-edge hole of bone.ply Loop-subdivided twice (``scripts/large_holes.py``, seed 1): the annealing
     gives up and falls back to the development, so both domains are one; the second is not filled again."""
-    from meshlab_holefill.core.holes import boundary_loops, hole_context
-    from meshlab_holefill.evaluation.cut_holes import cut_holes
-
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(sample("bone.ply"))
-    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
-    V, F = mesh_arrays(ms)
-    _, holes = cut_holes(V, F, sizes=["irregular", "irregular", "large"], seed=1, strict=False)
-    removed = np.zeros(len(F), bool)
-    removed[holes[2].face_indices] = True
-    F = F[~removed]
-    ctx = hole_context(V, F, max(boundary_loops(F), key=len), rings=cu.RINGS)
+    _, _, ctx = large_hole("bone.ply", seed=1, hole=2)
     unfolding, development = cu.fill(ctx, domain="unfolding"), cu.fill(ctx, domain="development")
     assert unfolding.info["unfolding"] == "development"  # the annealing's fallback
     assert np.array_equal(unfolding.vertices, development.vertices)
