@@ -311,12 +311,12 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
             crossed = _mesh_crossings(V, F, ctx.loop, outcome, grid=grid)
             if crossed[0]:
                 key = None  # the fill depends on more of the mesh than the context: never reused
-                outcome, crossed, seconds = refill_clear(i, outcome, crossed, seconds, grid)
+                outcome, crossed, seconds = refill_clear(i, outcome, crossed, seconds, grid, ctx)
         return key, outcome, seconds, crossed
 
-    def refill_clear(i, patch, crossed, seconds, grid=None):
+    def refill_clear(i, patch, crossed, seconds, grid=None, ctx=None):
         return _refill_clear_of_mesh(V, F, loops[i], incidence, rings, i, fill, fill_kwargs, params["timelimit"],
-                                     patch, crossed, seconds, grid)
+                                     patch, crossed, seconds, grid, ctx)
 
     def filled_one(position):  # run_jobs counts positions in ``order``; the caller wants hole ids
         progress(order[position], len(order))
@@ -420,7 +420,7 @@ OBSTACLE_MARGIN = 0.25
 
 
 def _refill_clear_of_mesh(V, F, loop, incidence, rings, index, fill, fill_kwargs, timelimit, patch, crossed, seconds,
-                          grid=None):
+                          grid=None, ctx=None):
     """Fill a hole again, seeing the mesh faces its patch crossed: (patch, (crossings, seconds), seconds).
 
     A filter sees only its hole's rings (:class:`.holes.HoleContext`), so its own crossing
@@ -430,29 +430,30 @@ def _refill_clear_of_mesh(V, F, loop, incidence, rings, index, fill, fill_kwargs
     checked against the mesh again. Where that fill fails too or still crosses, or the time
     limit leaves no time for it, the first patch and its crossings are returned, so the
     hole is reported as it was; so are they, without a second fill, where the patch crosses
-    itself or the faces its filter saw (its avoidance has failed on what it could see). ``crossed`` is the first check's (faces crossed, seconds);
-    ``seconds``, the first fill's, and the time returned includes it.
+    itself or the faces its filter saw (its avoidance failed on what it could see).
+    ``crossed`` is the first check's (faces crossed, seconds), ``seconds`` the first fill's
+    (the time returned includes it), ``ctx`` the first fill's context when the caller has it.
     """
     t0 = time.perf_counter()
     left = timelimit - seconds if timelimit > 0 else 0.0
     if timelimit > 0 and left <= 0:
         return patch, crossed, seconds
     points = patch.all_points(V[loop.vertices])
-    box = patch_box(points)
-    box += np.array([[-1.0], [1.0]]) * OBSTACLE_MARGIN * float(np.linalg.norm(box[1] - box[0]))
     try:
-        if len(context_crossings(hole_context(V, F, loop, incidence, rings=rings, index=index), points, patch.faces)):
-            # It crosses faces its filter saw already, or itself: more faces to avoid cannot help it.
-            return patch, crossed, seconds + time.perf_counter() - t0
-        near = face_boxes_near(V, F, box[None])[0] if grid is None else grid.near(box)[0]
-        ctx = hole_context(V, F, loop, incidence, rings=rings, index=index, obstacles=near)
+        if ctx is None:
+            ctx = hole_context(V, F, loop, incidence, rings=rings, index=index)
+        # A patch crossing what its filter saw, or itself: more faces to avoid cannot help it.
+        if not len(context_crossings(ctx, points, patch.faces)):
+            box = patch_box(points)
+            box += np.array([[-1.0], [1.0]]) * OBSTACLE_MARGIN * float(np.linalg.norm(box[1] - box[0]))
+            near = face_boxes_near(V, F, box[None])[0] if grid is None else grid.near(box)[0]
+            wider = hole_context(V, F, loop, incidence, rings=rings, index=index, obstacles=near)
+            outcome, _ = fill_one(fill, wider, fill_kwargs, left)
+            if not isinstance(outcome, str) and not _mesh_crossings(V, F, wider.loop, outcome, grid=grid)[0]:
+                outcome.info["obstacle_faces"] = len(wider.obstacle_faces)
+                return outcome, (0, crossed[1]), seconds + time.perf_counter() - t0
     except FILL_ERRORS:
-        return patch, crossed, seconds + time.perf_counter() - t0
-    outcome, _ = fill_one(fill, ctx, fill_kwargs, left)
-    if not isinstance(outcome, str):
-        if not _mesh_crossings(V, F, ctx.loop, outcome, grid=grid)[0]:
-            outcome.info["obstacle_faces"] = len(ctx.obstacle_faces)
-            return outcome, (0, crossed[1]), seconds + time.perf_counter() - t0
+        pass
     return patch, crossed, seconds + time.perf_counter() - t0
 
 

@@ -281,6 +281,7 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     the unfolding depends on these alone, so a domain met again reuses that patch with its own
     unfolding figures.
     """
+    params = {name: value for name, value in locals().items() if name not in ("ctx", "filled")}
     P = ctx.points
     m = ctx.size
     rng = np.random.default_rng(seed)
@@ -292,11 +293,7 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     if domain == "smoothest" and m > 3 and development_domain(planar_domains)[0] is not None:
         # Where the annealing gives up, the unfolding is the development: that patch is made once.
         filled = {}
-        return smoothest_patch(ctx, lambda choice: _fill_steps(
-            ctx, k=k, temperature=temperature, epsilon=epsilon, max_restarts=max_restarts, sa_steps=sa_steps,
-            step_bound=step_bound, energy=energy, refinement=refinement, fallback=fallback, repair=repair,
-            swaps=swaps, tangential=tangential, seed=seed, area_rows=area_rows, max_domain_area=max_domain_area,
-            density=density, slivers=slivers, lengths=lengths, domain=choice, filled=filled))
+        return smoothest_patch(ctx, lambda choice: _fill_steps(ctx, **dict(params, domain=choice), filled=filled))
     Q, unfold_info = development_domain(planar_domains) if domain == "development" and m > 3 else (None, None)
     if Q is None:
         Q, unfold_info = unfold_loop(P, rng, k=k, temperature=temperature, epsilon=epsilon,
