@@ -12,8 +12,8 @@ import numpy as np
 from .segments import is_simple_polygon
 from .triangulate import polygon_perimeter, polygon_signed_area
 
-__all__ = ["boundary_gap_angles", "develop_loop", "developed_area", "close_lengths", "simple_development",
-           "simple_developments"]
+__all__ = ["boundary_gap_angles", "enclosed_curvature", "develop_loop", "developed_area", "close_lengths",
+           "simple_development", "simple_developments"]
 
 
 def boundary_gap_angles(vertices, faces, k):
@@ -35,6 +35,27 @@ def boundary_gap_angles(vertices, faces, k):
     A = corner_angles(vertices, faces)
     total = np.bincount(faces.ravel(), weights=A.ravel(), minlength=len(vertices))[:k]
     return 2.0 * np.pi - total
+
+
+def enclosed_curvature(gap_angles):
+    """Gaussian curvature of the missing surface, from the angles the surface leaves open at the loop.
+
+    Gauss-Bonnet for the disc the loop bounds: its total curvature is 2 pi minus the loop's
+    geodesic turning, sum (pi - gap_i) (:func:`develop_loop` spreads this excess along the loop
+    to close its polygon). On a mesh, the angle defects of the vertices the hole removed and of
+    its loop's vertices. 0 on a developable surface, across a crease too; about
+    2 pi (1 - cos t) for a spherical cap of angular radius t; negative on a saddle.
+
+    Parameters
+    ----------
+    gap_angles : (m,) float64  from :func:`boundary_gap_angles`
+
+    Returns
+    -------
+    float  radians
+    """
+    gap_angles = np.asarray(gap_angles, np.float64)
+    return float(gap_angles.sum() - (len(gap_angles) - 2) * np.pi)
 
 
 def develop_loop(P, gap_angles, relax=0.0):

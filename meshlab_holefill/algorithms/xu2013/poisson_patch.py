@@ -17,6 +17,7 @@ from ._laplacian_kernels import edge_weight_rows, with_unit_diagonal
 from .advancing_front import advancing_front_triangulation
 from ...geometry.flips import folds, relax_edges
 from ...core.crossings import context_crossings
+from ...geometry.development import boundary_gap_angles, develop_loop, enclosed_curvature
 from ...geometry.laplacian import (cotangent_laplacian, cotangent_weights, tangential_umbrella_smoothing,
                                    vertices_near)
 from ...geometry.quality import triangle_quality, unique_edges
@@ -109,7 +110,6 @@ def planar_boundaries(ctx):
     list of (name, (k, 3) float64 with z = 0, counter-clockwise seen from +z)
     """
     from ...geometry.pca import fit_plane, project_to_plane
-    from ...geometry.development import boundary_gap_angles, develop_loop
 
     k = ctx.size
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, k)
@@ -244,8 +244,9 @@ def initial_patches(ctx, merge_factor, failures):
     ------
     X : (k + p, 3) float64  boundary then new vertices
     F : (q, 3) int64
-    stats : dict  the triangulation's counts and ``domain`` ('3d', 'developed', 'projected', 'ears'), and
-        for a refined layout ``lift_stretch`` and ``lift_refined`` (vertices added)
+    stats : dict  the triangulation's counts and ``domain`` ('3d', 'developed', 'projected', 'ears'), for
+        the developed layout ``enclosed_curvature`` (radians, :func:`geometry.development.enclosed_curvature`),
+        and for a refined layout ``lift_stretch`` and ``lift_refined`` (vertices added)
     layout : (k + p, 3) float64 or None  the planar patch the front built, z = 0 (the planar domains;
         None where the front or the ear cutting built the patch in 3D)
     """
@@ -266,6 +267,8 @@ def initial_patches(ctx, merge_factor, failures):
             failures.append(f"{name} advancing front: {exc}")
             continue
         stats["domain"] = name
+        if name == "developed":
+            stats["enclosed_curvature"] = enclosed_curvature(boundary_gap_angles(ctx.vertices, ctx.faces, len(P)))
         layout = np.concatenate([D, new_vertices])
         X = harmonic_lift(layout, F, P)
         stretch = lift_stretch(X, layout, F, len(P))
