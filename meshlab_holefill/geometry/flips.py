@@ -305,11 +305,13 @@ def _independent_swaps(cand, f1, f2, priority, new_key, face_count, scored):
     return chosen[first]
 
 
-def folds(X, F, fixed=None):
+def folds(X, F, fixed=None, before=None):
     """Does the patch fold: a degenerate triangle, or two neighbours at a dihedral over 120 degrees?
 
     With ``fixed`` ((n,) bool), triangles whose three vertices are all fixed are not judged,
     nor pairs of them: only where a step that moves the free vertices can have folded the patch.
+    With ``before`` ((n, 3) float64, the same vertices before that step), neither is a pair of
+    neighbours that were at over 120 degrees there already: the step did not fold them.
     """
     N = face_normals(X, F, normalize=False)
     area2 = np.linalg.norm(N, axis=1)
@@ -325,4 +327,9 @@ def folds(X, F, fixed=None):
         U = N / np.maximum(area2, 1e-300)[:, None]
         judged = moved[f1] | moved[f2]
         f1, f2 = f1[judged], f2[judged]
-    return bool(np.any(np.einsum("ij,ij->i", U[f1], U[f2]) < -0.5))
+    folded = np.einsum("ij,ij->i", U[f1], U[f2]) < -0.5
+    if before is not None and folded.any():
+        B = face_normals(before, F, normalize=False)
+        B /= np.maximum(np.linalg.norm(B, axis=1), 1e-300)[:, None]
+        folded &= np.einsum("ij,ij->i", B[f1], B[f2]) >= -0.5
+    return bool(np.any(folded))

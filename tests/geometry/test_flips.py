@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from meshlab_holefill.geometry.flips import circumcenters, min_angle_scores, relax_edges
+from meshlab_holefill.geometry.flips import circumcenters, folds, min_angle_scores, relax_edges
 from meshlab_holefill.geometry.quality import corner_angles
 from meshlab_holefill.geometry.topology import interior_edges
 
@@ -306,3 +306,25 @@ def test_compiled_interior_edges_equal_the_sorted_keys_edges():
         got, want = interior_edges(F, n), interior_edges_numpy(F, n)
         for g, w in zip(got, want):
             np.testing.assert_array_equal(g, w)
+
+
+def fan(centre):
+    """A unit square's border, fixed, fanned to one free vertex at ``centre``."""
+    X = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], centre], np.float64)
+    F = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+    return X, F, np.arange(5) < 4
+
+
+@settings(max_examples=30, deadline=None)
+@given(dz=st.floats(-0.05, 0.05), dx=st.floats(-0.1, 0.1))
+def test_folds_judges_only_the_folds_a_step_made(dz, dx):
+    X, F, fixed = fan([0.5, 0.5, 0.0])
+    outside = [0.5, -0.2, 0.0]  # past the edge (0, 1): triangle (0, 1, 4) turns over
+    Y = X.copy()
+    Y[4] = outside
+    assert not folds(X, F, fixed) and folds(Y, F, fixed)
+    assert folds(Y, F, fixed, before=X)  # the step folded it
+    Z = Y.copy()
+    Z[4] += [dx, 0.0, dz]
+    assert folds(Z, F, fixed) and not folds(Z, F, fixed, before=Y)  # it was folded before the step
+    assert folds(Z, F, fixed, before=X)

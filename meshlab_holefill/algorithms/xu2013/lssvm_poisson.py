@@ -394,7 +394,8 @@ def poisson_reposition(X, F, fixed, regressors=None, iterations=1, update_rhs=Fa
     solve, 3.7 with 2, 3.6 with 3) and better triangles. A solve that folds the patch where it
     moves it (:func:`.poisson_patch.solve_folds`: a degenerate triangle, or neighbours at a
     dihedral angle over 120 degrees) and that :func:`unfold` cannot unfold (with
-    ``relax_ctx``) is discarded and the iteration stops.
+    ``relax_ctx``; folds the patch had before the solve excepted) is discarded and the
+    iteration stops.
 
     Parameters
     ----------
@@ -461,11 +462,11 @@ def _unfolded_solve(X, F, free, rhs, boundary, layout, relax_ctx):
     if not np.all(np.isfinite(Y)):
         return None, F
     if solve_folds(Y, F, ~free):
-        return unfold(Y, F, ~free, relax_ctx)
+        return unfold(Y, F, ~free, relax_ctx, X)
     return Y, F
 
 
-def unfold(Y, F, fixed, relax_ctx=None):
+def unfold(Y, F, fixed, relax_ctx=None, before=None):
     """A folded Poisson solution unfolded by the relaxation that follows every solve, or (None, F).
 
     A fold across one edge is often a quad the solve turned over: its other diagonal (the
@@ -479,7 +480,10 @@ def unfold(Y, F, fixed, relax_ctx=None):
     the bounding-box diagonal from the ground truth; unfolded, 0.39 (CGAL's Liepa fill 0.26).
     When the solve with the planar layout's weights cannot be unfolded, the lift's own weights
     are tried before the solve is discarded. Without ``relax_ctx`` (``relax`` off) a fold
-    discards the solve.
+    discards the solve. Where neither unfolds it, the folds left may be those the patch had
+    ``before`` the solve (its positions then): they are not the solve's
+    (:func:`.poisson_patch.solve_folds`), and the solve is kept, swapped, then smoothed if
+    the swaps alone leave a fold of its own.
 
     Returns
     -------
@@ -494,6 +498,11 @@ def unfold(Y, F, fixed, relax_ctx=None):
     H = relax_patch(Z, G, relax_ctx)[0]
     if not solve_folds(Z, H, fixed):
         return Z, H
+    if before is not None:
+        if not solve_folds(Y, G, fixed, before):
+            return Y, G
+        if not solve_folds(Z, H, fixed, before):
+            return Z, H
     return None, F
 
 

@@ -289,26 +289,33 @@ def initial_patches(ctx, merge_factor, failures):
     yield X, F, {"domain": "ears", **info}, None
 
 
-def solve_folds(X, F, fixed):
-    """Does the patch fold where the Poisson solve moves it (:func:`geometry.flips.folds` without the fixed triangles)?
+def solve_folds(X, F, fixed, before=None):
+    """Does the Poisson solve fold the patch (:func:`geometry.flips.folds` without the fixed triangles)?
 
     A triangle of boundary vertices only keeps its place whatever the solve does: a fold
     between two such triangles (the front bridges a narrow stretch of the hole with them) is
     the initial patch's. Judging the solve by it threw the solve away on bone.ply's 72-edge hole
     wrapped around the knob (holes cut with ``scripts/benchmark.py --seed 1 --holes 6``): the
     patch's mean distance to the ground truth is 9.9 per mille of the bounding-box diagonal
-    with the solve, 19.4 without.
+    with the solve, 19.4 without. So is a fold that the patch had before the solve (``before``,
+    its positions then): a fan of triangles from one free vertex to a narrow notch of the
+    boundary (gap angles of 314, 45 and 312 degrees on airplane.obj Loop-subdivided once,
+    ``scripts/large_holes.py``'s airplane1_s1 hole 0, 296 edges) is folded in the lifted patch
+    already, and every solve was thrown away for it: 9.60 per mille from the ground truth
+    without the solve, 5.92 with it (CGAL's Liepa fill 4.89). :func:`.lssvm_poisson.unfold`
+    asks first for a patch without any fold, then for one without folds of the solve's own.
 
     Parameters
     ----------
     X : (n, 3) float64, F : (m, 3) int64, fixed : (n,) bool
+    before : (n, 3) float64, optional  the positions before the solve
 
     Returns
     -------
     bool  a triangle with a free vertex is degenerate, or it meets a neighbour at a dihedral
-        angle over 120 degrees
+        angle over 120 degrees that it did not meet at before
     """
-    return folds(X, F, fixed)
+    return folds(X, F, fixed, before)
 
 
 def _ear_guard(k):
