@@ -13,18 +13,21 @@ Where each step lives:
   private ``_front_*`` modules); the initial patch with its fallbacks (development, plane
   projection) and the safeguards beyond the paper: :mod:`.poisson_patch`
   (:func:`initial_patches`, :func:`relax_patch`, :func:`repair_slivers`).
-* Sec. 3.3, the training set and the predicted Laplacians, and Sec. 3.4, the Poisson
-  reconstruction with Dirichlet boundary: :mod:`.lssvm_poisson` (:func:`training_set`,
-  :func:`fit_laplacian_regressors`, :func:`predict_laplacians`, :func:`poisson_reposition`).
+* Sec. 3.3, the training set and the predicted Laplacians: :mod:`.laplacian_regression`
+  (:func:`training_set`, :func:`fit_laplacian_regressors`, :func:`predict_laplacians`).
+* Sec. 2.3 and 3.4, the Poisson reconstruction with the boundary's Laplacian rows, and its
+  safeguards: :mod:`.poisson_reconstruction` (:func:`poisson_reposition`, :func:`reposition`).
 * The filter (``fill``, ``PARAMS``, ``RINGS``, ``PREPARE``): :mod:`.lssvm_poisson`.
 """
 from .advancing_front import advancing_front_triangulation
 from .border_split import split_long_boundary_edges
 from .lssvm import lssvm_fit
-from .lssvm_poisson import (PARAMS, PREPARE, RINGS, fill, fit_laplacian_regressors, poisson_reposition,
-                            predict_laplacians, training_set)
+from .laplacian_regression import fit_laplacian_regressors, predict_laplacians, training_set
+from .lssvm_poisson import PARAMS, PREPARE, RINGS, fill
+from .poisson_reconstruction import poisson_reposition, reposition
 from .poisson_patch import initial_patches, normalized_cotangent_laplacian, relax_patch, repair_slivers
 
 __all__ = ["fill", "PARAMS", "RINGS", "PREPARE", "normalized_cotangent_laplacian", "lssvm_fit",
            "split_long_boundary_edges", "advancing_front_triangulation", "initial_patches", "relax_patch",
-           "repair_slivers", "training_set", "fit_laplacian_regressors", "predict_laplacians", "poisson_reposition"]
+           "repair_slivers", "training_set", "fit_laplacian_regressors", "predict_laplacians", "poisson_reposition",
+           "reposition"]

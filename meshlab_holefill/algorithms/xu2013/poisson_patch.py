@@ -302,7 +302,7 @@ def solve_folds(X, F, fixed, before=None):
     boundary (gap angles of 314, 45 and 312 degrees on airplane.obj Loop-subdivided once,
     ``scripts/large_holes.py``'s airplane1_s1 hole 0, 296 edges) is folded in the lifted patch
     already, and every solve was thrown away for it: 9.60 per mille from the ground truth
-    without the solve, 5.92 with it (CGAL's Liepa fill 4.89). :func:`.lssvm_poisson.unfold`
+    without the solve, 5.92 with it (CGAL's Liepa fill 4.89). :func:`.poisson_reconstruction.unfold`
     asks first for a patch without any fold, then for one without folds of the solve's own.
 
     Parameters

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from meshlab_holefill.algorithms.xu2013.lssvm import lssvm_fit
-from meshlab_holefill.algorithms.xu2013.lssvm_poisson import loo_error, select_model, LOO_GAMMAS, LOO_WIDTHS
+from meshlab_holefill.algorithms.xu2013.laplacian_regression import loo_error, select_model, LOO_GAMMAS, LOO_WIDTHS
 from meshlab_holefill.array_api import fill_holes
 from meshlab_holefill.evaluation.cut_holes import cut_holes
 

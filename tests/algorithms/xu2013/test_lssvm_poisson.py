@@ -8,6 +8,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from meshlab_holefill.algorithms.xu2013 import lssvm_poisson as xu
+from meshlab_holefill.algorithms.xu2013 import laplacian_regression as lr
+from meshlab_holefill.algorithms.xu2013 import poisson_patch as pp
+from meshlab_holefill.algorithms.xu2013 import poisson_reconstruction as pr
 from meshlab_holefill.algorithms.xu2013.lssvm import kkt_matrix, lssvm_fit, rbf_kernel
 from meshlab_holefill.algorithms.xu2013.poisson_patch import normalized_cotangent_laplacian
 from meshlab_holefill.algorithms.xu2013.advancing_front import advancing_front_triangulation
@@ -382,13 +385,13 @@ def test_training_set_is_k_layers_with_laplacians_toward_the_centre():
     V, F, _ = sphere_hole()
     ctx = context_of(V, F)
     for layers in (1, 2, 3):
-        X, delta = xu.training_set(ctx, layers)
+        X, delta = lr.training_set(ctx, layers)
         assert len(X) == np.count_nonzero((ctx.depth >= 1) & (ctx.depth <= layers))
         # On the unit sphere the cotangent Laplacian points to the centre (mean curvature normal).
         assert np.all(np.einsum("ij,ij->i", delta, X) < 0)
         cosines = -np.einsum("ij,ij->i", delta, X) / np.linalg.norm(delta, axis=1)
         assert cosines.min() > 0.95
-    assert len(xu.training_set(ctx, 2)[0]) > len(xu.training_set(ctx, 1)[0])
+    assert len(lr.training_set(ctx, 2)[0]) > len(lr.training_set(ctx, 1)[0])
 
 
 # ------------------------------------------------------------------ Sec. 2.2 LS-SVM
@@ -489,7 +492,7 @@ def test_poisson_solve_with_zero_laplacian_is_the_membrane():
 def test_repeated_poisson_solves_converge_to_their_own_weights():
     # Sec. 3.4: L_Vn depends on the positions, so each further solve uses the previous result's
     # weights; the displacement shrinks and the final positions satisfy their own Laplacian system.
-    from meshlab_holefill.algorithms.xu2013.lssvm_poisson import poisson_reposition
+    from meshlab_holefill.algorithms.xu2013.poisson_reconstruction import poisson_reposition
 
     V, F, _ = sphere_hole()
     ctx = context_of(V, F)
@@ -539,13 +542,13 @@ def test_poisson_solve_folded_across_one_edge_is_kept_when_a_swap_unfolds_it():
     rhs = np.asarray(normalized_cotangent_laplacian(X, F) @ T)[free]
     regressors = [lambda x, d=d: rhs[:, d] for d in range(3)]
     assert not folds(X, F) and folds(T, F)
-    Y, G, info = xu.poisson_reposition(X, F, ~free, regressors, relax_ctx=ctx)
+    Y, G, info = pr.poisson_reposition(X, F, ~free, regressors, relax_ctx=ctx)
     assert not info["poisson_rejected"] and info["poisson_solves"] == 1
     assert np.allclose(Y, T, atol=1e-9)  # the solve is kept ...
     assert not folds(Y, G) and not np.array_equal(np.sort(G, axis=1), np.sort(F, axis=1))  # ... with swapped faces
     assert sorted(map(sorted, G[(G == 10).any(axis=1)].tolist())).count([3, 8, 10]) == 0
     # Without the swaps (no HoleContext) the folded solve is discarded.
-    Y0, G0, info0 = xu.poisson_reposition(X, F, ~free, regressors)
+    Y0, G0, info0 = pr.poisson_reposition(X, F, ~free, regressors)
     assert info0["poisson_rejected"] and info0["poisson_solves"] == 0
     assert np.array_equal(Y0, X) and np.array_equal(G0, F)
 
@@ -587,16 +590,16 @@ def test_sliver_repair_lifts_the_border_row_the_poisson_solve_squeezes(face_hole
     D = dict(planar_boundaries(ctx))["developed"]
     new_vertices, F0, _ = advancing_front_triangulation(D, ctx.forbidden_edges, 0.75, reference_normal=UP)
     X0 = harmonic_lift(np.concatenate([D, new_vertices]), F0, ctx.points)
-    regressors = xu.fit_laplacian_regressors(*xu.training_set(ctx, 2), 10.0, 0.5)
-    X, F, info = xu.reposition(ctx, X0, F0, regressors, 1, True, "dirichlet")
+    regressors = lr.fit_laplacian_regressors(*lr.training_set(ctx, 2), 10.0, 0.5)
+    X, F, info = pr.reposition(ctx, X0, F0, regressors, 1, True, "dirichlet")
     q = triangle_quality(X, F)
     assert info["sliver_repairs"] >= 1 and info["poisson_damping"] == 1.0
     assert q.min() >= 0.3 and q.mean() >= 0.85
-    assert len(xu.context_hits(X, F, ctx)) == 0
-    monkeypatch.setattr(xu, "SLIVER_QUALITY", 0.0)  # without the repair
-    X1, F1, _ = xu.reposition(ctx, X0, F0, regressors, 1, True, "dirichlet")
+    assert len(pp.context_hits(X, F, ctx)) == 0
+    monkeypatch.setattr(pr, "SLIVER_QUALITY", 0.0)  # without the repair
+    X1, F1, _ = pr.reposition(ctx, X0, F0, regressors, 1, True, "dirichlet")
     assert triangle_quality(X1, F1).min() < 0.3
-    X2, F2, info2 = xu.reposition(ctx, X0, F0, regressors, 1, True)
+    X2, F2, info2 = pr.reposition(ctx, X0, F0, regressors, 1, True)
     assert triangle_quality(X2, F2).min() >= 0.3 and info2["sliver_repairs"] == 0
 
 

@@ -2,6 +2,8 @@
 import numpy as np
 
 from meshlab_holefill.algorithms.xu2013 import lssvm_poisson as xu
+from meshlab_holefill.algorithms.xu2013 import laplacian_regression as lr
+from meshlab_holefill.algorithms.xu2013 import poisson_reconstruction as pr
 from meshlab_holefill.algorithms.xu2013.advancing_front import advancing_front_triangulation
 from meshlab_holefill.algorithms.xu2013.poisson_patch import harmonic_lift, normalized_cotangent_laplacian, planar_boundaries
 from meshlab_holefill.core.holes import boundary_loops, hole_context
@@ -47,7 +49,7 @@ def test_the_development_of_a_tube_hole_gives_its_patch_the_tube_s_weights_and_s
     fixed = np.arange(len(X)) < ctx.size
     off_tube = {}
     for name, weights_from in (("lift", None), ("layout", layout)):
-        Y, _, info = xu.poisson_reposition(X, G, fixed, None, boundary_ctx=ctx, layout=weights_from)
+        Y, _, info = pr.poisson_reposition(X, G, fixed, None, boundary_ctx=ctx, layout=weights_from)
         assert info["poisson_solves"] == 1 and not info["poisson_rejected"]
         off_tube[name] = np.abs(np.linalg.norm(Y[ctx.size:, :2], axis=1) - 1.0).mean()
     membrane = np.abs(np.linalg.norm(X[ctx.size:, :2], axis=1) - 1.0).mean()
@@ -64,14 +66,14 @@ def test_solve_with_a_layout_uses_the_layout_s_cotangents_for_the_patch_faces_on
     ctx = hole_of(V, F)
     X, G, layout = developed_patch(ctx)
     free = np.arange(len(X)) >= ctx.size
-    rows, allX, allF = xu.boundary_rows(X, G, ctx)
+    rows, allX, allF = pr.boundary_rows(X, G, ctx)
     rhs, rhs_rows = np.zeros((free.sum(), 3)), np.zeros((len(rows), 3))
     # Own cotangents passed explicitly: the same system, bit for bit.
-    plain = xu.solve_poisson(X, G, free, rhs, (rows, allX, allF, rhs_rows))
-    same = xu.solve_poisson(X, G, free, rhs, (rows, allX, allF, rhs_rows), cotangents=cotangent_weights(X, G))
+    plain = pr.solve_poisson(X, G, free, rhs, (rows, allX, allF, rhs_rows))
+    same = pr.solve_poisson(X, G, free, rhs, (rows, allX, allF, rhs_rows), cotangents=cotangent_weights(X, G))
     assert np.array_equal(plain, same)
     # The layout's: the least-squares solution of the system whose patch rows have the layout's weights.
-    got = xu.solve_poisson(X, G, free, rhs, (rows, allX, allF, rhs_rows), cotangents=cotangent_weights(layout, G))
+    got = pr.solve_poisson(X, G, free, rhs, (rows, allX, allF, rhs_rows), cotangents=cotangent_weights(layout, G))
     C = np.concatenate([cotangent_weights(layout, G), cotangent_weights(allX, allF[len(G):])])
     L = normalized_cotangent_laplacian(allX, allF, cotangents=C).toarray()
     free_idx = np.flatnonzero(free)
@@ -101,8 +103,8 @@ def off_sphere_after(ctx, solves):
     """Mean distance from the unit sphere of the developed patch after ``solves`` Poisson solves."""
     X, G, layout = developed_patch(ctx)
     fixed = np.arange(len(X)) < ctx.size
-    regressors = xu.fit_laplacian_regressors(*xu.training_set(ctx, 1), 10.0, 0.5)
-    Y, _, info = xu.poisson_reposition(X, G, fixed, regressors, solves, relax_ctx=ctx, boundary_ctx=ctx, layout=layout)
+    regressors = lr.fit_laplacian_regressors(*lr.training_set(ctx, 1), 10.0, 0.5)
+    Y, _, info = pr.poisson_reposition(X, G, fixed, regressors, solves, relax_ctx=ctx, boundary_ctx=ctx, layout=layout)
     assert info["poisson_solves"] == solves and not info["poisson_rejected"]
     return np.abs(np.linalg.norm(Y[ctx.size:], axis=1) - 1.0).mean()
 
@@ -117,12 +119,12 @@ def test_a_curved_development_gets_a_second_solve_with_its_own_weights():
 
 
 def test_only_a_development_enclosing_curvature_gets_two_solves():
-    curved = {"domain": "developed", "enclosed_curvature": -2 * xu.CURVED_DEVELOPMENT}
-    flat = {"domain": "developed", "enclosed_curvature": 0.5 * xu.CURVED_DEVELOPMENT}
-    assert xu.poisson_solves(curved, 1) == 2 and xu.poisson_solves(curved, 3) == 3
-    assert xu.poisson_solves(flat, 1) == 1
-    assert xu.poisson_solves({"domain": "3d"}, 1) == 1 and xu.poisson_solves({"domain": "projected"}, 1) == 1
+    curved = {"domain": "developed", "enclosed_curvature": -2 * pr.CURVED_DEVELOPMENT}
+    flat = {"domain": "developed", "enclosed_curvature": 0.5 * pr.CURVED_DEVELOPMENT}
+    assert pr.poisson_solves(curved, 1) == 2 and pr.poisson_solves(curved, 3) == 3
+    assert pr.poisson_solves(flat, 1) == 1
+    assert pr.poisson_solves({"domain": "3d"}, 1) == 1 and pr.poisson_solves({"domain": "projected"}, 1) == 1
     # The elliptic hole's loop encloses about 2.3 rad: the filter makes the second solve there.
     _, ctx = sphere_hole()
     stats = next(s for _, _, s, _ in xu.initial_patches(ctx, 0.75, []) if s["domain"] == "developed")
-    assert stats["enclosed_curvature"] > 2.0 and xu.poisson_solves(stats, 1) == 2
+    assert stats["enclosed_curvature"] > 2.0 and pr.poisson_solves(stats, 1) == 2

@@ -2,7 +2,7 @@
 import numpy as np
 import pymeshlab
 
-from meshlab_holefill.algorithms.xu2013.lssvm_poisson import solve_poisson
+from meshlab_holefill.algorithms.xu2013.poisson_reconstruction import solve_poisson
 from meshlab_holefill.algorithms.xu2013.poisson_patch import normalized_cotangent_laplacian
 
 

@@ -2,6 +2,7 @@
 import numpy as np
 
 from meshlab_holefill.algorithms.xu2013 import lssvm_poisson as xu
+from meshlab_holefill.algorithms.xu2013 import poisson_reconstruction as pr
 from meshlab_holefill.algorithms.xu2013.poisson_patch import solve_folds
 from meshlab_holefill.core import examples, hole_context
 from meshlab_holefill.geometry.flips import folds
@@ -44,12 +45,12 @@ def test_a_vertex_pressed_over_the_border_is_spread_again_by_the_relaxation():
     Y = X.copy()
     Y[v] = X[0] + 0.45 * (X[0] - X[v])  # just beyond the loop vertex, outside the hole
     assert solve_folds(Y, F, fixed)
-    Z, G = xu.unfold(Y, F, fixed, relax_ctx=ctx)
+    Z, G = pr.unfold(Y, F, fixed, relax_ctx=ctx)
     assert Z is not None and not solve_folds(Z, G, fixed)
     assert np.array_equal(Z[:k], X[:k])  # the boundary stays
     assert np.linalg.norm(Z[v] - X[v]) < np.linalg.norm(Y[v] - X[v])  # back towards its place
     # Without the relaxation (relax off) the fold discards the solve.
-    assert xu.unfold(Y, F, fixed)[0] is None
+    assert pr.unfold(Y, F, fixed)[0] is None
 
 
 def test_a_patch_crossing_itself_counts_as_a_hit_of_the_context():
