@@ -191,7 +191,8 @@ def _hole_status_table(result):
 
 
 def cmd_holes(args, extra):
-    from .core.holes import boundary_loops, hole_measures, loop_class, outlines_one_face, vertex_face_incidence
+    from .core.holes import boundary_loops, vertex_face_incidence
+    from .core.outlines import hole_measures, loop_class, outlines_one_face
 
     ms = load_meshset(args.input)
     m = ms.current_mesh()

@@ -13,7 +13,8 @@ Imports ``errors`` and ``geometry`` only (no pymeshlab). Modules:
 - ``pipeline``: :func:`fill_mesh_holes`, what every filter does around its algorithm.
 """
 from .attributes import MeshArrays
-from .holes import BoundaryLoop, HoleContext, boundary_loops, hole_context, hole_measures
+from .holes import BoundaryLoop, HoleContext, boundary_loops, hole_context
+from .outlines import hole_measures
 from .parameters import ParamSpec, Percentage, resolve_params
 from .patch import Patch, merge_patches, validate_patch
 from .pipeline import COMMON_PARAMS, FilledMesh, fill_mesh_holes

@@ -23,8 +23,8 @@ from .crossings import (clashing_patches, context_crossings, crossing_patches, f
 from .face_grid import face_grid
 from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .kernel_cache import refresh_kernel_cache_once
-from .holes import (boundary_loops, edge_summary, hole_context, hole_measures, loop_class,
-                    outline_ratio, outlines_one_face, vertex_face_incidence)
+from .holes import boundary_loops, edge_summary, hole_context, vertex_face_incidence
+from .outlines import hole_measures, loop_class, outline_ratio, outlines_one_face
 from .parameters import ParamSpec, Percentage
 from .patch import load_validation_kernel, merge_patches, validate_patch
 
@@ -462,7 +462,7 @@ def _explain_outlines(V, F, crossing, report, incidence):
 
     Range scans hold small fragments whose only border is their outline; capping it lays a
     second sheet over the fragment, which the intersection check rightly refuses. The
-    reason then tells the user it is not a hole (holes.outline_ratio: grown from the loop,
+    reason then tells the user it is not a hole (outlines.outline_ratio: grown from the loop,
     where labelling the whole mesh took 0.06 s of serial time on face000.ply).
     """
     for i, loop in crossing:

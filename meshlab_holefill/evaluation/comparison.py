@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-from ..core.holes import OUTLINE_RATIO, boundary_halfedges, boundary_loops, outline_ratios
+from ..core.holes import boundary_halfedges, boundary_loops
+from ..core.outlines import OUTLINE_RATIO, outline_ratios
 from ..geometry.topology import face_adjacency
 from ..meshlab.mesh_files import is_mesh, load_mesh, mesh_arrays
 from ..meshlab.registration import filter_list, is_builtin_filter, parse_text_value
@@ -249,7 +250,7 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
                        else f"{len(lp)} edges > maxholesize {maxholesize}" if len(lp) > maxholesize else "degenerate")
                 notes.append(f"boundary loop {i} ({len(lp)} edges) not evaluated: {why}")
                 continue
-            # An island's outline is listed apart: capping it folds over the island (holes.outline_ratios).
+            # An island's outline is listed apart: capping it folds over the island (outlines.outline_ratios).
             kind_of = "outline" if outline[i] else "natural"
             out.append(Hole(i, kind_of, kind_of, len(lp), lp.vertices, i,
                             _border(F0, he, hf, lp.vertices), None, corner_quality_bound(V0, F0, lp.vertices)))

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import meshlab_holefill
-from meshlab_holefill.core.holes import OUTLINE_RATIO, boundary_halfedges, boundary_loops, outline_ratios
+from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops
+from meshlab_holefill.core.outlines import OUTLINE_RATIO, outline_ratios
 from meshlab_holefill.evaluation.comparison import (Filler, MeshCase, _patch_info, as_case, parse_fillers, prepare_case,
                                                     run_comparison)
 from meshlab_holefill.meshlab.mesh_files import load_mesh, meshset_from_arrays

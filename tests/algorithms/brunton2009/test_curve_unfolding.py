@@ -23,7 +23,8 @@ from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.geometry.segments import min_segment_distance, segment_distances
 from meshlab_holefill.geometry.triangulate import polygon_signed_area
-from meshlab_holefill.core.holes import boundary_loops, hole_context, nonmanifold_edges, outline_ratios
+from meshlab_holefill.core.holes import boundary_loops, hole_context, nonmanifold_edges
+from meshlab_holefill.core.outlines import outline_ratios
 from meshlab_holefill.evaluation.metrics import corner_quality_bound
 from meshlab_holefill.core import examples
 from meshlab_holefill.core.patch import validate_patch

@@ -1,0 +1,123 @@
+"""core.outlines: island outlines against holes, and a loop's measures."""
+import numpy as np
+import pymeshlab
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from meshlab_holefill.core.holes import boundary_loops, vertex_face_incidence
+from meshlab_holefill.core.outlines import loop_measures
+
+from conftest import cut_disks, grid
+
+
+def test_loop_measures_of_a_planar_circle():
+    t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    P = np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], 1)
+    m = loop_measures(P)
+    assert m["planarity"] == pytest.approx(0, abs=1e-12)
+    assert m["diameter"] == pytest.approx(2, rel=1e-3)
+    assert m["perimeter"] == pytest.approx(2 * np.pi, rel=1e-2)
+
+
+def _is_outline_ring_by_ring(V, F, loop, incidence):
+    """The outline test grown one ring of faces at a time by sparse row gathers (the reference)."""
+    from meshlab_holefill.core.outlines import OUTLINE_RATIO, vector_area
+    from meshlab_holefill.geometry.quality import face_areas
+
+    budget = vector_area(V[np.asarray(loop.vertices)]) / OUTLINE_RATIO
+    frontier = np.unique(np.asarray(loop.border_faces, np.int64))
+    seen = np.zeros(len(F), bool)
+    seen[frontier] = True
+    area = face_areas(V, F[frontier]).sum()
+    while area <= budget:
+        near = incidence[np.unique(F[frontier])].indices
+        frontier = np.unique(near[~seen[near]])
+        if len(frontier) == 0:
+            return True
+        seen[frontier] = True
+        area += face_areas(V, F[frontier]).sum()
+    return False
+
+
+def _islands_and_holes():
+    """A grid with two holes, plus a lone triangle and a small square island beside it."""
+    V, F = grid(12, 12)
+    _, F, _ = cut_disks(V, F, [(0.3, 0.3, 0), (0.7, 0.6, 0)], 0.12)
+    Vi, Fi = grid(3, 3)
+    tri_V = np.array([[2.0, 0, 0], [2.2, 0, 0], [2.0, 0.2, 0]])
+    V2 = np.concatenate([V, Vi * 0.3 + [1.5, 0, 0.1], tri_V])
+    F2 = np.concatenate([F, Fi + len(V), np.array([[0, 1, 2]]) + len(V) + len(Vi)])
+    return V2, F2
+
+
+def test_compiled_outline_test_matches_the_ratio_and_the_ring_by_ring_growth():
+    from meshlab_holefill.core.outlines import OUTLINE_RATIO, is_outline, outline_ratios
+
+    V, F = _islands_and_holes()
+    loops = boundary_loops(F)
+    incidence = vertex_face_incidence(F, len(V))
+    ratios = outline_ratios(V, F, loops)
+    compiled = [is_outline(V, F, loop, incidence) for loop in loops]
+    ring_by_ring = [_is_outline_ring_by_ring(V, F, loop, incidence) for loop in loops]
+    assert compiled == ring_by_ring == (ratios >= OUTLINE_RATIO).tolist()
+    assert sum(compiled) == 3  # the grid's outer rim and both islands; the two holes are not outlines
+
+
+def test_grown_area_is_the_component_area_within_the_budget():
+    from meshlab_holefill.core.outlines import _grown_area
+    from meshlab_holefill.geometry.quality import face_areas
+
+    V, F = _islands_and_holes()
+    incidence = vertex_face_incidence(F, len(V))
+    island = np.arange(len(F) - 9, len(F) - 1)  # the square island's eight faces
+    area = face_areas(V, F[island]).sum()
+    start = island[:1]
+    assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 2 * area) == pytest.approx(area, rel=1e-12)
+    assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 0.5 * area) == -1.0
+
+
+def test_vector_area_has_np_cross_bits_and_is_exact_for_a_planar_square():
+    from meshlab_holefill.core.outlines import vector_area
+
+    rng = np.random.default_rng(3)
+    for k in (3, 17, 400):
+        P = rng.normal(size=(k, 3)) * 10.0 ** rng.integers(-3, 4)
+        Q = P - P[0]  # taken about the loop's first vertex
+        assert vector_area(P) == float(0.5 * np.linalg.norm(np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)))
+    square = np.array([[0.0, 0, 1], [2, 0, 1], [2, 2, 1], [0, 2, 1]])
+    assert vector_area(square) == 4.0
+
+
+@settings(max_examples=30, deadline=None)
+@given(offset=st.floats(-1e9, 1e9), scale=st.sampled_from([1e-3, 1.0, 1e3]))
+def test_far_from_the_origin_holes_keep_their_area_and_are_not_taken_for_outlines(offset, scale):
+    # Georeferenced scans: a 1-unit model 1e8 from the origin had every hole taken for an
+    # island outline (the vector area of raw coordinates cancelled to noise).
+    from meshlab_holefill.core.outlines import OUTLINE_RATIO, is_outline, outline_ratios, vector_area
+
+    V, F = _islands_and_holes()
+    loops = boundary_loops(F)
+    incidence = vertex_face_incidence(F, len(V))
+    expected = [is_outline(V, F, loop, incidence) for loop in loops]
+    areas = [vector_area(V[loop.vertices]) for loop in loops]
+    W = V * scale + offset
+    assert [is_outline(W, F, loop, incidence) for loop in loops] == expected
+    assert (outline_ratios(W, F, loops) >= OUTLINE_RATIO).tolist() == expected
+    rounding = np.spacing(abs(offset)) / scale  # the coordinates themselves are rounded by this much (per unit)
+    for loop, area in zip(loops, areas):
+        assert vector_area(W[loop.vertices]) == pytest.approx(area * scale**2, rel=1e-9 + 100 * rounding)
+
+
+def test_a_three_edge_loop_outlines_one_face_only_when_one_face_holds_all_its_edges():
+    from meshlab_holefill.core.outlines import outlines_one_face
+
+    V, F = grid(5, 5)
+    lone = np.concatenate([F, [[len(V), len(V) + 1, len(V) + 2]]])
+    triangle = [lp for lp in boundary_loops(lone) if len(lp) == 3]
+    assert len(triangle) == 1 and outlines_one_face(triangle[0])
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=2)
+    Fs = ms.current_mesh().face_matrix()
+    (hole,) = boundary_loops(np.delete(Fs, 0, axis=0))  # one face removed: its three neighbours hold the edges
+    assert len(hole) == 3 and not outlines_one_face(hole)
+    assert not any(outlines_one_face(lp) for lp in boundary_loops(F))
