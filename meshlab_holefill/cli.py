@@ -6,8 +6,6 @@ import json
 import os
 import sys
 
-import numpy as np
-
 from .meshlab.meshset_io import load_meshset
 from .meshlab.registration import parse_text_value, shown_value
 

@@ -26,7 +26,7 @@ from .kernel_cache import refresh_kernel_cache_once
 from .holes import boundary_loops, edge_summary, hole_context, vertex_face_incidence
 from .outlines import hole_measures, loop_class, outline_ratio, outlines_one_face
 from .parameters import ParamSpec, Percentage
-from .patch import load_validation_kernel, merge_patches, validate_patch
+from .patch import load_validation_kernel, merge_patches
 
 __all__ = ["COMMON_PARAMS", "FilledMesh", "fill_mesh_holes"]
 

@@ -38,12 +38,8 @@ Recording (:func:`save_filter_script`, :func:`filter_script_xml`)
 from __future__ import annotations
 
 import os
-import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
-from xml.parsers import expat
-
-import pymeshlab
 
 from . import names as mlx_names
 from . import versions as mlx_versions
