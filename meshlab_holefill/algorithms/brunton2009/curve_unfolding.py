@@ -65,7 +65,7 @@ from ...core.holes import hole_context
 from ...core.patch import Patch
 from ...core.parameters import ParamSpec
 from .crossing_repair import CrossingCounts, crossing_faces, repair_crossings
-from .domain_choice import smoothest_patch
+from .domain_choice import development_is_candidate, smoothest_patch
 from .planar_domains import PlanarDomains, development_domain
 from .quality_swaps import improve_by_swaps
 from .slivers import repair_slivers
@@ -111,7 +111,8 @@ PARAMS = [
               "with the surrounding surface's angles whenever that polygon is simple, without annealing "
               "(closer on developable surfaces: creases, cylinders; farther on large holes of curved ones), and "
               "'smoothest' = the hole filled on both, the patch that bends less against the surrounding faces "
-              "across the hole's border kept (the hole is filled twice).",
+              "across the hole's border kept (the hole is filled twice; on the unfolding alone where the loop "
+              "encloses a full turn of Gaussian curvature or more, which no development lays out).",
               choices=("unfolding", "development", "smoothest")),
     ParamSpec("energy", "enum", "area",
               "Energy of the interior vertices (Sec. 3.3): 'area' = least-squares mesh E_AREA (the energy of the "
@@ -205,7 +206,8 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         development as the planar domain whenever there is one
         (:func:`.planar_domains.development_domain`), and 'smoothest' fills the hole on both and
         keeps the patch that continues the surrounding surface with less bend
-        (:func:`.domain_choice.smoothest_patch`).
+        (:func:`.domain_choice.smoothest_patch`), on the unfolding alone where the loop encloses a
+        full turn of curvature or more (:func:`.domain_choice.development_is_candidate`).
     energy : {'area', 'fairing'}
         E_AREA or E_DF (Sec. 3.3); ``area_rows`` ({'mesh', 'interior'}) chooses E_AREA's rows.
     refinement : bool
@@ -291,6 +293,10 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m) if m > 3 else None
     planar_domains = PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
     if domain == "smoothest" and m > 3 and development_domain(planar_domains)[0] is not None:
+        if not development_is_candidate(gaps):
+            patch = _fill_steps(ctx, **dict(params, domain="unfolding"), filled=filled)
+            patch.info["domain"] = "unfolding"
+            return patch
         # Where the annealing gives up, the unfolding is the development: that patch is made once.
         filled = {}
         return smoothest_patch(ctx, lambda choice: _fill_steps(ctx, **dict(params, domain=choice), filled=filled))

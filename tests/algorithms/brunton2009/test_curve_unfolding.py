@@ -1028,6 +1028,35 @@ def test_smoothest_keeps_the_unfolding_where_it_continues_a_curved_surface_bette
     assert off["unfolding"] < off["development"]
 
 
+def _sphere_without(z_below):
+    """pymeshlab's unit sphere (subdiv 3) keeping only the faces whose centroids lie below z = ``z_below``."""
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    m = ms.current_mesh()
+    V, F = np.asarray(m.vertex_matrix(), np.float64), np.asarray(m.face_matrix(), np.int64)
+    F = F[V[F].mean(axis=1)[:, 2] < z_below]
+    return hole_context(V, F, boundary_loops(F)[0], rings=cu.RINGS)
+
+
+def test_the_development_competes_only_for_a_loop_round_less_than_a_full_turn_of_curvature():
+    from meshlab_holefill.algorithms.brunton2009.domain_choice import development_is_candidate
+    from meshlab_holefill.geometry.development import boundary_gap_angles, enclosed_curvature
+
+    m = 12
+    for K, competes in ((2 * np.pi - 0.05, True), (2 * np.pi + 0.05, False), (-2 * np.pi - 0.05, False), (0.0, True)):
+        gaps = np.full(m, ((m - 2) * np.pi + K) / m)
+        assert enclosed_curvature(gaps) == pytest.approx(K) and development_is_candidate(gaps) == competes
+    # More than a hemisphere removed (K = 2 pi (1 + 0.3) = 8.2): the unfolding alone, filled once.
+    ctx = _sphere_without(-0.3)
+    assert enclosed_curvature(boundary_gap_angles(ctx.vertices, ctx.faces, ctx.size)) > 2 * np.pi
+    chosen = cu.fill(ctx, domain="smoothest")
+    unfolded = cu.fill(ctx, domain="unfolding")
+    assert chosen.info["domain"] == "unfolding" and "border_bends" not in chosen.info
+    assert np.array_equal(chosen.vertices, unfolded.vertices) and np.array_equal(chosen.faces, unfolded.faces)
+    # Less than a hemisphere (K = 4.4): both domains compete.
+    assert "border_bends" in cu.fill(_sphere_without(0.3), domain="smoothest").info
+
+
 def _flat_fan(ctx, height=0.0, crossing=0):
     k = ctx.size
     centre = ctx.points.mean(axis=0, keepdims=True) + [0, 0, height]
