@@ -33,7 +33,7 @@ def development_is_candidate(gap_angles):
     the surface turns by 0 or less) that changes the loop's total turning by a full turn or more
     and the layout no longer resembles the missing surface's: the unfolding alone is used.
     airplane.obj Loop-subdivided once, ``scripts/large_holes.py``'s airplane1_s1 hole 0 (296
-    edges round the tip of a wing, K = 7.2 rad): the border bend chose the development's patch,
+    edges, K = 7.2 rad): the border bend chose the development's patch,
     11.40 per mille of the bounding-box diagonal from the ground truth, where the unfolding's is
     5.10 (CGAL's Liepa fill 4.89); no other hole of those 24 or of the benchmark suite reaches it.
 
