@@ -29,9 +29,10 @@ def development_is_candidate(gap_angles):
     On the surface the loop turns by 2 pi - K, K its enclosed Gaussian curvature
     (:func:`geometry.development.enclosed_curvature`); a simple planar polygon turns by 2 pi, so
     the development (:func:`geometry.development.develop_loop`) bends every corner by K / m to
-    close. From |K| = 2 pi on (a loop round more than a hemisphere's worth of curvature, which on
-    the surface turns by 0 or less) that changes the loop's total turning by a full turn or more
-    and the layout no longer resembles the missing surface's: the unfolding alone is used.
+    close. From |K| = 2 pi on (a loop round more than a hemisphere's worth of curvature turns by 0
+    or less on the surface, a saddle's by 4 pi or more) that changes the loop's total turning by a
+    full turn or more and the layout no longer resembles the missing surface's: the unfolding
+    alone is used.
     airplane.obj Loop-subdivided once, ``scripts/large_holes.py``'s airplane1_s1 hole 0 (296
     edges, K = 7.2 rad): the border bend chose the development's patch,
     11.40 per mille of the bounding-box diagonal from the ground truth, where the unfolding's is
