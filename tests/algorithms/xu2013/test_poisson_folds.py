@@ -66,3 +66,38 @@ def test_a_patch_crossing_itself_counts_as_a_hit_of_the_context():
     X2 = np.concatenate([X, cross])
     F2 = np.concatenate([F, base + np.array([[0, 1, 2], [3, 4, 5]])])
     assert context_hits(X2, F2, ctx).tolist() == [len(F), len(F) + 1]
+
+
+def test_a_fold_the_initial_patch_had_does_not_discard_the_solve(monkeypatch):
+    """airplane.obj Loop-subdivided once, a 296-edge hole (``scripts/large_holes.py``'s airplane1_s1 hole 0):
+    the lifted development folds a fan into a narrow notch of the border, and every solve kept that fold."""
+    import pymeshlab
+
+    from meshlab_holefill.core.holes import boundary_loops
+    from meshlab_holefill.evaluation.cut_holes import cut_holes
+    from meshlab_holefill.evaluation.metrics import closest_faces
+
+    from conftest import sample
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("airplane.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=1, threshold=pymeshlab.PercentageValue(0))
+    V, F = np.asarray(ms.current_mesh().vertex_matrix(), np.float64), ms.current_mesh().face_matrix()
+    _, holes = cut_holes(V, F, sizes=("irregular", "irregular", "large"), seed=1, strict=False)
+    removed = np.zeros(len(F), bool)
+    removed[holes[0].face_indices] = True
+    kept = F[~removed]
+    ctx = hole_context(V, kept, max(boundary_loops(kept), key=len), rings=xu.RINGS)
+    assert ctx.size == 296
+    diagonal = np.linalg.norm(V.max(axis=0) - V.min(axis=0))
+
+    def off_surface(patch):
+        return closest_faces(patch.vertices, V, F[removed])[0].mean() / diagonal
+
+    patch = xu.fill(ctx)
+    assert patch.info["afm_domain"] == "developed" and not patch.info["poisson_rejected"]
+    # Judged by every fold, as before, the solves are discarded and the lifted patch is kept.
+    monkeypatch.setattr(pr, "solve_folds", lambda X, F, fixed, before=None: solve_folds(X, F, fixed))
+    lifted = xu.fill(ctx)
+    assert lifted.info["poisson_rejected"] and lifted.info["poisson_solves"] == 0
+    assert off_surface(patch) < 0.75 * off_surface(lifted)
