@@ -128,3 +128,28 @@ def test_only_a_development_enclosing_curvature_gets_two_solves():
     _, ctx = sphere_hole()
     stats = next(s for _, _, s, _ in xu.initial_patches(ctx, 0.75, []) if s["domain"] == "developed")
     assert stats["enclosed_curvature"] > 2.0 and pr.poisson_solves(stats, 1) == 2
+
+
+def test_a_development_that_touches_itself_gives_way_to_the_least_relaxed_simple_one(monkeypatch):
+    """The benchmark's torus hole of 211 edges wraps round the tube: its plain development touches itself."""
+    from meshlab_holefill.algorithms.xu2013 import poisson_patch
+    from meshlab_holefill.evaluation.analytic import analytic_distance, analytic_mesh
+    from meshlab_holefill.evaluation.comparison import MeshCase, prepare_case
+    from meshlab_holefill.geometry.development import boundary_gap_angles, develop_loop
+    from meshlab_holefill.geometry.segments import polygon_edges_touch
+
+    V, F = analytic_mesh("torus")
+    case = prepare_case(MeshCase("torus", V, F), holes=4, seed=0)
+    ctx = hole_context(case.V0, case.F0, max(boundary_loops(case.F0), key=len), rings=xu.RINGS)
+    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, ctx.size)
+    assert ctx.size == 211 and polygon_edges_touch(develop_loop(ctx.points, gaps))
+    (name, D), = planar_boundaries(ctx)
+    assert name == "developed" and not polygon_edges_touch(D[:, :2])
+    off_torus = analytic_distance("torus")
+    patch = xu.fill(ctx)
+    assert patch.info["afm_domain"] == "developed"
+    # Without it the patch grows from the ear cutting, farther from the torus.
+    monkeypatch.setattr(poisson_patch, "simple_development", lambda *args: (None, None))
+    ears = xu.fill(ctx)
+    assert ears.info["afm_domain"] == "ears"
+    assert np.abs(off_torus(patch.vertices)).mean() < 0.8 * np.abs(off_torus(ears.vertices)).mean()
