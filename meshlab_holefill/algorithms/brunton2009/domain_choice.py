@@ -4,7 +4,7 @@ Option ``domain='smoothest'`` (:func:`smoothest_patch`): the hole is filled on S
 unfolded loop and on the loop's development over the surrounding surface's angles, each by the
 whole filter (Sec. 3.2-3.3 and the steps after them), and the patch
 that meets the surrounding surface with the smaller mean bend across the hole's border
-(:func:`border_bend`) is kept. Neither domain wins everywhere: the development is the removed
+(:func:`meshlab_holefill.core.border_bend.border_bend`) is kept. Neither domain wins everywhere: the development is the removed
 surface's own layout on developable surfaces (creases, cylinders, the flanks of a CAD part) and
 drifts on large holes of curved ones, where the unfolding is closer. Either way the patch that
 continues the surface without a kink at the border is the one that bends like the missing
@@ -16,9 +16,9 @@ import numpy as np
 
 from ...errors import HoleFillError
 from ...geometry.development import enclosed_curvature
-from ...geometry.quality import face_normals
+from ...core.border_bend import border_bend
 
-__all__ = ["DOMAINS", "border_bend", "smoothest_patch", "development_is_candidate"]
+__all__ = ["DOMAINS", "smoothest_patch", "development_is_candidate"]
 
 DOMAINS = ("unfolding", "development")  # the candidates, in the order a tie is decided
 
@@ -92,54 +92,3 @@ def smoothest_patch(ctx, fill_on):
     patch = patches[best]
     patch.info.update(domain=best, border_bends={domain: bends.get(domain) for domain in DOMAINS})
     return patch
-
-
-def border_bend(ctx, vertices, faces):
-    """Mean angle, in degrees, between the mesh face and the patch face on each border edge.
-
-    Parameters
-    ----------
-    ctx : HoleContext
-    vertices : (s, 3) float64  new vertices of the patch
-    faces : (t, 3) int64  patch faces in Patch numbering (loop index i < k, new vertex k + j)
-
-    Returns
-    -------
-    float  0 where the patch continues the surface's tangent planes across the whole border;
-    NaN when no border edge is in the patch
-
-    Examples
-    --------
-    The bowl's hole closed by a fan from one loop vertex, then by a flat fan from the loop's
-    centroid, bends more than the curved patch of the filter:
-
-    >>> from meshlab_holefill.core import examples, hole_context
-    >>> from meshlab_holefill.algorithms.brunton2009.curve_unfolding import fill
-    >>> V, F, loop = examples.bowl_with_hole()
-    >>> ctx = hole_context(V, F, loop, rings=2)
-    >>> k = ctx.size
-    >>> fan = np.array([[k, i, (i + 1) % k] for i in range(k)])
-    >>> flat = border_bend(ctx, ctx.points.mean(axis=0, keepdims=True), fan)
-    >>> patch = fill(ctx)
-    >>> bool(border_bend(ctx, patch.vertices, patch.faces) < flat)
-    True
-    """
-    k = ctx.size
-    faces = np.asarray(faces, np.int64)
-    n = k + len(vertices)
-    tails, heads = faces.ravel(), np.roll(faces, -1, axis=1).ravel()  # (3 t,) directed patch edges
-    patch_keys = np.minimum(tails, heads) * n + np.maximum(tails, heads)
-    order = np.argsort(patch_keys, kind="stable")
-    i = np.arange(k)
-    j = (i + 1) % k
-    wanted = np.minimum(i, j) * n + np.maximum(i, j)  # (k,) loop edge (i, i + 1)
-    position = np.clip(np.searchsorted(patch_keys[order], wanted), 0, len(order) - 1)
-    found = patch_keys[order][position] == wanted
-    if not found.any():
-        return float("nan")
-    patch_face = order[position[found]] // 3
-    X = np.concatenate([ctx.points, np.asarray(vertices, np.float64).reshape(-1, 3)])
-    n_patch = face_normals(X, faces[patch_face])
-    n_mesh = face_normals(ctx.vertices, ctx.faces[ctx.border_faces[found]])
-    cosine = np.clip(np.einsum("ij,ij->i", n_patch, n_mesh), -1.0, 1.0)
-    return float(np.degrees(np.arccos(cosine)).mean())

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...core.border_bend import border_bend
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...geometry.laplacian import tangential_umbrella_smoothing
@@ -178,6 +179,15 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
         if clean is None:
             reasons.append(reason)
             continue
+        bends = None
+        if layout == "development":
+            # The disc, the other fallback layout, may continue the surface better (a cap round a knob).
+            disc, _ = _layout_patch(hole, "disc", result, name.replace("development", "disc"))
+            if disc is not None:
+                bends = {"development": border_bend(ctx, clean.V[k:], clean.F),
+                         "disc": border_bend(ctx, disc.V[k:], disc.F)}
+                if bends["disc"] < bends["development"]:
+                    clean, layout = disc, "disc"
         info = dict(result[3])
         # Points left out next to long loop edges (triangulation.EDGE_CLEARANCE) are not lost by the layout.
         kept = (clean.stats["kept"] + clean.edge_cleared) / max(info["predicted"], 1)
@@ -187,6 +197,8 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
                     kept_share=float(kept), boundary_seconds=t1 - t0, prediction_seconds=prediction_seconds,
                     triangulation_seconds=clean.triangulation_seconds,
                     optimisation_seconds=clean.optimisation_seconds, **clean.stats)
+        if bends is not None:
+            info["border_bends"] = bends
         patch = Patch(vertices=clean.V[k:], faces=clean.F, info=info)
         if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
             if reasons:
@@ -242,8 +254,13 @@ def attempt_order(base, normals, seg, I_c):
     """The (segmented, layout) attempts in the order they are tried.
 
     The paper's choice (segmented prediction with two unfolded planes, or the unsegmented one
-    with the PCA plane), then the other plane layout and the disc with the same prediction,
-    then the same three layouts with the other prediction. Reading: a pairing that keeps fewer
+    with the PCA plane), then the other plane layout, then beyond the paper the loop's
+    development and the disc with the same prediction, then the same layouts with the other
+    prediction. Where the development gives a patch, :func:`patch_hole` makes the disc's too and
+    keeps the one that bends less against the surface across the border
+    (:func:`meshlab_holefill.core.border_bend.border_bend`, as curve unfolding chooses its domain).
+    The development keeps a long strip a strip where the disc rounds it; the disc suits a cap
+    round a knob, whose development the curvature distorts. Reading: a pairing that keeps fewer
     than half of the base points (the Eq. 9 pairs of a hole whose two PCA runs are its two long
     sides run along the boundary and are skipped by I_c) covers the hole badly; then the other
     choice goes first if it covers more.
@@ -260,7 +277,7 @@ def attempt_order(base, normals, seg, I_c):
         plane_layouts = ["two planes", "plane"] if segmented else ["plane", "two planes"]
         if seg["split"] is None:
             plane_layouts = ["plane"]
-        attempts += [(segmented, layout) for layout in plane_layouts + ["disc"]]
+        attempts += [(segmented, layout) for layout in plane_layouts + ["development", "disc"]]
     return attempts
 
 

@@ -3,8 +3,8 @@
 The boundary and prediction points are projected to the PCA plane of the boundary, or, for a
 segmented boundary, to the two fitted planes unfolded into one about their common line
 (Fig. 1); Triangle's constrained Delaunay triangulation keeps every boundary edge and its
-topology is applied to the 3D points. A disc layout is the fallback beyond the paper for holes
-no plane can flatten; fold-overs are handled in :mod:`.folds`.
+topology is applied to the 3D points. The loop's development, then a disc, are the fallback
+layouts beyond the paper for holes no plane can flatten; fold-overs are handled in :mod:`.folds`.
 """
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import numpy as np
 import triangle
 from scipy.spatial import cKDTree
 
+from ...geometry.development import boundary_gap_angles, simple_development
 from ...geometry.pca import fit_plane, plane_frame
 from ...geometry.topology import interior_edges, undirected_keys
 from ...geometry.triangulate import polygon_signed_area, triangulate_polygon
@@ -19,8 +20,8 @@ from ...errors import HoleFillError
 from . import folds
 from . import sections
 
-__all__ = ["PlaneMap", "points_in_polygon", "distance_to_polygon", "disc_coordinates", "inside_boundary",
-           "lateral_offsets", "triangulate_planar", "edge_sliver_apexes", "triangulate_projection",
+__all__ = ["PlaneMap", "points_in_polygon", "distance_to_polygon", "disc_coordinates", "development_coordinates",
+           "inside_boundary", "lateral_offsets", "triangulate_planar", "edge_sliver_apexes", "triangulate_projection",
            "split_forbidden_edges", "fitting_plane", "plane_map_for", "triangulate_layout"]
 
 EDGE_CLEARANCE = 0.35  # beyond the paper: a sliver apex nearer than this * L to a loop edge of length L ...
@@ -153,6 +154,35 @@ def disc_coordinates(loop_arc, perimeter, base_count, pair_a, pair_b, fraction, 
     B = circle(2 * np.pi * np.asarray(pair_b) / base_count)
     t = np.asarray(fraction)[:, None]
     return Q, (1 - t) * A + t * B
+
+
+def development_coordinates(Q, base, pair_a, pair_b, fraction):
+    """Fallback layout of the prediction points on the loop's development (beyond the paper).
+
+    Tried after both plane layouts and before the disc (:func:`disc_coordinates`): the loop is
+    laid out with its edge lengths and the surrounding surface's angles
+    (:func:`geometry.development.simple_development`), which keeps a long strip a strip where
+    the disc rounds it, and is the surface's own layout on a developable one. BP_j goes to the
+    same place on its edge of the developed polygon, and a prediction point at fraction t along
+    the chord of pair (a, b) to the same fraction of the straight chord between their images.
+    Unlike the disc's, a chord may leave a non-convex polygon: such points are left out by
+    :func:`triangulate_planar`'s inside test, as on the plane layouts.
+
+    Parameters
+    ----------
+    Q : (k, 2) float64  the developed loop (simple, counter-clockwise)
+    base : sections.BasePoints
+    pair_a, pair_b : (q,) int64  base points of the pair of each prediction point
+    fraction : (q,) float64
+
+    Returns
+    -------
+    X : (q, 2) float64
+    """
+    k = len(Q)
+    images = Q[base.edge] + base.t[:, None] * (Q[(base.edge + 1) % k] - Q[base.edge])  # (n, 2) BP_j
+    t = np.asarray(fraction)[:, None]
+    return (1 - t) * images[np.asarray(pair_a)] + t * images[np.asarray(pair_b)]
 
 
 def inside_boundary(X, BP, inward, clearance):
@@ -407,7 +437,7 @@ def plane_map_for(base, normals, seg, segmented):
 
 
 def triangulate_layout(ctx, base, normals, seg, layout, prediction_result, edge_len, excluded, stats=None):
-    """Step 6 for one layout: 'plane', 'two planes' (Sec. 4.6) or the 'disc' fallback.
+    """Step 6 for one layout: 'plane', 'two planes' (Sec. 4.6) or the 'development' and 'disc' fallbacks.
 
     Parameters
     ----------
@@ -437,6 +467,14 @@ def triangulate_layout(ctx, base, normals, seg, layout, prediction_result, edge_
                                            fraction[use], offsets)
         V, F, _, kept = triangulate_planar(P, points[use], Q, X, clearance, EDGE_CLEARANCE, stats,
                                                       LONG_EDGE * edge_len)
+    elif layout == "development":
+        gaps = boundary_gap_angles(ctx.vertices, ctx.faces, len(P))
+        Q, _ = simple_development(P, gaps, 1e-5 * edge_len)
+        if Q is None:
+            raise HoleFillError("no development of the loop is a simple polygon")
+        X = development_coordinates(Q, base, owner[use, 0], owner[use, 1], fraction[use])
+        V, F, _, kept = triangulate_planar(P, points[use], Q, X, clearance, EDGE_CLEARANCE, stats,
+                                           LONG_EDGE * edge_len)
     else:
         pmap = plane_map_for(base, normals, seg, layout == "two planes")
         V, F, orientation, kept = triangulate_projection(P, points[use], pmap, clearance, EDGE_CLEARANCE,

@@ -948,7 +948,8 @@ def test_principal_entries_are_scipys_submatrix_triples():
 
 # ----------------------------------------------------------------------------- domain='smoothest' (beyond the paper)
 
-from meshlab_holefill.algorithms.brunton2009.domain_choice import DOMAINS, border_bend, smoothest_patch  # noqa: E402
+from meshlab_holefill.algorithms.brunton2009.domain_choice import DOMAINS, smoothest_patch  # noqa: E402
+from meshlab_holefill.core.border_bend import border_bend  # noqa: E402
 from meshlab_holefill.core.patch import Patch  # noqa: E402
 
 
@@ -959,23 +960,6 @@ def _bent_sheet_hole():
     up = V[:, 1] > 0.5
     V = np.c_[V[:, 0], np.where(up, 0.5, V[:, 1]), np.where(up, V[:, 1] - 0.5, 0.0)]
     return hole_context(V, F, min(boundary_loops(F), key=len), rings=cu.RINGS)
-
-
-def test_border_bend_is_zero_on_a_plane_and_the_crease_angle_on_a_folded_cap():
-    V, F = grid(9, 9)
-    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0.0)], 0.25)
-    ctx = hole_context(V, F, min(boundary_loops(F), key=len), rings=2)
-    k = ctx.size
-    fan = np.array([[k, i, (i + 1) % k] for i in range(k)])
-    centre = ctx.points.mean(axis=0, keepdims=True)
-    assert border_bend(ctx, centre, fan) == pytest.approx(0.0, abs=1e-6)
-    # the same fan lifted: every border face meets a face tilted by the cone's slope
-    lift = 0.2
-    slopes = np.degrees(np.arctan2(lift, np.linalg.norm(ctx.points[:, :2] - centre[:, :2], axis=1)))
-    bend = border_bend(ctx, centre + [0, 0, lift], fan)
-    assert slopes.min() - 1e-6 < bend < slopes.max() + 1e-6
-    # reversed faces turn against the surface: the supplement
-    assert border_bend(ctx, centre, fan[:, ::-1]) == pytest.approx(180.0, abs=1e-6)
 
 
 def test_smoothest_is_the_whole_fill_of_the_domain_whose_patch_bends_less():

@@ -470,6 +470,56 @@ def test_disc_layout_keeps_chords_apart():
     assert np.all(np.diff(X[:, 1]) > 0)  # nested, parallel chords
 
 
+def test_development_layout_puts_base_points_on_the_developed_loop_and_points_on_their_chords():
+    from meshlab_holefill.algorithms.xie_zou2013.sections import BasePoints
+
+    Q = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 1.0], [0.0, 1.0]])  # a strip, 4 by 1
+    base = BasePoints(points=np.zeros((4, 3)), edge=np.array([0, 0, 2, 2]), t=np.array([0.25, 0.75, 0.25, 0.75]),
+                      perimeter=10.0)
+    X = hpde_mesh.development_coordinates(Q, base, np.array([0, 1]), np.array([3, 2]), np.array([0.5, 0.25]))
+    # BP_0 = (1, 0), BP_3 = (1, 1); BP_1 = (3, 0), BP_2 = (3, 1): chords straight across the strip
+    assert np.allclose(X, [[1.0, 0.5], [3.0, 0.25]])
+
+
+def _equatorial_band(width=0.1, x_from=-0.5):
+    """pymeshlab's unit sphere (subdiv 4) without a band |z| < width round more than half of the equator."""
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=4)
+    V, F = np.asarray(ms.current_mesh().vertex_matrix(), np.float64), ms.current_mesh().face_matrix()
+    C = V[F].mean(axis=1)
+    F = F[~((np.abs(C[:, 2]) < width) & (C[:, 0] > x_from))]
+    (loop,) = boundary_loops(F)
+    return hole_context(V, F, loop, rings=hpde.RINGS)
+
+
+def test_a_long_curved_strip_takes_the_development_layout_where_the_disc_rounds_it(monkeypatch):
+    ctx = _equatorial_band()
+    patch = hpde.fill(ctx)
+    bends = patch.info["border_bends"]
+    assert patch.info["layout"] == "development" and bends["development"] < bends["disc"]
+    off_sphere = lambda p: np.abs(np.linalg.norm(p.vertices, axis=1) - 1.0).mean()  # noqa: E731
+    order = hpde_algorithm2.attempt_order
+    monkeypatch.setattr(hpde_algorithm2, "attempt_order", lambda *a: [x for x in order(*a) if x[1] != "development"])
+    disc = hpde.fill(ctx)
+    assert disc.info["layout"] == "disc"
+    assert off_sphere(patch) < 0.1 * off_sphere(disc)  # measured 0.00054 and 0.0213
+
+
+def test_a_cap_round_a_knob_keeps_the_disc_layout_whose_patch_bends_less():
+    """The benchmark's bone.ply hole of 60 edges runs round the bone's end (4.7 rad of curvature inside)."""
+    from meshlab_holefill.evaluation.comparison import MeshCase, prepare_case
+    from meshlab_holefill.meshlab.mesh_files import load_mesh
+
+    from conftest import sample
+
+    V, F = load_mesh(sample("bone.ply"))
+    case = prepare_case(MeshCase("bone.ply", V, F), holes=4, seed=0)
+    loop = [lp for lp in boundary_loops(case.F0) if len(lp) == 60][0]
+    patch = hpde.fill(hole_context(case.V0, case.F0, loop, rings=hpde.RINGS))
+    bends = patch.info["border_bends"]
+    assert patch.info["layout"] == "disc" and bends["disc"] < bends["development"]
+
+
 # ----------------------------------------------------------------- step 7: Sec. 4.7
 
 def test_taubin_smoothing_keeps_boundary_and_a_planar_patch_planar():
