@@ -292,11 +292,8 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     t0 = time.perf_counter()
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m) if m > 3 else None
     planar_domains = PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
-    if domain == "smoothest" and m > 3 and development_domain(planar_domains)[0] is not None:
-        if not development_is_candidate(gaps):
-            patch = _fill_steps(ctx, **dict(params, domain="unfolding"), filled=filled)
-            patch.info["domain"] = "unfolding"
-            return patch
+    unfolding_only = domain == "smoothest" and m > 3 and not development_is_candidate(gaps)
+    if domain == "smoothest" and m > 3 and not unfolding_only and development_domain(planar_domains)[0] is not None:
         # Where the annealing gives up, the unfolding is the development: that patch is made once.
         filled = {}
         return smoothest_patch(ctx, lambda choice: _fill_steps(ctx, **dict(params, domain=choice), filled=filled))
@@ -379,6 +376,8 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
         "sliver_rounds": sliver_rounds,
         "sliver_seconds": t6 - t5,
     }
+    if unfolding_only:
+        info["domain"] = "unfolding"
     patch = Patch(vertices=vertices, faces=faces, info=info)
     if filled is not None:
         filled[key] = patch

@@ -18,6 +18,7 @@ are in the module docstring of :mod:`.differential_evolution`.
 """
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
 
@@ -107,6 +108,11 @@ class _Hole:
     smoothing: SmoothingOptions
     optimisation: OptimisationOptions
 
+    @functools.cached_property
+    def development(self):
+        """The 'development' layout's polygon, or None (:func:`.triangulation.loop_development`), found once."""
+        return triangulation.loop_development(self.ctx, self.edge_len)
+
 
 @dataclass
 class _PatchCounts:
@@ -162,6 +168,7 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
     de_options = prediction.de_options()
     attempts = attempt_order(base, normals, seg, np.radians(prediction.critical_intersection))
     predictions, reasons, best = {}, [], None
+    discs = {}  # prediction -> the disc's attempt, made beside the development's
     mesh_normals = folds.border_normals(ctx)
     hole = _Hole(ctx, base, normals, seg, edge_len, mesh_normals, smoothing, optimisation)
     prediction_seconds = 0.0
@@ -175,14 +182,18 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
         result = predictions[segmented]
         prediction_seconds += time.perf_counter() - t2
         name = f"{'segmented' if segmented else 'unsegmented'} prediction, {layout}"
-        clean, reason = _layout_patch(hole, layout, result, name)
+        if layout == "disc" and segmented in discs:
+            clean, reason = discs.pop(segmented)
+        else:
+            clean, reason = _layout_patch(hole, layout, result, name)
         if clean is None:
             reasons.append(reason)
             continue
         bends = None
         if layout == "development":
             # The disc, the other fallback layout, may continue the surface better (a cap round a knob).
-            disc, _ = _layout_patch(hole, "disc", result, name.replace("development", "disc"))
+            discs[segmented] = _layout_patch(hole, "disc", result, name.replace("development", "disc"))
+            disc = discs[segmented][0]
             if disc is not None:
                 bends = {"development": border_bend(ctx, clean.V[k:], clean.F),
                          "disc": border_bend(ctx, disc.V[k:], disc.F)}
@@ -297,8 +308,9 @@ def _layout_patch(hole, layout, result, name):
         try:
             t3 = time.perf_counter()
             tri_stats = {}
-            V, F, ids = triangulation.triangulate_layout(ctx, hole.base, hole.normals, hole.seg, layout, result,
-                                                         hole.edge_len, excluded, tri_stats)
+            V, F, ids = triangulation.triangulate_layout(
+                ctx, hole.base, hole.normals, hole.seg, layout, result, hole.edge_len, excluded, tri_stats,
+                development=hole.development if layout == "development" else None)
             t4 = time.perf_counter()
             attempt_record = {}
             V, F, stats, bad_ids = smooth_and_optimise(V, F, ids, ctx, hole.edge_len, hole.mesh_normals,

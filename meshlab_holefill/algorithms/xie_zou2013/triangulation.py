@@ -22,7 +22,7 @@ from . import sections
 
 __all__ = ["PlaneMap", "points_in_polygon", "distance_to_polygon", "disc_coordinates", "development_coordinates",
            "inside_boundary", "lateral_offsets", "triangulate_planar", "edge_sliver_apexes", "triangulate_projection",
-           "split_forbidden_edges", "fitting_plane", "plane_map_for", "triangulate_layout"]
+           "split_forbidden_edges", "fitting_plane", "plane_map_for", "loop_development", "triangulate_layout"]
 
 EDGE_CLEARANCE = 0.35  # beyond the paper: a sliver apex nearer than this * L to a loop edge of length L ...
 LONG_EDGE = 2.0  # ... longer than this * EdgeLen is left out (triangulate_planar)
@@ -436,13 +436,25 @@ def plane_map_for(base, normals, seg, segmented):
     return PlaneMap(*fitting_plane(base.points, normals))
 
 
-def triangulate_layout(ctx, base, normals, seg, layout, prediction_result, edge_len, excluded, stats=None):
+def loop_development(ctx, edge_len):
+    """The loop's least relaxed simple development (:func:`geometry.development.simple_development`), or None.
+
+    The polygon of the 'development' layout (:func:`development_coordinates`), clearance 1e-5 EdgeLen.
+    """
+    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, ctx.size)
+    return simple_development(ctx.points, gaps, 1e-5 * edge_len)[0]
+
+
+def triangulate_layout(ctx, base, normals, seg, layout, prediction_result, edge_len, excluded, stats=None,
+                       development=None):
     """Step 6 for one layout: 'plane', 'two planes' (Sec. 4.6) or the 'development' and 'disc' fallbacks.
 
     Parameters
     ----------
     excluded : (q,) bool  prediction points left out (outliers of earlier rounds)
     stats : dict, optional  receives ``edge_cleared`` (points left out by EDGE_CLEARANCE alone)
+    development : (k, 2) float64, optional  the 'development' layout's polygon when the caller has it
+        (:func:`loop_development`, computed here otherwise)
 
     Returns
     -------
@@ -468,8 +480,7 @@ def triangulate_layout(ctx, base, normals, seg, layout, prediction_result, edge_
         V, F, _, kept = triangulate_planar(P, points[use], Q, X, clearance, EDGE_CLEARANCE, stats,
                                                       LONG_EDGE * edge_len)
     elif layout == "development":
-        gaps = boundary_gap_angles(ctx.vertices, ctx.faces, len(P))
-        Q, _ = simple_development(P, gaps, 1e-5 * edge_len)
+        Q = loop_development(ctx, edge_len) if development is None else development
         if Q is None:
             raise HoleFillError("no development of the loop is a simple polygon")
         X = development_coordinates(Q, base, owner[use, 0], owner[use, 1], fraction[use])

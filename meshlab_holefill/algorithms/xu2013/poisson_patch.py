@@ -98,7 +98,7 @@ def reference_normals(ctx):
     return np.where(length > 1e-12, N / np.maximum(length, 1e-300), ctx.loop_normals)
 
 
-def planar_boundaries(ctx):
+def planar_boundaries(ctx, gaps=None):
     """Simple planar polygons for the boundary, for holes the 3D advancing front cannot cover.
 
     Not in the paper. The development of the boundary (its edge lengths, and at each vertex
@@ -111,6 +111,11 @@ def planar_boundaries(ctx):
     ``scripts/large_holes.py --seeds 3``'s 372-edge hole, which failed, closes (8.87; CGAL 9.73);
     ``--seeds 1,2``'s 308-edge cow hole 0.70 -> 0.85 (CGAL 0.76), the other 23 unchanged.
 
+    Parameters
+    ----------
+    ctx : HoleContext
+    gaps : (k,) float64, optional  :func:`geometry.development.boundary_gap_angles` of the loop, when known
+
     Returns
     -------
     list of (name, (k, 3) float64 with z = 0, counter-clockwise seen from +z)
@@ -118,7 +123,7 @@ def planar_boundaries(ctx):
     from ...geometry.pca import fit_plane, project_to_plane
 
     k = ctx.size
-    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, k)
+    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, k) if gaps is None else gaps
     c, n, _, _ = fit_plane(ctx.points)
     vector_area = np.cross(ctx.points, np.roll(ctx.points, -1, axis=0)).sum(axis=0)
     developed = develop_loop(ctx.points, gaps)
@@ -271,7 +276,8 @@ def initial_patches(ctx, merge_factor, failures):
         yield np.concatenate([P, new_vertices]), F, stats, None
     except HoleFillError as exc:
         failures.append(f"3d advancing front: {exc}")
-    for name, D in planar_boundaries(ctx):
+    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, len(P))
+    for name, D in planar_boundaries(ctx, gaps):
         try:
             new_vertices, F, stats = advancing_front_triangulation(D, ctx.forbidden_edges, merge_factor,
                                                                    reference_normal=(0.0, 0.0, 1.0))
@@ -280,7 +286,7 @@ def initial_patches(ctx, merge_factor, failures):
             continue
         stats["domain"] = name
         if name == "developed":
-            stats["enclosed_curvature"] = enclosed_curvature(boundary_gap_angles(ctx.vertices, ctx.faces, len(P)))
+            stats["enclosed_curvature"] = enclosed_curvature(gaps)
         layout = np.concatenate([D, new_vertices])
         X = harmonic_lift(layout, F, P)
         stretch = lift_stretch(X, layout, F, len(P))
