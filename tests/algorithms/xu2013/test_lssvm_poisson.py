@@ -309,6 +309,25 @@ def test_star_shaped_holes_close_without_overlap(k, lobes, amplitude, phase, til
     assert len(faces_intersecting(X, F, np.arange(len(F)), np.arange(len(F)))) == 0
 
 
+@settings(max_examples=30, deadline=None)
+@given(k=st.integers(8, 120), lobes=st.integers(2, 6), amplitude=st.floats(0.0, 0.35),
+       saddle=st.floats(0.0, 0.3), phase=st.floats(0.0, 6.28))
+def test_closing_fronts_stay_well_inside_the_triangle_bound(k, lobes, amplitude, saddle, phase):
+    # The default bound stops fronts that left the hole early; one that closes (here star-shaped and
+    # saddle-shaped loops, whose surface the vector area underestimates) uses under half of it.
+    from meshlab_holefill.algorithms.xu2013.advancing_front import FACE_BOUND
+
+    t = np.linspace(0, 2 * np.pi, k, endpoint=False)
+    r = 1 + amplitude * np.sin(lobes * t + phase)
+    P = np.stack([r * np.cos(t), r * np.sin(t), saddle * r * np.cos(2 * t)], axis=1)
+    Q = P - P[0]
+    area = np.linalg.norm(0.5 * np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0))
+    h = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean()
+    bound = FACE_BOUND * area / (0.43 * h * h) + 10 * k + 100
+    nv, F, _ = advancing_front_triangulation(P)
+    assert len(F) < 0.5 * bound
+
+
 def test_self_crossing_boundary_fails_clearly():
     # A figure-eight: no valid disk patch exists; the front's growth bound stops it.
     t = np.linspace(0, 2 * np.pi, 40, endpoint=False)

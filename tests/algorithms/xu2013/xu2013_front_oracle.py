@@ -17,8 +17,8 @@ from meshlab_holefill.algorithms.xu2013._front_kernels import merge_target, near
 from meshlab_holefill.algorithms.xu2013._front_obstacles import FrontObstacles
 from meshlab_holefill.algorithms.xu2013._front_predicates import cross, dot, front_angle, norm, scaled, sub, unit
 from meshlab_holefill.algorithms.xu2013.advancing_front import (
-    ANGLE_MARGIN, FALLBACK_ONE_TRIANGLE_MAX, FOLD_MIN_COS, FRONT_GROWTH_LIMIT, HOVER_FACTOR, MERGE_EAR_MAX,
-    ONE_TRIANGLE_MAX, TWO, TWO_TRIANGLES_MAX)
+    ANGLE_MARGIN, FACE_BOUND, FALLBACK_ONE_TRIANGLE_MAX, FOLD_MIN_COS, FRONT_GROWTH_LIMIT, HOVER_FACTOR,
+    MERGE_EAR_MAX, ONE_TRIANGLE_MAX, TWO, TWO_TRIANGLES_MAX)
 
 _NO_NORMAL = (math.nan, math.nan, math.nan)
 
@@ -559,7 +559,7 @@ def oracle_triangulation(points, forbidden_edges=(), merge_factor=0.75, max_face
     n_ref = n_ref / np.maximum(np.linalg.norm(n_ref, axis=1, keepdims=True), 1e-300)
     if max_faces is None:
         h = float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean()) or 1.0
-        max_faces = int(20 * area / (0.43 * h * h) + 10 * k + 100)
+        max_faces = int(FACE_BOUND * area / (0.43 * h * h) + 10 * k + 100)
     front = PythonFront(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ear_max)
     new_vertices, faces = front.run()
     stats = dict(front.stats)
