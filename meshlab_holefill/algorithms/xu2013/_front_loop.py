@@ -41,7 +41,7 @@ MAX_FRONT, KEPT_BLOCKED, FAN_CLOSURES, RELEASED_NEAR = 15, 16, 17, 18
 E_USED, F_USED = 19, 20  # slots used (live or deleted) in the edge tables
 N_COUNTERS = 21
 # Outcomes of run_front.
-CLOSED, TOO_MANY_FACES, GREW, STUCK = 0, 1, 2, 3
+CLOSED, TOO_MANY_FACES, GREW, STUCK, LEFT_BALL = 0, 1, 2, 3, 4
 
 # Slots of the hash tables of vertex pairs: never used, deleted.
 EMPTY, DELETED = -1, -2
@@ -235,7 +235,8 @@ FrontArrays = namedtuple("FrontArrays", [
     "faces", "ht", "hn", "hv", "fsize", "blocked", "ekeys", "fkeys", "fvals", "C", "Fs"])
 FrontParams = namedtuple("FrontParams", [
     "k", "merge_factor", "merge_ear_max", "S_max", "longest_edge", "cell", "max_faces", "limit", "min_sin",
-    "min_cos", "one_max", "two_max", "fallback_one_max", "angle_margin", "fold_min_cos", "hover", "two"])
+    "min_cos", "one_max", "two_max", "fallback_one_max", "angle_margin", "fold_min_cos", "hover", "two",
+    "ball_x", "ball_y", "ball_z", "ball_r2"])
 # The surrounding mesh (FrontObstacles' arrays); ``has`` False: none.
 FrontObstacleArrays = namedtuple("FrontObstacleArrays", [
     "has", "V", "F", "base", "dims", "keys", "starts", "cell_faces", "lo", "hi", "stamp", "out"])
@@ -892,10 +893,13 @@ def run_front(st, pr, ob, sc):
     """Steps 2-6 until every front is closed (Sec. 3.2); (outcome, front vertices, final state).
 
     Outcomes: CLOSED; TOO_MANY_FACES (more than ``pr.max_faces`` triangles); GREW (the fronts
-    hold more than ``pr.limit`` vertices: they left the hole); STUCK (no step possible and no
-    small front to close by a fan). The front-vertex count is the one the outcome refers to.
+    hold more than ``pr.limit`` vertices: they left the hole); LEFT_BALL (a new vertex lies
+    farther than sqrt(``pr.ball_r2``) from (``pr.ball_x``, ``pr.ball_y``, ``pr.ball_z``): the
+    front left the hole; the count is that vertex's index); STUCK (no step possible and no small
+    front to close by a fan). The front-vertex count is the one the outcome refers to.
     """
     C = st.C
+    checked = C[N_VERT]  # vertices before this one are inside the ball
     while True:
         size, fronts = 0, 0
         for label in range(C[NEXT_LABEL]):
@@ -904,6 +908,11 @@ def run_front(st, pr, ob, sc):
                 fronts += 1
         if fronts == 0:
             return CLOSED, 0, st
+        while checked < C[N_VERT]:
+            dx, dy, dz = st.P[checked, 0] - pr.ball_x, st.P[checked, 1] - pr.ball_y, st.P[checked, 2] - pr.ball_z
+            if dx * dx + dy * dy + dz * dz > pr.ball_r2:
+                return LEFT_BALL, checked, st
+            checked += 1
         if C[N_FACES] > pr.max_faces:
             return TOO_MANY_FACES, size, st
         C[MAX_FRONT] = max(C[MAX_FRONT], size)

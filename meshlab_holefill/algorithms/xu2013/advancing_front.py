@@ -44,9 +44,9 @@ and no new vertex may come within 0.35 target lengths of one. A rejected step is
 with the next rule down (three triangles -> two -> one) and then at the vertex with the next
 smallest angle; a front of at most 6 vertices on which every step is refused is closed by a
 fan. The run stops with :class:`HoleFillError` when no step is possible, when the fronts grow
-past 1.3 times the boundary's vertex count plus 20 (the front has left the hole: it runs over
-the surrounding surface or out of a hole wrapped around a tube), or past a bound on the
-triangle count: it always ends.
+past 1.3 times the boundary's vertex count plus 20 or a new vertex lies outside the loop's ball
+(``LEAVE_RADIUS``; either way the front has left the hole: it runs over the surrounding surface
+or out of a hole wrapped around a tube), or past a bound on the triangle count: it always ends.
 
 The whole step loop runs compiled (:mod:`._front_loop`: the heap, the linked-list fronts and
 the edge sets in arrays and typed dicts, driving the per-step checks of :mod:`._front_kernels`);
@@ -59,8 +59,8 @@ import math
 import numpy as np
 
 from ...errors import HoleFillError
-from ._front_loop import (CLOSED, FAN_CLOSURES, GREW, KEPT_BLOCKED, MAX_FRONT, MERGES, N_FACES, N_VERT,
-                          OBSTACLE_TESTS, REJECTED, RELEASED_NEAR, RULE1, RULE2, RULE3, SPLITS, STEPS, STUCK,
+from ._front_loop import (CLOSED, FAN_CLOSURES, GREW, KEPT_BLOCKED, LEFT_BALL, MAX_FRONT, MERGES, N_FACES,
+                          N_VERT, OBSTACLE_TESTS, REJECTED, RELEASED_NEAR, RULE1, RULE2, RULE3, SPLITS, STEPS, STUCK,
                           FrontObstacleArrays, FrontParams, Scratch, initial_state, run_front)
 from ._front_obstacles import FrontObstacles
 from ._front_predicates import PLANE_MIN_COS, PLANE_MIN_SIN
@@ -91,6 +91,11 @@ FRONT_GROWTH_LIMIT = 1.3
 # surface, most of its steps refused, until a bound stops it: with 20 such runs took 4.6 of the
 # 5.3 s those holes spent in the front, with 4 3.3 s.
 FACE_BOUND = 4.0
+# A front that closes keeps its vertices near the loop: within 0.99 times the largest distance of
+# a loop vertex from the loop's centroid on the 120 closing runs above. A new vertex beyond this
+# many times that distance has left the hole (on those holes the failing fronts crossed it after
+# 60 % of the vertices they made, the closing ones never).
+LEAVE_RADIUS = 1.25
 # A new vertex must keep this fraction of its target edge length away from the surrounding
 # mesh: closer, the front is running over the existing surface instead of across the hole.
 HOVER_FACTOR = 0.35
@@ -117,6 +122,16 @@ def _obstacle_arrays(obstacles, cell, k):
     return arrays, np.ascontiguousarray(ob.border_faces(), np.int64)
 
 
+def leave_ball(P):
+    """Centre (x, y, z) and squared radius of the ball a closing front stays in (``LEAVE_RADIUS``).
+
+    The loop's centroid and ``LEAVE_RADIUS`` times its vertices' largest distance from it.
+    """
+    centre = P.mean(axis=0)
+    radius = LEAVE_RADIUS * float(np.sqrt(((P - centre) ** 2).sum(axis=1).max()))
+    return float(centre[0]), float(centre[1]), float(centre[2]), radius * radius
+
+
 def _run(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ear_max):
     """Set up the compiled loop's state (Step 1) and run it (Steps 2-6); (new vertices, faces, stats)."""
     k = len(P)
@@ -127,7 +142,8 @@ def _run(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ea
     params = FrontParams(int(k), float(merge_factor), math.inf if merge_ear_max is None else float(merge_ear_max),
                          float(S.max()), float(lengths.max()), float(cell), int(max_faces),
                          float(FRONT_GROWTH_LIMIT * k + 20), PLANE_MIN_SIN, PLANE_MIN_COS, ONE_TRIANGLE_MAX,
-                         TWO_TRIANGLES_MAX, FALLBACK_ONE_TRIANGLE_MAX, ANGLE_MARGIN, FOLD_MIN_COS, HOVER_FACTOR, TWO)
+                         TWO_TRIANGLES_MAX, FALLBACK_ONE_TRIANGLE_MAX, ANGLE_MARGIN, FOLD_MIN_COS, HOVER_FACTOR, TWO,
+                         *leave_ball(P))
     ob, border_faces = _obstacle_arrays(obstacles, cell, k)
     normals = np.ascontiguousarray(np.broadcast_to(n_ref, (k, 3)), np.float64)
     forbidden = np.ascontiguousarray(np.asarray(forbidden_edges, np.int64).reshape(-1, 2))
@@ -138,6 +154,9 @@ def _run(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ea
     C = st.C
     if outcome == GREW:
         raise HoleFillError(f"advancing front grew to {size} vertices from {k}: it left the hole")
+    if outcome == LEFT_BALL:
+        raise HoleFillError(f"advancing front left the hole: its vertex {size} lies more than {LEAVE_RADIUS} times the "
+                            "loop's radius from the loop's centre")
     if outcome == STUCK:
         raise HoleFillError("advancing front is stuck: no valid triangle can be added "
                             f"({size} front vertices left)")

@@ -329,11 +329,11 @@ def test_closing_fronts_stay_well_inside_the_triangle_bound(k, lobes, amplitude,
 
 
 def test_self_crossing_boundary_fails_clearly():
-    # A figure-eight: no valid disk patch exists; the front's growth bound stops it.
+    # A figure-eight: no valid disk patch exists; the front runs out of the loop's ball and is stopped.
     t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
     P = np.stack([np.sin(t), np.sin(t) * np.cos(t), np.zeros_like(t)], axis=1)
     P[:, 2] = 1e-3 * np.cos(t)
-    with pytest.raises(HoleFillError, match="advancing front grew to .* it left the hole"):
+    with pytest.raises(HoleFillError, match="advancing front left the hole: its vertex .* loop's radius"):
         advancing_front_triangulation(P)
 
 

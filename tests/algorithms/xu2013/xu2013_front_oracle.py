@@ -18,7 +18,7 @@ from meshlab_holefill.algorithms.xu2013._front_obstacles import FrontObstacles
 from meshlab_holefill.algorithms.xu2013._front_predicates import cross, dot, front_angle, norm, scaled, sub, unit
 from meshlab_holefill.algorithms.xu2013.advancing_front import (
     ANGLE_MARGIN, FACE_BOUND, FALLBACK_ONE_TRIANGLE_MAX, FOLD_MIN_COS, FRONT_GROWTH_LIMIT, HOVER_FACTOR,
-    MERGE_EAR_MAX, ONE_TRIANGLE_MAX, TWO, TWO_TRIANGLES_MAX)
+    LEAVE_RADIUS, MERGE_EAR_MAX, ONE_TRIANGLE_MAX, TWO, TWO_TRIANGLES_MAX, leave_ball)
 
 _NO_NORMAL = (math.nan, math.nan, math.nan)
 
@@ -306,7 +306,14 @@ class PythonFront(FrontState):
     # ----------------------------------------------------------------- main loop
     def run(self):
         limit = FRONT_GROWTH_LIMIT * self.k + 20
+        *centre, r2 = leave_ball(np.asarray(self.P[:self.k], np.float64))
+        checked = len(self.P)
         while self.front_size:
+            for i in range(checked, len(self.P)):
+                if sum((self.P[i][j] - centre[j]) ** 2 for j in range(3)) > r2:
+                    raise HoleFillError(f"advancing front left the hole: its vertex {i} lies more than {LEAVE_RADIUS} "
+                                        "times the loop's radius from the loop's centre")
+            checked = len(self.P)
             if len(self.faces) > self.max_faces:
                 raise HoleFillError(f"advancing front did not close within {self.max_faces} triangles")
             size = sum(self.front_size.values())
