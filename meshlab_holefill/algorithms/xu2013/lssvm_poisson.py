@@ -34,6 +34,7 @@ import time
 import numpy as np
 
 from ...core.blas_threads import single_blas_thread
+from ...core.border_bend import border_bend
 from ...core.parameters import ParamSpec
 from ...core.patch import Patch
 from ...errors import HoleFillError
@@ -86,7 +87,8 @@ PARAMS = [
               "Poisson solves (Sec. 3.4): the patch's cotangent Laplacian depends on the positions, so further "
               "solves use the previous result's weights. A patch built on the loop's development (the fallback "
               f"where the 3D front leaves the hole) whose loop encloses more than {CURVED_DEVELOPMENT} rad of "
-              "Gaussian curvature gets at least 2: its first solve's weights are the development's.",
+              "Gaussian curvature also gets a second, kept if its patch meets the surrounding surface with the "
+              "smaller bend: its first solve's weights are the development's.",
               minimum=1, maximum=50),
     ParamSpec("poisson_boundary", "enum", "laplacian",
               "Boundary condition of the Poisson equation (Sec. 2.3): 'laplacian' (the hole boundary is fixed and "
@@ -151,6 +153,23 @@ def _one_blas_thread(fill_function):
         with single_blas_thread():
             return fill_function(*args, **kwargs)
     return wrapped
+
+
+def _less_bent(ctx, curved, asked):
+    """Of the repositioned patches with the solves :func:`.poisson_reconstruction.poisson_solves` added
+    (``curved``) and with those asked for (``asked``), each (X, F, info), the one whose patch meets the
+    surrounding surface with the smaller :func:`core.border_bend.border_bend` (a tie, or a patch not
+    clear of the mesh, goes to ``curved``); ``info["curved_solve_kept"]`` says which.
+    """
+    k = ctx.size
+    kept = curved
+    if curved[0] is not None and asked[0] is not None:
+        if border_bend(ctx, asked[0][k:], asked[1]) < border_bend(ctx, curved[0][k:], curved[1]):
+            kept = asked
+    elif curved[0] is None:
+        kept = asked
+    kept[2]["curved_solve_kept"] = kept is curved
+    return kept
 
 
 @_one_blas_thread
@@ -237,6 +256,10 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
         t2 = time.perf_counter()
         solves = poisson_solves(stats, poisson_iterations)
         X, F, pinfo = reposition(ctx, X0, F0, regressors, solves, relax, poisson_boundary, layout)
+        if solves > poisson_iterations:
+            X, F, pinfo = _less_bent(ctx, (X, F, pinfo),
+                                     reposition(ctx, X0, F0, regressors, poisson_iterations, relax, poisson_boundary,
+                                                layout))
         t3 = time.perf_counter()
         if X is None:
             failures.append(f"{stats['domain']} patch: intersects the surrounding mesh")

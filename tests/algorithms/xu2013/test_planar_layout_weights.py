@@ -130,6 +130,39 @@ def test_only_a_development_enclosing_curvature_gets_two_solves():
     assert stats["enclosed_curvature"] > 2.0 and pr.poisson_solves(stats, 1) == 2
 
 
+def test_the_added_solve_is_kept_only_when_its_patch_bends_less_at_the_border(monkeypatch):
+    from meshlab_holefill.core.border_bend import border_bend
+
+    _, ctx = sphere_hole()
+    k = ctx.size
+    repositioned = []
+    reposition = xu.reposition
+
+    def spy(*args, **kwargs):
+        repositioned.append((args[4], reposition(*args, **kwargs)))
+        return repositioned[-1][1]
+
+    monkeypatch.setattr(xu, "reposition", spy)
+    assert [solves for solves, _ in repositioned] == [] and xu.fill(ctx).info["afm_domain"] == "3d"
+    assert [solves for solves, _ in repositioned] == [1]  # the 3D front closed it: nothing added
+    # The patch on the loop's development (the fallback where the 3D front leaves the hole):
+    initial_patches = xu.initial_patches
+    monkeypatch.setattr(xu, "initial_patches", lambda *args: (
+        p for p in initial_patches(*args) if p[2]["domain"] == "developed"))
+    repositioned.clear()
+    patch = xu.fill(ctx)
+    (two, curved), (one, asked) = repositioned
+    assert (two, one) == (2, 1)
+    bends = [border_bend(ctx, X[k:], F) for X, F, _ in (curved, asked)]
+    kept = curved if bends[0] <= bends[1] else asked
+    assert patch.info["curved_solve_kept"] == (kept is curved)
+    assert np.array_equal(patch.vertices, kept[0][k:]) and np.array_equal(patch.faces, kept[1])
+    # Asked for two solves, the user gets them: nothing is added, nothing compared.
+    repositioned.clear()
+    assert "curved_solve_kept" not in xu.fill(ctx, poisson_iterations=2).info
+    assert [solves for solves, _ in repositioned] == [2]
+
+
 def test_a_development_that_touches_itself_gives_way_to_the_least_relaxed_simple_one(monkeypatch):
     """The benchmark's torus hole of 211 edges wraps round the tube: its plain development touches itself."""
     from meshlab_holefill.algorithms.xu2013 import poisson_patch

@@ -485,7 +485,6 @@ class PythonFront(FrontState):
 
     def _valid(self, node, faces, new_pos, sequence):
         """Topological and geometric checks of one step (see module docstring)."""
-        m = self.node_plane[node]
         label = self.node_front[node]
         directed = []
         for a, b, c in faces:
