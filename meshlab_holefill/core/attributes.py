@@ -92,9 +92,10 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
     n, m = len(arrays.V), len(arrays.F)
     new_v_owner = np.repeat(np.arange(len(loops)), new_vertex_counts)
     weights = []
-    for h, loop in enumerate(loops):
-        targets = V2[n:][new_v_owner == h]
-        weights.append(_idw_weights(arrays.V[loop], targets) if len(targets) else np.zeros((0, len(loop))))
+    if arrays.vertex_attrs or arrays.wedge_texcoords is not None:  # nothing to interpolate otherwise
+        for h, loop in enumerate(loops):
+            targets = V2[n:][new_v_owner == h]
+            weights.append(_idw_weights(arrays.V[loop], targets) if len(targets) else np.zeros((0, len(loop))))
     vertex_attrs = {}
     for name, A in arrays.vertex_attrs.items():
         parts = [A] + [_new_values(name, W @ A[loop]) for W, loop in zip(weights, loops)]
