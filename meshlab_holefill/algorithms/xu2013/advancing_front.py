@@ -84,17 +84,17 @@ MERGE_EAR_MAX = math.radians(120.0)
 # A front of a disk-like hole shrinks; one that grows past this many times the boundary's
 # vertex count has run out of the hole (over the surrounding surface).
 FRONT_GROWTH_LIMIT = 1.3
-# The triangle bound is this many times the estimate from the boundary's vector area and mean
-# edge length, plus 10 k + 100. Fronts that close (120 runs on the benchmark's cut and natural
-# holes and the Loop-subdivided samples' large and strip holes) used at most 0.29 of it, the
-# same patches as with 20 times the estimate; a front that has left the hole runs on over the
-# surface, most of its steps refused, until a bound stops it: with 20 such runs took 4.6 of the
-# 5.3 s those holes spent in the front, with 4 3.3 s.
+# The default triangle bound is this many times the estimate from the boundary's vector area and
+# mean edge length, plus 10 k + 100. Fronts that close (120 runs on the benchmark's cut and natural
+# holes and the Loop-subdivided samples' large and strip holes) used at most 0.29 of it and gave the
+# same patches as with 20 times the estimate. A front that has left the hole runs on, most of its
+# steps refused, until a bound stops it: on those holes such runs took 4.6 of the 5.3 s spent in the
+# front with 20 times the estimate, 3.3 s with 4, and 2.1 s with the ball below as well.
 FACE_BOUND = 4.0
 # A front that closes keeps its vertices near the loop: within 0.99 times the largest distance of
 # a loop vertex from the loop's centroid on the 120 closing runs above. A new vertex beyond this
-# many times that distance has left the hole (on those holes the failing fronts crossed it after
-# 60 % of the vertices they made, the closing ones never).
+# many times that distance has left the hole (the failing fronts there crossed it after 60 % of
+# the vertices they made, the closing ones never).
 LEAVE_RADIUS = 1.25
 # A new vertex must keep this fraction of its target edge length away from the surrounding
 # mesh: closer, the front is running over the existing surface instead of across the hole.
@@ -155,7 +155,7 @@ def _run(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ea
     if outcome == GREW:
         raise HoleFillError(f"advancing front grew to {size} vertices from {k}: it left the hole")
     if outcome == LEFT_BALL:
-        raise HoleFillError(f"advancing front left the hole: its vertex {size} lies more than {LEAVE_RADIUS} times the "
+        raise HoleFillError(f"advancing front left the hole: a new vertex lies more than {LEAVE_RADIUS} times the "
                             "loop's radius from the loop's centre")
     if outcome == STUCK:
         raise HoleFillError("advancing front is stuck: no valid triangle can be added "

@@ -156,10 +156,12 @@ def _one_blas_thread(fill_function):
 
 
 def _less_bent(ctx, curved, asked):
-    """Of the repositioned patches with the solves :func:`.poisson_reconstruction.poisson_solves` added
-    (``curved``) and with those asked for (``asked``), each (X, F, info), the one whose patch meets the
-    surrounding surface with the smaller :func:`core.border_bend.border_bend` (a tie, or a patch not
-    clear of the mesh, goes to ``curved``); ``info["curved_solve_kept"]`` says which.
+    """The repositioned patch, of two, that bends less against the surrounding surface at the border.
+
+    ``curved`` has the solves :func:`.poisson_reconstruction.poisson_solves` added, ``asked`` those
+    the filter was asked for; each is (X, F, info), X None when the patch was not clear of the mesh.
+    The smaller :func:`core.border_bend.border_bend` wins, a tie going to ``curved``;
+    ``info["curved_solve_kept"]`` says which was kept.
     """
     k = ctx.size
     kept = curved

@@ -333,7 +333,7 @@ def test_self_crossing_boundary_fails_clearly():
     t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
     P = np.stack([np.sin(t), np.sin(t) * np.cos(t), np.zeros_like(t)], axis=1)
     P[:, 2] = 1e-3 * np.cos(t)
-    with pytest.raises(HoleFillError, match="advancing front left the hole: its vertex .* loop's radius"):
+    with pytest.raises(HoleFillError, match="advancing front left the hole: a new vertex lies more than .* loop's radius"):
         advancing_front_triangulation(P)
 
 

@@ -311,7 +311,7 @@ class PythonFront(FrontState):
         while self.front_size:
             for i in range(checked, len(self.P)):
                 if sum((self.P[i][j] - centre[j]) ** 2 for j in range(3)) > r2:
-                    raise HoleFillError(f"advancing front left the hole: its vertex {i} lies more than {LEAVE_RADIUS} "
+                    raise HoleFillError(f"advancing front left the hole: a new vertex lies more than {LEAVE_RADIUS} "
                                         "times the loop's radius from the loop's centre")
             checked = len(self.P)
             if len(self.faces) > self.max_faces:
