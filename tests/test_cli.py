@@ -1,6 +1,10 @@
-import numpy as np
-import pymeshlab
+import json
+import logging
 
+import pymeshlab
+import pytest
+
+import meshlab_holefill
 from meshlab_holefill.cli import main
 
 from conftest import sample
@@ -77,14 +81,6 @@ def test_fill_with_a_builtin_filter_reports_a_bad_value_or_name_clearly(tmp_path
 
 import csv
 import io
-import json
-import logging
-
-import pytest
-
-import meshlab_holefill
-from meshlab_holefill import cli
-
 BUNNY = sample("bunny10k_textured.obj")
 FAST = ["--filter", "meshing_close_holes_min_angle_bilateral", "--iterations", "1", "--workers", "1"]
 
