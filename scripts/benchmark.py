@@ -59,7 +59,7 @@ REAL_SIZE_HOLES = ("irregular", "large", "irregular")  # targets 250, 150, 250 b
 # with its defaults and with every hole allowed.
 # CGAL's Liepa fill and MeshFix as open anchors (skipped with a note when not installed).
 DEFAULT_FILTERS = ("ours,lssvm_poisson:laplacian_prediction=zero:poisson_boundary=dirichlet,min_angle_bilateral:fairing=thinplate:iterations=0:smoothing=10,"
-                   "curve_unfolding:domain=unfolding,anchors,baseline")
+                   "curve_unfolding:domain=unfolding,differential_evolution:layouts=smoothest,anchors,baseline")
 
 
 def load_case(name):

@@ -376,6 +376,8 @@ PRESET_WORKFLOWS = {
     "close_holes_min_angle_bilateral_faired.mlx": ("meshing_close_holes_min_angle_bilateral",
                                                    {"iterations": 0, "fairing": "thinplate", "smoothing": 10}),
     "close_holes_curve_unfolding_developed.mlx": ("meshing_close_holes_curve_unfolding", {"domain": "development"}),
+    "close_holes_differential_evolution_smoothest.mlx": ("meshing_close_holes_differential_evolution",
+                                                         {"layouts": "smoothest"}),
 }
 
 

@@ -140,7 +140,7 @@ class _CleanLayout:
     optimisation_seconds: float
 
 
-def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
+def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="first"):
     """Algorithm 2, steps 2-7, for one hole (see :func:`.differential_evolution.fill`).
 
     Parameters
@@ -151,6 +151,10 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
     optimisation : OptimisationOptions
     record : dict, optional
         Receives ``smoothed_points`` of the returned patch.
+    layouts : {'first', 'smoothest'}
+        Keep the first clean attempt of :func:`attempt_order`, or make them all and keep the
+        patch with the smallest :func:`meshlab_holefill.core.border_bend.border_bend` (the first
+        of equals), its ``info["layout_bends"]`` the bend of each attempt's patch.
 
     Returns
     -------
@@ -172,6 +176,7 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
     mesh_normals = folds.border_normals(ctx)
     hole = _Hole(ctx, base, normals, seg, edge_len, mesh_normals, smoothing, optimisation)
     prediction_seconds = 0.0
+    made = []  # with layouts='smoothest': (bend, attempt's name, patch, record) of every attempt
     for segmented, layout in attempts:
         t2 = time.perf_counter()
         if segmented not in predictions:
@@ -211,6 +216,9 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
         if bends is not None:
             info["border_bends"] = bends
         patch = Patch(vertices=clean.V[k:], faces=clean.F, info=info)
+        if layouts == "smoothest":
+            made.append((border_bend(ctx, patch.vertices, patch.faces), name, patch, clean.record))
+            continue
         if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
             if reasons:
                 info["attempts_failed"] = "; ".join(reasons)
@@ -221,6 +229,14 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None):
         if best is None or kept > best.info["kept_share"]:
             best, best_record = patch, clean.record
         reasons.append(f"{name}: kept only {kept:.0%} of the prediction points")
+    if made:
+        _, _, patch, kept_record = min(made, key=lambda m: m[0] if m[0] == m[0] else np.inf)  # NaN: no border edge
+        patch.info["layout_bends"] = {name: float(b) for b, name, _, _ in made}
+        if reasons:
+            patch.info["attempts_failed"] = "; ".join(reasons)
+        if record is not None:
+            record.update(kept_record)
+        return patch
     if best is not None:
         best.info["attempts_failed"] = "; ".join(reasons)
         if record is not None:

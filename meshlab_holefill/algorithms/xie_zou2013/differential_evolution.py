@@ -153,6 +153,11 @@ PARAMS = [
               "optimisation, evening out the triangles without changing the shape; on by default for triangle "
               "quality; 0 = the paper.",
               minimum=0, maximum=1000),
+    ParamSpec("layouts", "enum", "first",
+              "Which attempt's patch is kept: 'first' (the paper's choice, the other layouts only where it "
+              "fails) or 'smoothest' (beyond the paper: every prediction and layout is tried and the patch that "
+              "bends least against the surrounding surface across the hole's border is kept; about four times "
+              "the time).", choices=("first", "smoothest")),
 ]
 
 _WARM = []  # set once the kernels are loaded in this process
@@ -181,7 +186,7 @@ def warm_up():
 def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=100, critical_dihedral=90.0,
          critical_intersection=12.0, num_smooth=60, decimation_rate=0.6, seed=0, relax=10, smoothing="taubin",
          record=None, smoothing_anchor=0.15, arc_tangent="secant", quality_floor=0.4, taubin_pass_band=0.0,
-         taubin_lambda=0.33):
+         taubin_lambda=0.33, layouts="first"):
     """Fill one hole by HPDE, Algorithm 2 steps 2-7.
 
     Attempts (first clean one wins): the paper's choice (segmented prediction with two
@@ -210,6 +215,10 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
         Beyond the paper: tangential relaxation passes and the floor of the final quality pass.
     arc_tangent : {'secant', 'circle'}
         Start angle of the arcs of Sec. 4.5.
+    layouts : {'first', 'smoothest'}
+        'first' keeps the first clean attempt (above); 'smoothest' (beyond the paper) makes every
+        attempt and keeps the patch with the smallest
+        :func:`meshlab_holefill.core.border_bend.border_bend`.
     record : dict, optional
         Receives ``smoothed_points`` ((s, 3) float64, the SP_i of Sec. 4.7 of the returned
         patch; empty for the loop-only last resort), for the errors of Eq. 17.
@@ -253,7 +262,7 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
         SmoothingOptions(operator=smoothing, passes=num_smooth, taubin_lambda=taubin_lambda,
                          taubin_pass_band=taubin_pass_band, anchor=smoothing_anchor),
         OptimisationOptions(decimation_rate=decimation_rate, relax=relax, quality_floor=quality_floor),
-        record=record)
+        record=record, layouts=layouts)
 
 
 WARM_UP = warm_up

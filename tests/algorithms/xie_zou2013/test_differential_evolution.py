@@ -520,6 +520,30 @@ def test_a_cap_round_a_knob_keeps_the_disc_layout_whose_patch_bends_less():
     assert patch.info["layout"] == "disc" and bends["disc"] < bends["development"]
 
 
+def test_layouts_smoothest_makes_every_attempt_and_keeps_the_least_bent_patch():
+    from meshlab_holefill.core import examples
+    from meshlab_holefill.core.border_bend import border_bend
+
+    V, F, loop = examples.bowl_with_hole()
+    ctx = hole_context(V, F, loop, rings=hpde.RINGS)
+    first = hpde.fill(ctx)
+    assert "layout_bends" not in first.info  # the paper's choice: the first clean attempt
+    patch = hpde.fill(ctx, layouts="smoothest")
+    bends = patch.info["layout_bends"]
+    order = [f"{'segmented' if s else 'unsegmented'} prediction, {layout}"
+             for s, layout in hpde_algorithm2.attempt_order(*_attempt_inputs(ctx))]
+    assert list(bends) == order  # every attempt made, in the order the paper's choice takes them
+    assert border_bend(ctx, patch.vertices, patch.faces) == min(bends.values())
+    assert border_bend(ctx, patch.vertices, patch.faces) <= border_bend(ctx, first.vertices, first.faces)
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+
+
+def _attempt_inputs(ctx):
+    """The arguments :func:`_algorithm2.patch_hole` passes to ``attempt_order`` for the default options."""
+    _, base, normals, seg = hpde_algorithm2.boundary_step(ctx, 90.0)
+    return base, normals, seg, np.radians(12.0)
+
+
 # ----------------------------------------------------------------- step 7: Sec. 4.7
 
 def test_taubin_smoothing_keeps_boundary_and_a_planar_patch_planar():
