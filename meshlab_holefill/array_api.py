@@ -117,7 +117,8 @@ def _fill_holes(V, F, algorithm, selected_faces, params, face_dtype):
     arrays = MeshArrays(V=V, F=F, face_attrs={"selected": selected.astype(np.float64)[:, None]}, label="mesh")
     filled, result = fill_mesh_holes(arrays, module.fill, resolved, algorithm_params=[p.name for p in own],
                                      rings=module.RINGS, prepare=getattr(module, "PREPARE", None),
-                                     warm_up=getattr(module, "WARM_UP", None))
+                                     warm_up=getattr(module, "WARM_UP", None),
+                                     seconds_per_edge=getattr(module, "SECONDS_PER_EDGE", None))
     return filled.V, filled.F, result
 
 

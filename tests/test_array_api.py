@@ -4,6 +4,8 @@ import pytest
 
 import meshlab_holefill
 from conftest import meshset_from_arrays, sphere_with_holes
+from meshlab_holefill.array_api import algorithm_names, fill_holes
+from meshlab_holefill.core.examples import bowl_with_hole
 from meshlab_holefill.core.holes import boundary_loops
 
 
@@ -99,3 +101,19 @@ def test_kernel_example_has_two_holes_every_filter_closes():
     for name in meshlab_holefill.algorithm_names():
         _, _, result = meshlab_holefill.fill_holes(V, F, name, workers=1)
         assert result["closed_holes"] == 2, (name, result["holes"])
+
+
+@pytest.mark.parametrize("algorithm", algorithm_names())
+def test_a_time_limit_that_expires_inside_compiled_kernels_fails_the_hole_cleanly(algorithm):
+    """The alarm can come while a numba kernel or its dispatcher runs: the hole fails, nothing else."""
+    V, F, _ = bowl_with_hole(n=31, radius=0.6)
+    fill_holes(V, F, algorithm, workers=1)  # kernels loaded: the limits below expire inside them
+    for limit in np.geomspace(0.001, 0.1, 9):
+        V2, F2, result = fill_holes(V, F, algorithm, workers=1, timelimit=limit)
+        statuses = {(h["status"], "time limit" in (h.get("reason") or "")) for h in result["holes"]
+                    if h["status"] != "skipped"}
+        assert statuses <= {("closed", False), ("failed", True)}
+        assert np.array_equal(V2[:len(V)], V) and np.all(np.isfinite(V2))
+    unlimited = fill_holes(V, F, algorithm, workers=1)
+    generous = fill_holes(V, F, algorithm, workers=1, timelimit=1000.0)
+    assert np.array_equal(unlimited[0], generous[0]) and np.array_equal(unlimited[1], generous[1])

@@ -19,6 +19,7 @@ import multiprocessing
 import os
 import queue
 import signal
+import sys
 import threading
 import time
 import traceback
@@ -34,6 +35,7 @@ __all__ = ["FILL_ERRORS", "HoleTimeLimit", "available_workers", "fill_one", "lim
            "worker_count"]
 
 _WORKER_CAP = None  # set by limit_workers
+_PACKAGE = __name__.split(".")[0]
 
 # What a fill may raise that makes its hole fail rather than the filter: the algorithm's own
 # refusal, and the numerical errors of degenerate input.
@@ -60,9 +62,34 @@ def available_workers():
     return cpus if _WORKER_CAP is None else min(cpus, _WORKER_CAP)
 
 
-def worker_count(workers, jobs):
-    """Processes :func:`run_jobs` uses for ``jobs`` jobs when asked for ``workers`` (0: one per CPU)."""
-    return max(1, min(available_workers() if workers == 0 else workers, available_workers(), jobs))
+#: Estimated seconds of work each process must have before ``workers=0`` forks it. Forking the
+#: children, their first touches of the inherited mesh and collecting their results cost
+#: 0.03-0.06 s a run, and two fills at once each run slower than one alone, so a run with less
+#: than twice this much work is faster in one process.
+SECONDS_PER_PROCESS = 0.1
+
+
+def worker_count(workers, jobs, estimated_seconds=None):
+    """Processes :func:`run_jobs` uses for ``jobs`` jobs when asked for ``workers``.
+
+    Parameters
+    ----------
+    workers : int
+        Processes asked for; 0 chooses: one per CPU, and given ``estimated_seconds`` no more
+        than give each process :data:`SECONDS_PER_PROCESS` of it (a run worth less than two
+        stays in this process).
+    jobs : int
+    estimated_seconds : float, optional
+        The jobs' estimated total time in one process.
+
+    Returns
+    -------
+    int  at least 1, at most ``jobs`` and :func:`available_workers`
+    """
+    count = available_workers() if workers == 0 else workers
+    if workers == 0 and estimated_seconds is not None:
+        count = min(count, max(1, int(estimated_seconds // SECONDS_PER_PROCESS)))
+    return max(1, min(count, available_workers(), jobs))
 
 
 @contextmanager
@@ -85,23 +112,57 @@ def _can_time():
     return threading.current_thread() is threading.main_thread()
 
 
+#: Seconds between the alarms that follow an expired time limit (see :func:`_time_limit`).
+_REPEAT_ALARM = 0.01
+
+
 @contextmanager
-def _time_limit(seconds):
-    """Raise HoleTimeLimit in this thread after ``seconds`` (0: no limit; only in a main thread)."""
+def _time_limit(seconds, module=None):
+    """Raise HoleTimeLimit in this thread after ``seconds`` (0: no limit; only in a main thread).
+
+    The SIGALRM handler does not raise: it can run inside a compiled kernel or a C function
+    that calls back into Python (numba's dispatcher, its constant unpickling), where an
+    exception corrupts their state (a SystemError, or a crash). It sets a trace function,
+    which raises at the next line of the package's own Python code (or of ``module``'s: the
+    fill's), so the limit is honoured between kernel calls, not within one. The alarm repeats every 10 ms after the limit, and
+    a block that completes after it raises too, so a fallback that catches the error cannot
+    carry on past the limit.
+    """
     if not seconds or not _can_time():
         yield
         return
+    message = f"took longer than the time limit of {seconds:g} s"
+    armed, expired = [True], [False]
+
+    def ours(frame):
+        name = frame.f_globals.get("__name__", "")
+        return (name.startswith(_PACKAGE) or name == module) and name != __name__
+
+    def raise_in_ours(frame, event, arg):
+        if armed[0] and ours(frame):
+            raise HoleTimeLimit(message)  # the interpreter then removes the trace function
+        return None
 
     def expire(signum, frame):
-        raise HoleTimeLimit(f"took longer than the time limit of {seconds:g} s")
+        expired[0] = True
+        sys.settrace(raise_in_ours)
+        while frame is not None:
+            if ours(frame):
+                frame.f_trace = raise_in_ours
+            frame = frame.f_back
 
+    previous_trace = sys.gettrace()
     previous = signal.signal(signal.SIGALRM, expire)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
+    signal.setitimer(signal.ITIMER_REAL, seconds, _REPEAT_ALARM)
     try:
         yield
     finally:
+        armed[0] = False
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
+        sys.settrace(previous_trace)
+    if expired[0]:
+        raise HoleTimeLimit(message)
 
 
 def fill_one(fill, ctx, fill_kwargs, timelimit):
@@ -114,7 +175,7 @@ def fill_one(fill, ctx, fill_kwargs, timelimit):
     """
     t0 = time.perf_counter()
     try:
-        with _time_limit(timelimit):
+        with _time_limit(timelimit, getattr(fill, "__module__", None)):
             patch = fill(ctx, **fill_kwargs)
             validate_patch(patch, ctx.points, ctx.forbidden_edges)
     except FILL_ERRORS as exc:

@@ -59,8 +59,9 @@ COMMON_PARAMS = [
               "is skipped.",
               mlx_name="FillOutlines", display="Fill island outlines"),
     ParamSpec("workers", "int", 0,
-              "Processes filling holes at once: 0, one per CPU; 1, in this process. The mesh is the same "
-              "whatever the number.",
+              "Processes filling holes at once: 0, one per CPU when the holes are worth it (a run of a few "
+              "small holes is faster in one process); 1, in this process. The mesh is the same whatever "
+              "the number.",
               minimum=0, mlx_name="Workers", display="Worker processes"),
     ParamSpec("timelimit", "float", 0.0,
               "Seconds one hole may take (0: no limit); a hole that takes longer is reported failed.",
@@ -114,7 +115,7 @@ class FilledMesh:
 
 
 def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepare=None, warm_up=None,
-                    progress=None):
+                    seconds_per_edge=None, progress=None):
     """Run one hole-filling algorithm on every eligible hole of a mesh given as arrays.
 
     Parameters
@@ -142,6 +143,10 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
         The algorithm module's ``WARM_UP``: loads its compiled kernels, called once before the
         holes are filled, so that forked workers inherit them instead of each loading them
         within its first hole's time.
+    seconds_per_edge : float, optional
+        The algorithm module's ``SECONDS_PER_EDGE``: its fill time per boundary edge with the
+        defaults, from which ``workers=0`` judges whether forking workers pays
+        (:func:`.parallel.worker_count`); without it ``workers=0`` is one per CPU.
 
     Returns
     -------
@@ -170,7 +175,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
             warm_up()
     while True:
         arrays, V, F, V2, F2, done_loops, patches, refinement, report = _fill_holes(
-            base, todo, params, fill, fill_kwargs, rings, prepare, fills, progress)
+            base, todo, params, fill, fill_kwargs, rings, prepare, fills, seconds_per_edge, progress)
         # A hole whose border was refined and which then failed would leave its split border
         # faces behind: fill again with that hole left out, so nothing of it is changed.
         undo = [i for i in todo if report[i]["status"] == "failed" and report[i].get("split_boundary_edges")]
@@ -260,7 +265,7 @@ def _context_key(ctx):
 GRID_SCANS = 9
 
 
-def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, progress=None):
+def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, seconds_per_edge=None, progress=None):
     """One pass of :func:`close_holes` over the holes ``todo``: refine, fill, check, merge.
 
     ``base`` is (arrays, loops, report entries) of the mesh as given; nothing is written to
@@ -288,7 +293,8 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, pr
     refill = [i for i in todo if i not in fills or fills[i][0] != _key_here(V, F, loops[i], incidence, rings, i)]
     # Largest holes first: the run ends when its longest fill does, so start that one early.
     order = sorted(refill, key=lambda i: -len(loops[i]))
-    workers = worker_count(params["workers"], len(order))
+    estimate = None if seconds_per_edge is None else seconds_per_edge * sum(len(loops[i]) for i in order)
+    workers = worker_count(params["workers"], len(order), estimate)
     # With workers each checks its own patches against the mesh, instead of waiting for every fill here.
     check_in_job = params["selfintersection"] and workers > 1
     grid = None

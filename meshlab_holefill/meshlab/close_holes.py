@@ -10,13 +10,14 @@ from .progress import current_callback
 __all__ = ["close_holes"]
 
 
-def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None, warm_up=None):
+def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None, warm_up=None,
+                seconds_per_edge=None):
     """Run one hole-filling algorithm on every eligible hole of the MeshSet's current mesh.
 
     Parameters
     ----------
     ms : pymeshlab.MeshSet
-    fill, params, algorithm_params, rings, prepare, warm_up
+    fill, params, algorithm_params, rings, prepare, warm_up, seconds_per_edge
         As for :func:`meshlab_holefill.core.pipeline.fill_mesh_holes`.
 
     Returns
@@ -39,7 +40,8 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None,
     t_start = time.perf_counter()
     arrays = current_mesh_arrays(ms)
     filled, result = fill_mesh_holes(arrays, fill, params, algorithm_params=algorithm_params, rings=rings,
-                                     prepare=prepare, warm_up=warm_up, progress=current_callback())
+                                     prepare=prepare, warm_up=warm_up, seconds_per_edge=seconds_per_edge,
+                                     progress=current_callback())
     mesh_id = arrays.mesh_id
     del arrays  # the filled arrays begin with the originals: one copy of the mesh is enough from here on
     filled.release_source()

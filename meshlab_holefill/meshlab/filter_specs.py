@@ -17,7 +17,8 @@ def filter_spec(algorithm):
     def run(ms, **params_in):
         return close_holes(ms, module.fill, params_in, algorithm_params=[p.name for p in own],
                            rings=module.RINGS, prepare=getattr(module, "PREPARE", None),
-                           warm_up=getattr(module, "WARM_UP", None))
+                           warm_up=getattr(module, "WARM_UP", None),
+                           seconds_per_edge=getattr(module, "SECONDS_PER_EDGE", None))
 
     doc = (module.__doc__ or "").strip().split("\n\n")[0]
     return FilterSpec(name=algorithm.filter_name, display_name=algorithm.display_name, description=doc,

@@ -66,9 +66,16 @@ class _Ctx:
     points = forbidden_edges = ()
 
 
+def _busy(seconds):
+    """Work in Python lines for ``seconds``: where a time limit can stop it (it waits out a blocking call)."""
+    deadline = time.perf_counter() + seconds
+    while time.perf_counter() < deadline:
+        pass
+
+
 def _timed_fill(item):
     def fill(ctx):
-        time.sleep(5 if item == 0 else 0.0)
+        _busy(5 if item == 0 else 0.0)
         raise HoleTimeLimit("not reached")  # a fill that returned would be validated; failing is enough here
 
     reason, seconds = fill_one(fill, _Ctx(), {}, 0.3)
@@ -88,3 +95,69 @@ def test_the_time_limit_holds_in_every_process_and_from_a_thread():
         reason, seconds, _ = out[where][0]
         assert "time limit of 0.3 s" in reason and seconds < 2
     assert os.getpid() not in {pid for _, _, pid in out["thread"]}
+
+
+@pytest.mark.parametrize("estimate, expected", [(None, 2), (0.05, 1), (0.15, 1), (0.2, 2), (50.0, 2)])
+def test_automatic_count_forks_only_for_work_worth_a_process_each(estimate, expected):
+    with parallel.limit_workers(2):
+        assert worker_count(0, 10, estimate) == expected
+
+
+def test_an_explicit_count_is_kept_whatever_the_estimate():
+    with parallel.limit_workers(2):
+        assert worker_count(2, 10, 0.001) == 2
+        assert worker_count(2, 1, 50.0) == 1  # never more processes than jobs
+
+
+def test_automatic_count_keeps_small_runs_in_this_process_and_forks_for_large_ones(monkeypatch):
+    import numpy as np
+
+    from meshlab_holefill.array_api import fill_holes
+    from meshlab_holefill.core import examples, pipeline
+
+    asked = []
+
+    def recording_run_jobs(job, items, workers=1, progress=None):
+        asked.append(workers)
+        return run_jobs(job, items, workers, progress)
+
+    monkeypatch.setattr(pipeline, "run_jobs", recording_run_jobs)
+    V, F, loop = examples.bowl_with_hole()
+    with parallel.limit_workers(2):
+        V1, F1, _ = fill_holes(V, F, "min_angle_bilateral")  # one small hole: far below 0.2 s of work
+        monkeypatch.setattr(parallel, "SECONDS_PER_PROCESS", 1e-9)  # every run worth a fork
+        V2, F2, _ = fill_holes(V, F, "min_angle_bilateral")
+    assert asked == [1, 1]  # one hole: one process, however much it is worth
+    holes = 3
+    Vs = np.concatenate([V + [3.0 * k, 0.0, 0.0] for k in range(holes)])
+    Fs = np.concatenate([F + k * len(V) for k in range(holes)])
+    asked.clear()
+    with parallel.limit_workers(2):
+        fill_holes(Vs, Fs, "min_angle_bilateral")
+        monkeypatch.setattr(parallel, "SECONDS_PER_PROCESS", 0.1)
+        fill_holes(Vs, Fs, "min_angle_bilateral")
+    assert asked == [2, 1]
+    assert np.array_equal(V1, V2) and np.array_equal(F1, F2)
+
+
+def test_a_fallback_that_catches_the_time_limit_does_not_carry_on_past_it():
+    from meshlab_holefill.errors import HoleFillError
+
+    def fill_with_fallback(ctx):
+        try:
+            _busy(5)
+        except HoleFillError:
+            _busy(5)  # a fallback taking over: stopped again
+        return None
+
+    reason, seconds = fill_one(fill_with_fallback, _Ctx(), {}, 0.2)
+    assert "time limit of 0.2 s" in reason and seconds < 2
+
+
+def test_a_fill_that_ends_past_its_limit_in_a_blocking_call_fails_all_the_same():
+    def fill_blocking(ctx):
+        time.sleep(0.3)  # a blocking call is waited out
+        raise AssertionError("the limit's error is raised as soon as Python code runs again")
+
+    reason, seconds = fill_one(fill_blocking, _Ctx(), {}, 0.1)
+    assert "time limit of 0.1 s" in reason and seconds < 1

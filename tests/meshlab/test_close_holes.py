@@ -455,8 +455,10 @@ def test_with_workers_each_hole_is_prepared_filled_and_checked_by_one_process(mo
 def _slow_roof(ctx):
     import time
 
-    if len(ctx.loop) > 8:
-        time.sleep(5)
+    if len(ctx.loop) > 8:  # working in Python lines, where a time limit can stop it
+        deadline = time.perf_counter() + 5
+        while time.perf_counter() < deadline:
+            pass
     return _roof(ctx.points, folded=False)
 
 

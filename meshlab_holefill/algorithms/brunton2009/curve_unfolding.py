@@ -408,3 +408,6 @@ def warm_up():
 
 
 WARM_UP = warm_up  # loads the compiled kernels before holes are filled in forked workers
+# Fill seconds per boundary edge with the defaults (the benchmark's holes, one core; the time grows
+# about linearly with the edges): the estimate from which workers=0 judges whether forking pays.
+SECONDS_PER_EDGE = 1.1e-3

@@ -266,3 +266,6 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
 
 
 WARM_UP = warm_up
+# Fill seconds per boundary edge with the defaults (the benchmark's holes, one core; the time grows
+# about linearly with the edges): the estimate from which workers=0 judges whether forking pays.
+SECONDS_PER_EDGE = 1.8e-3
