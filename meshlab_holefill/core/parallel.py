@@ -62,11 +62,12 @@ def available_workers():
     return cpus if _WORKER_CAP is None else min(cpus, _WORKER_CAP)
 
 
-#: Estimated seconds of work each process must have before ``workers=0`` forks it. Forking the
-#: children, their first touches of the inherited mesh and collecting their results cost
-#: 0.03-0.06 s a run, and two fills at once each run slower than one alone, so a run with less
-#: than twice this much work is faster in one process.
-SECONDS_PER_PROCESS = 0.1
+#: Estimated seconds of work each process must have before ``workers=0`` forks it: about twice
+#: what forking, the children's first touches of the inherited mesh and collecting their
+#: results cost a run (15-30 ms: the min-angle filter's whole runs on the benchmark's cases,
+#: two processes against one). With it, of the benchmark's 56 runs (14 cases, 4 filters) all but
+#: 4 got the faster of one and two processes, and those 4 lost at most 30 ms.
+SECONDS_PER_PROCESS = 0.05
 
 
 def worker_count(workers, jobs, estimated_seconds=None):
@@ -88,7 +89,7 @@ def worker_count(workers, jobs, estimated_seconds=None):
     """
     count = available_workers() if workers == 0 else workers
     if workers == 0 and estimated_seconds is not None:
-        count = min(count, max(1, int(estimated_seconds // SECONDS_PER_PROCESS)))
+        count = min(count, max(1, int(estimated_seconds / SECONDS_PER_PROCESS)))
     return max(1, min(count, available_workers(), jobs))
 
 

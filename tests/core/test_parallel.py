@@ -97,7 +97,7 @@ def test_the_time_limit_holds_in_every_process_and_from_a_thread():
     assert os.getpid() not in {pid for _, _, pid in out["thread"]}
 
 
-@pytest.mark.parametrize("estimate, expected", [(None, 2), (0.05, 1), (0.15, 1), (0.2, 2), (50.0, 2)])
+@pytest.mark.parametrize("estimate, expected", [(None, 2), (0.01, 1), (0.09, 1), (0.1, 2), (50.0, 2)])
 def test_automatic_count_forks_only_for_work_worth_a_process_each(estimate, expected):
     with parallel.limit_workers(2):
         assert worker_count(0, 10, estimate) == expected
@@ -124,7 +124,7 @@ def test_automatic_count_keeps_small_runs_in_this_process_and_forks_for_large_on
     monkeypatch.setattr(pipeline, "run_jobs", recording_run_jobs)
     V, F, loop = examples.bowl_with_hole()
     with parallel.limit_workers(2):
-        V1, F1, _ = fill_holes(V, F, "min_angle_bilateral")  # one small hole: far below 0.2 s of work
+        V1, F1, _ = fill_holes(V, F, "min_angle_bilateral")  # one small hole: far below 0.1 s of work
         monkeypatch.setattr(parallel, "SECONDS_PER_PROCESS", 1e-9)  # every run worth a fork
         V2, F2, _ = fill_holes(V, F, "min_angle_bilateral")
     assert asked == [1, 1]  # one hole: one process, however much it is worth
@@ -134,7 +134,7 @@ def test_automatic_count_keeps_small_runs_in_this_process_and_forks_for_large_on
     asked.clear()
     with parallel.limit_workers(2):
         fill_holes(Vs, Fs, "min_angle_bilateral")
-        monkeypatch.setattr(parallel, "SECONDS_PER_PROCESS", 0.1)
+        monkeypatch.setattr(parallel, "SECONDS_PER_PROCESS", 0.05)
         fill_holes(Vs, Fs, "min_angle_bilateral")
     assert asked == [2, 1]
     assert np.array_equal(V1, V2) and np.array_equal(F1, F2)
