@@ -1094,13 +1094,13 @@ def large_hole(name, seed, hole):
 
 def test_a_patch_the_tangential_relaxation_folds_is_made_again_without_it():
     """A 308-edge hole of cow.obj Loop-subdivided twice (``scripts/large_holes.py``, seed 2): with the tangential
-    relaxation the patch crosses itself (18 faces, every domain); without it, it crosses nothing."""
+    relaxation the patch crosses itself (146 faces, every domain); without it, it crosses nothing."""
     from meshlab_holefill.array_api import fill_holes
 
     V, F, ctx = large_hole("cow.obj", seed=2, hole=0)
     assert ctx.size == 308
     relaxed = cu._fill_steps(ctx, **{p.name: p.default for p in cu.PARAMS})  # the filter before its fallback
-    assert len(crossing_repair.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) > 10
+    assert len(crossing_repair.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) > 100
     patch = cu.fill(ctx)
     assert patch.info["fallback"] == "no tangential relaxation"
     assert len(crossing_repair.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
