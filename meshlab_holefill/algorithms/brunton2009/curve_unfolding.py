@@ -220,7 +220,8 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         still crossing the mesh or itself is replaced by the patch made without the tangential
         relaxation when that one crosses nothing (``info['fallback']``): the relaxation can leave a
         fold the energy's own placement does not make (a 308-edge hole of cow.obj Loop-subdivided
-        twice, ``scripts/large_holes.py``: 146 faces of the patch crossing it, none without).
+        twice, ``scripts/large_holes.py``, on one of our machines: 146 faces of the patch crossing it, none
+        without; whether it folds there hangs on the processor's last bits).
     seed : int
         Seed of the annealing.
     area_rows : {'mesh', 'interior'}

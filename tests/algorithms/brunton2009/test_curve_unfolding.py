@@ -1092,21 +1092,41 @@ def large_hole(name, seed, hole):
     return V, F, hole_context(V, F, max(boundary_loops(F), key=len), rings=cu.RINGS)
 
 
-def test_a_patch_the_tangential_relaxation_folds_is_made_again_without_it():
-    """A 308-edge hole of cow.obj Loop-subdivided twice (``scripts/large_holes.py``, seed 2): with the tangential
-    relaxation the patch crosses itself (146 faces, every domain); without it, it crosses nothing."""
-    from meshlab_holefill.array_api import fill_holes
+def test_a_patch_the_tangential_relaxation_folds_is_made_again_without_it(monkeypatch):
+    """Where the relaxed patch crosses itself and the patch made without the relaxation does not, the filter
+    keeps the latter (``info['fallback']``). The fold is forced: the relaxed patch's two new vertices farthest
+    apart trade places, so their fans span the patch (on a real hole, a 308-edge hole of cow.obj Loop-subdivided
+    twice, whether the relaxation folds hangs on the processor's last bits)."""
+    from dataclasses import replace
 
-    V, F, ctx = large_hole("cow.obj", seed=2, hole=0)
-    assert ctx.size == 308
-    relaxed = cu._fill_steps(ctx, **{p.name: p.default for p in cu.PARAMS})  # the filter before its fallback
-    assert len(crossing_repair.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) > 100
-    patch = cu.fill(ctx)
+    V, F, loop = examples.bowl_with_hole(n=21)
+    ctx = hole_context(V, F, loop, rings=cu.RINGS)
+    made = cu._fill_steps
+
+    def folded_when_relaxed(ctx, **params):
+        patch = made(ctx, **params)
+        if not params["tangential"]:
+            return patch
+        P = patch.vertices
+        a, b = np.unravel_index(np.argmax(np.linalg.norm(P[:, None] - P[None], axis=2)), (len(P), len(P)))
+        P = P.copy()
+        P[[a, b]] = P[[b, a]]
+        return replace(patch, vertices=P, info=dict(patch.info, crossing_faces=len(crossing_repair.crossing_faces(ctx, P, patch.faces))))
+
+    monkeypatch.setattr(cu, "_fill_steps", folded_when_relaxed)
+    options = dict(domain="unfolding")
+    relaxed = cu._fill_steps(ctx, **dict({p.name: p.default for p in cu.PARAMS}, **options))
+    assert len(crossing_repair.crossing_faces(ctx, relaxed.vertices, relaxed.faces)) > 10
+    patch = cu.fill(ctx, **options)
     assert patch.info["fallback"] == "no tangential relaxation"
     assert len(crossing_repair.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
-    V2, F2, result = fill_holes(V, F, "curve_unfolding")
-    assert result["closed_holes"] == 1 and result["holes"][0]["fallback"] == "no tangential relaxation"
-    assert_filled_cleanly(V, F, V2, F2)
+    assert np.array_equal(patch.vertices, made(ctx, **dict({p.name: p.default for p in cu.PARAMS}, **options, tangential=False)).vertices)
+    V2, F2, result = fill_holes(V, F, "curve_unfolding", workers=1, maxholesize=len(loop) + 1, **options)
+    closed = [h for h in result["holes"] if h["status"] == "closed"]
+    assert len(closed) == 1 and closed[0]["fallback"] == "no tangential relaxation"
+    assert np.array_equal(V2[:len(V)], V) and np.array_equal(F2[:len(F)], F)
+    assert len(boundary_loops(F2)) == 1  # the grid's outer border alone
+    assert len(faces_intersecting(V2, F2, np.arange(len(F), len(F2)), np.arange(len(F2)))) == 0
 
 
 def test_where_the_unfolding_is_the_development_the_smoothest_domain_fills_the_hole_once(monkeypatch):
