@@ -1,6 +1,7 @@
 """meshlab_holefill.fill_holes: the pipeline on (V, F) arrays, the same meshes as the MeshSet filters."""
 import numpy as np
 import pytest
+import pymeshlab
 
 import meshlab_holefill
 from conftest import meshset_from_arrays, sphere_with_holes
@@ -68,6 +69,23 @@ def test_non_manifold_edges_are_refused_and_the_arrays_are_untouched():
     with pytest.raises(meshlab_holefill.MeshTopologyError, match="non-manifold edges"):
         meshlab_holefill.fill_holes(V, F)
     np.testing.assert_array_equal(F, before)
+
+
+def test_a_face_that_uses_a_vertex_twice_is_refused_by_name_on_arrays_and_on_a_meshset():
+    from meshlab_holefill.core.examples import bowl_with_hole
+
+    V, F, _ = bowl_with_hole()
+    F = np.vstack([F, [[5, 5, 6]]])
+    with pytest.raises(meshlab_holefill.MeshTopologyError, match=r"1 faces that use a vertex twice .*\[5, 5, 6\]"):
+        meshlab_holefill.fill_holes(V, F)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(V, F.astype(np.int32)))
+    with pytest.raises(meshlab_holefill.MeshTopologyError, match="meshing_remove_null_faces"):
+        ms.meshing_close_holes_min_angle_bilateral()
+    assert ms.mesh_number() == 1 and ms.current_mesh().face_number() == len(F)  # nothing lost
+    ms.meshing_remove_null_faces()  # the repair the message names
+    ms.meshing_close_holes_min_angle_bilateral(maxholesize=100)
+    assert ms.current_mesh().face_number() > len(F) - 1
 
 
 def test_the_algorithms_warm_up_runs_once_before_any_hole_is_filled(holed_sphere, monkeypatch):

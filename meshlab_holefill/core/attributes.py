@@ -50,13 +50,22 @@ class MeshArrays:
 def check_manifold_edges(F, label="", bad=None):
     """Raise MeshTopologyError when an edge is shared by more than two faces.
 
-    ``bad`` may pass the non-manifold edges when already computed (``holes.edge_summary``).
+    Where faces that use a vertex twice (such as [a, a, b]) are present, the message names them
+    and the repair that removes them: they are what makes such edges, most often. Elsewhere in
+    the mesh these faces are kept as they are. ``bad`` may pass the non-manifold edges when
+    already computed (``holes.edge_summary``).
     """
     bad = nonmanifold_edges(F) if bad is None else bad
-    if len(bad):
+    if not len(bad):
+        return
+    repeats = np.flatnonzero((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0]))
+    if len(repeats):
         raise MeshTopologyError(
-            f"mesh '{label}' has {len(bad)} non-manifold edges (e.g. vertices {bad[0].tolist()}); "
-            "run meshing_repair_non_manifold_edges first")
+            f"mesh '{label}' has {len(bad)} non-manifold edges and {len(repeats)} faces that use a vertex twice "
+            f"(e.g. face {int(repeats[0])}: vertices {F[repeats[0]].tolist()}); run meshing_remove_null_faces first")
+    raise MeshTopologyError(
+        f"mesh '{label}' has {len(bad)} non-manifold edges (e.g. vertices {bad[0].tolist()}); "
+        "run meshing_repair_non_manifold_edges first")
 
 
 def _idw_weights(sources, targets):
