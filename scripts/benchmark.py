@@ -8,7 +8,10 @@ natural holes (bunny10k_textured.obj) and the face range scan (rangemaps/face000
 filled as they are; the CAD-like cases of ``evaluation.creased`` (creased_box, bevelled_box,
 cylinder_rims, union: holes a crease runs through; interpenetrating: holes next to where
 overlapping parts cross) have their own holes; bunny_212k (the bunny Loop-subdivided once, about
-212k faces) has three holes of 150-375 boundary edges with ground truth ("real-size"). CGAL's Liepa fill (``cgal_liepa``) and MeshFix
+212k faces) has three holes of 150-375 boundary edges with ground truth ("real-size"); cow_noisy (cow.obj
+Loop-subdivided twice, about 93k faces, its vertices moved along their normals by Gaussian noise of 0.3 mean
+edge lengths, as a range scan's error lies along the line of sight) has four holes of about 20-250 boundary
+edges with jagged borders ("noisy"). CGAL's Liepa fill (``cgal_liepa``) and MeshFix
 (``pymeshfix``) run as anchors when installed. The report (tables, charts, one picture per hole) goes to ``OUT/suite``.
 
 ``--scaling`` adds the scaling run: the same holes (same centres, same boundary sizes) in the
@@ -39,6 +42,7 @@ from meshlab_holefill.evaluation.comparison import BASELINE, MeshCase, parse_fil
 from meshlab_holefill.evaluation.creased import CREASED_CASES, creased_case
 from meshlab_holefill.evaluation.cut_holes import cut_holes
 from meshlab_holefill.evaluation.isolation import IsolatedRunner
+from meshlab_holefill.evaluation.noisy import normal_noise
 from meshlab_holefill.evaluation.papers import hpde_sphere
 from meshlab_holefill.evaluation.report.labels import filler_colors, short_label
 from meshlab_holefill.evaluation.report.tables import markdown_table, summary_blocks, to_markdown
@@ -52,7 +56,10 @@ NATURAL = ["bunny10k_textured.obj", "face000.ply"]
 CREASED = list(CREASED_CASES)
 # A scan-sized mesh with holes of 200-375 boundary edges (ground truth kept): the bunny Loop-subdivided once
 REAL_SIZE = ["bunny_212k"]
-CASES = CLOSED + NATURAL + CREASED + REAL_SIZE
+# A scan-like mesh: noise along the normals (evaluation.noisy), holes with jagged borders
+NOISY = ["cow_noisy"]
+NOISE_SIGMA = 0.3  # mean edge lengths
+CASES = CLOSED + NATURAL + CREASED + REAL_SIZE + NOISY
 REAL_SIZE_HOLES = ("irregular", "large", "irregular")  # targets 250, 150, 250 boundary edges
 # Ours with defaults; three measured variants (Xu et al.'s Table 1 membrane comparison, Hu's optional
 # fairing as in its filters/ preset, curve unfolding on the paper's unfolded domain alone); MeshLab's Close Holes
@@ -69,6 +76,8 @@ def load_case(name):
         return creased_case(name)
     if name == "bunny_212k":
         return real_size_case()
+    if name == "cow_noisy":
+        return noisy_case()
     if name in ANALYTIC_SURFACES:
         V, F = analytic_mesh(name)
         analytic, area = analytic_distance(name), analytic_area(name)
@@ -91,6 +100,23 @@ def real_size_case(seed=0):
     removed = np.zeros(len(F), bool)
     removed[np.concatenate([h.face_indices for h in holes])] = True
     return MeshCase("bunny_212k", V, F, removed=removed, given_class="real-size")
+
+
+def noisy_case(seed=0):
+    """cow.obj Loop-subdivided twice (about 93k faces), moved by :func:`normal_noise` (``NOISE_SIGMA``), four holes cut.
+
+    The holes (about 20, 60, 150 and 250 boundary edges) are cut once, after the noise, and handed
+    to the comparison as given holes of class "noisy": the ground truth is the noisy surface.
+    """
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(os.path.join(SAMPLES, "cow.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    V = normal_noise(V, F, NOISE_SIGMA, seed=seed)
+    _, holes = cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=seed, strict=False)
+    removed = np.zeros(len(F), bool)
+    removed[np.concatenate([h.face_indices for h in holes])] = True
+    return MeshCase("cow_noisy", V, F, removed=removed, given_class="noisy")
 
 
 # ----------------------------------------------------------------------------- scaling run

@@ -8,6 +8,7 @@ the command line (``cli``); nothing below it imports it. Modules:
 - :mod:`.cut_holes`: holes with known ground truth cut into closed meshes;
 - :mod:`.analytic`: the sphere and torus meshed, their exact distance and area;
 - :mod:`.creased`: CAD-like meshes with holes a crease runs through, and interpenetrating parts;
+- :mod:`.noisy`: scan-like noise along the normals, for cases with jagged hole borders;
 - :mod:`.anchors`: third-party fillers (CGAL's Liepa fill, MeshFix), optional, run like ours;
 - :mod:`.comparison`: cases, fillers, running each filler on each case, the hole rows;
 - :mod:`.isolation`: the worker processes with timeouts;
@@ -17,4 +18,4 @@ the command line (``cli``); nothing below it imports it. Modules:
 - :mod:`.papers`: the papers' own experiments (Xie and Zou's sphere).
 """
 
-__all__ = ["analytic", "anchors", "compare", "comparison", "creased", "cut_holes", "isolation", "metrics", "papers", "reference_targets", "report"]
+__all__ = ["analytic", "anchors", "compare", "comparison", "creased", "cut_holes", "isolation", "metrics", "noisy", "papers", "reference_targets", "report"]

@@ -30,7 +30,7 @@ METRICS = [
 CHART_METRICS = ["dist_patch_to_gt_mean_permille", "dist_gt_to_patch_mean_permille", "normal_dev_mean_deg",
                  "quality_mean", "quality_min", "edge_ratio", "border_dihedral_excess_deg", "seconds"]
 HEADINGS = {m[0]: m[1] for m in METRICS} | {"seconds": "seconds per hole"}
-SIZE_ORDER = ["small", "medium", "large", "irregular", "real-size", "given", "crease", "crossing", "natural", "outline"]
+SIZE_ORDER = ["small", "medium", "large", "irregular", "real-size", "given", "crease", "crossing", "noisy", "natural", "outline"]
 
 
 def short_label(label):
