@@ -10,6 +10,7 @@ from .core.kernel_cache import refresh_kernel_cache
 from .core.parameters import resolve_params
 from .core.pipeline import COMMON_PARAMS, fill_mesh_holes
 from .errors import FilterParameterError
+from .geometry.dihedral_triangulation import dihedral_triangulation
 
 __all__ = ["algorithm_names", "compile_kernels", "fill_holes", "refresh_kernel_cache"]
 
@@ -147,6 +148,9 @@ def _compile_one(algorithm, params):
         if result["closed_holes"] == 0:
             raise RuntimeError(f"{algorithm}: the kernel example closed no hole ({result['holes']})")
         load_face_grid_kernels(face_dtype)  # built before workers fork, which the example does not
+    # The jagged-border fallback's programme, which the example's smooth holes never reach.
+    square = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    dihedral_triangulation(square, np.tile([0.0, 0.0, 1.0], (4, 1)))
     return time.process_time() - start
 
 

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
-from ..geometry.quality import vertex_normals
+from ..geometry.quality import face_normals, vertex_normals
 from ..geometry.sets import positions_ints, setdiff_ints, unique_ints
 
 
@@ -439,6 +439,11 @@ class HoleContext:
     def loop_normals(self):
         """(k, 3) vertex normals of the loop vertices."""
         return self.normals[: self.size]
+
+    @property
+    def border_normals(self):
+        """(k, 3) unit normals of the mesh faces on the loop edges (i, i + 1) (zero for a degenerate face)."""
+        return face_normals(self.vertices, self.faces[self.border_faces])
 
     def surroundings(self):
         """(vertices (n + s, 3), faces (m + r, 3)): everything a patch must not cross, loop first.

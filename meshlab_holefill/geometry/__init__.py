@@ -9,11 +9,12 @@ Plain numpy arrays in and out; nothing here imports the core, the algorithms or 
 * :mod:`.refine`: Pfeifle-Seidel density refinement (Hu et al. Sec. III.C; Xu et al.'s fallback).
 * :mod:`.pca`: least-squares planes and plane frames.
 * :mod:`.triangulate`: constrained Delaunay triangulation of a simple polygon (Triangle).
+* :mod:`.dihedral_triangulation`: a 3D loop triangulated by least bend against its neighbours (Liepa's weight).
 * :mod:`.segments`: exact segment distances, simple-polygon tests.
 * :mod:`.intersections`: topology-aware triangle-triangle intersection queries.
 * :mod:`.development`: a border loop laid out in the plane with its edge lengths and surface angles.
 * :mod:`.sets`: np.unique, np.isin and np.setdiff1d of integer arrays, by sorting.
 """
 
-__all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca", "triangulate", "segments", "intersections",
+__all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca", "triangulate", "dihedral_triangulation", "segments", "intersections",
            "development", "sets"]

@@ -60,11 +60,14 @@ import numpy as np
 
 from ...geometry.quality import edge_lengths
 from ...geometry.development import boundary_gap_angles
+from ...geometry.refine import refine_patch
 from ...core import examples
 from ...core.holes import hole_context
+from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...core.parameters import ParamSpec
 from .crossing_repair import CrossingCounts, crossing_faces, repair_crossings
+from .embedding import embed_patch
 from .domain_choice import development_is_candidate, smoothest_patch
 from .planar_domains import PlanarDomains, development_domain
 from .quality_swaps import improve_by_swaps
@@ -218,7 +221,9 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         Beyond the paper: development fallback, crossing repair, quality swaps, tangential relaxation,
         sliver repair (:func:`.slivers.repair_slivers`). With ``repair`` and ``tangential``, a patch
         still crossing the mesh or itself is replaced by the patch made without the tangential
-        relaxation when that one crosses nothing (``info['fallback']``): the relaxation can leave a
+        relaxation when that one crosses nothing (``info['fallback']``), and with ``fallback`` then by
+        a patch embedded on the loop's least-bend triangulation (:func:`_least_bend_patches`, for
+        jagged borders whose faces tilt every way): the relaxation can leave a
         fold the energy's own placement does not make (a 308-edge hole of cow.obj Loop-subdivided
         twice, ``scripts/large_holes.py``, on one of our machines: 146 faces of the patch crossing it, none
         without; whether it folds there hangs on the processor's last bits).
@@ -266,13 +271,38 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
     """
     params = {name: value for name, value in locals().items() if name != "ctx"}  # the filter's parameters
     patch = _fill_steps(ctx, **params)
-    if repair and tangential and patch.info["crossing_faces"] and len(crossing_faces(ctx, patch.vertices, patch.faces)):
+    if not (repair and patch.info["crossing_faces"] and len(crossing_faces(ctx, patch.vertices, patch.faces))):
+        return patch
+    if tangential:
         # The tangential relaxation can leave a fold in the patch that the paper's placement does not make.
         plain = _fill_steps(ctx, **dict(params, tangential=False))
         if not len(crossing_faces(ctx, plain.vertices, plain.faces)):
             plain.info["fallback"] = "no tangential relaxation"
             return plain
+    if fallback:
+        energy = "area_interior" if energy == "area" and area_rows == "interior" else energy
+        for vertices, faces in _least_bend_patches(ctx, energy, tangential):
+            if not len(crossing_faces(ctx, vertices, faces)):
+                return Patch(vertices=vertices, faces=faces, info=dict(patch.info, crossing_faces=0,
+                                                                       fallback="least bend"))
     return patch
+
+
+def _least_bend_patches(ctx, energy, tangential):
+    """Patches embedded (Sec. 3.3) on the loop's least-bend triangulations refined to the border's density.
+
+    For a jagged border (a noisy scan) whose faces tilt every way, where every planar domain's
+    patch folds onto them (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`).
+
+    Yields
+    ------
+    (vertices (p, 3) float64, faces (q, 3) int64)  as a Patch holds them
+    """
+    k = ctx.size
+    fixed = np.concatenate([np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1), ctx.forbidden_edges.reshape(-1, 2)])
+    for triangles in least_bend_triangulations(ctx):
+        X, faces, _, _ = refine_patch(ctx.points, triangles, ctx.edge_scale, fixed_edges=fixed)
+        yield embed_patch(ctx, len(X) - k, faces, energy, tangential=tangential), faces
 
 
 def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,

@@ -45,6 +45,7 @@ the benchmark met); the same with alpha=1.55: 0.22 / 2.10 / 4.71, 0.862, 0; Mesh
 from __future__ import annotations
 
 import functools
+import itertools
 import time
 
 import numpy as np
@@ -55,6 +56,7 @@ from ...geometry.flips import relax_edges
 from ...geometry.refine import refine_patch
 from ...geometry.segments import polygon_edges_touch
 from .hole_guards import LoopSectors, patch_crossings, patch_guard, relax_in_sectors, swaps_crossing
+from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
@@ -384,7 +386,10 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
         Beyond the paper: a patch that still crosses the mesh is replaced by the
         :data:`FAIRED_OPTIONS` patch when that one crosses nothing, and, where the initial
         triangulation itself crosses the mesh or itself, by the patches grown from
-        :func:`hole_plane_triangulation` (paper's steps, then faired) when one of them crosses nothing.
+        :func:`hole_plane_triangulation` (paper's steps, then faired) when one of them crosses nothing;
+        last, by the paper's steps grown from the loop's least-bend triangulations
+        (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`), for jagged borders
+        whose faces tilt every way (noisy scans).
 
     Returns
     -------
@@ -472,7 +477,9 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
         # The triangulation folds already: a cut across walls standing on the hole's plane.
         plane = functools.cache(lambda: hole_plane_triangulation(ctx.points, ctx.forbidden_edges))
         tries += [("hole plane", plane, options)] + ([] if faired else [("hole plane, faired", plane, FAIRED_OPTIONS)])
-    for name, initial, chosen in tries:
+    # Last, a jagged border: the faces beside the hole tilt every way and the ears fold onto them.
+    least_bend = (("least bend", lambda T=T: T, options) for T in least_bend_triangulations(ctx))
+    for name, initial, chosen in itertools.chain(tries, least_bend):
         try:
             patch = _patch_from(ctx, initial(), **same, **chosen)
         except HoleFillError:  # the hole fails for the paper's patch, not for a fallback's

@@ -19,12 +19,14 @@ are in the module docstring of :mod:`.differential_evolution`.
 from __future__ import annotations
 
 import functools
+import itertools
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from ...core.border_bend import border_bend
+from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...geometry.laplacian import tangential_umbrella_smoothing
@@ -506,6 +508,9 @@ def _quality_pass(patch, ctx, mesh_normals, quality_floor, stats):
 def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
     """Last resort (beyond the paper): the loop alone, triangulated by Liepa's weights or flat in the PCA plane.
 
+    Loops longer than ``folds.LOOP_TRIANGULATION_SIZE`` take the compiled least-bend triangulations
+    (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`, the same weights) after the plane.
+
     Teeth of a crumpled scan border force sharp creases there, so up to LAST_RESORT_ANGLE is
     accepted (a triangle flipped onto its neighbour is at 180 degrees). The first candidate
     that duplicates no mesh edge, has no sharper fold and does not cross the rings is relaxed
@@ -520,14 +525,16 @@ def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
     k = ctx.size
     P = ctx.points
     candidates = [folds.loop_triangulation(P, mesh_normals, ctx.forbidden_edges,
-                                           blocked=folds.crossing_triangles(ctx))[0]]
+                                           max_size=folds.LOOP_TRIANGULATION_SIZE,
+                                           blocked=folds.crossing_triangles(ctx, folds.LOOP_TRIANGULATION_SIZE))[0]]
     try:
         pmap = triangulation.plane_map_for(base, normals, seg, False)
         candidates.append(triangulation.triangulate_projection(P, np.zeros((0, 3)), pmap, 0.0)[1])
     except HoleFillError:
         pass
     fe = np.sort(np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2), axis=1)
-    for F in candidates:
+    # Loops too long for folds.loop_triangulation: the compiled least-bend triangulations, lazily.
+    for F in itertools.chain(candidates, least_bend_triangulations(ctx) if k > folds.LOOP_TRIANGULATION_SIZE else ()):
         if F is None or len(F) == 0:
             continue
         E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)

@@ -25,7 +25,11 @@ __all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_fold
 FOLD_ANGLE = np.radians(150.0)
 
 
-def crossing_triangles(ctx, max_size=60):
+#: Loops up to this size are triangulated by :func:`loop_triangulation` (its cost is cubic, in Python).
+LOOP_TRIANGULATION_SIZE = 60
+
+
+def crossing_triangles(ctx, max_size=LOOP_TRIANGULATION_SIZE):
     """Set of loop triples (i, m, j), i < m < j, whose triangle crosses the surrounding rings.
 
     All C(k, 3) candidate triangles are tested at once against the context's faces (for
@@ -42,7 +46,7 @@ def crossing_triangles(ctx, max_size=60):
     return set(map(tuple, T[np.asarray(hits, np.int64)].tolist()))
 
 
-def loop_triangulation(P, border_normals, forbidden_edges=(), max_size=60, blocked=frozenset()):
+def loop_triangulation(P, border_normals, forbidden_edges=(), max_size=LOOP_TRIANGULATION_SIZE, blocked=frozenset()):
     """Triangulation of the loop alone minimising (largest dihedral angle, area), as Liepa (2003).
 
     Last resort beyond the paper, used only when every HPDE attempt folds (slit-like or

@@ -17,6 +17,7 @@ from ._laplacian_kernels import edge_weight_rows, with_unit_diagonal
 from .advancing_front import advancing_front_triangulation
 from ...geometry.flips import folds, relax_edges
 from ...core.crossings import context_crossings
+from ...core.least_bend import least_bend_triangulations
 from ...geometry.development import boundary_gap_angles, develop_loop, enclosed_curvature, simple_development
 from ...geometry.laplacian import (cotangent_laplacian, cotangent_weights, tangential_umbrella_smoothing,
                                    vertices_near)
@@ -247,9 +248,11 @@ def initial_patches(ctx, merge_factor, failures):
     result cannot be repositioned clear of the mesh: the same advancing front on each of
     :func:`planar_boundaries`, lifted to 3D by :func:`harmonic_lift` (and, where the lift stretches the
     layout's edges by more than ``LIFT_STRETCH``, refined by that ratio and lifted again,
-    :func:`refine_layout`); last, Hu et al.'s
-    minimum-angle ear cutting refined to the boundary's density. The caller takes the first
-    that works out.
+    :func:`refine_layout`); then Hu et al.'s
+    minimum-angle ear cutting refined to the boundary's density; last, for jagged borders whose
+    faces tilt every way (noisy scans), the loop's least-bend triangulations
+    (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`) refined alike. The caller
+    takes the first that works out.
 
     Parameters
     ----------
@@ -261,7 +264,7 @@ def initial_patches(ctx, merge_factor, failures):
     ------
     X : (k + p, 3) float64  boundary then new vertices
     F : (q, 3) int64
-    stats : dict  the triangulation's counts and ``domain`` ('3d', 'developed', 'projected', 'ears'), for
+    stats : dict  the triangulation's counts and ``domain`` ('3d', 'developed', 'projected', 'ears', 'least bend'), for
         the developed layout ``enclosed_curvature`` (radians, :func:`geometry.development.enclosed_curvature`),
         and for a refined layout ``lift_stretch`` and ``lift_refined`` (vertices added)
     layout : (k + p, 3) float64 or None  the planar patch the front built, z = 0 (the planar domains;
@@ -302,9 +305,12 @@ def initial_patches(ctx, merge_factor, failures):
         F0 = min_angle_triangulation(P, ctx.loop_normals, ctx.forbidden_edges)
     except HoleFillError as exc:
         failures.append(f"ear cutting: {exc}")
-        return
-    X, F, _, info = refine_patch(P, F0, ctx.edge_scale, fixed_edges=_fixed_edges(ctx))
-    yield X, F, {"domain": "ears", **info}, None
+    else:
+        X, F, _, info = refine_patch(P, F0, ctx.edge_scale, fixed_edges=_fixed_edges(ctx))
+        yield X, F, {"domain": "ears", **info}, None
+    for F0 in least_bend_triangulations(ctx):
+        X, F, _, info = refine_patch(P, F0, ctx.edge_scale, fixed_edges=_fixed_edges(ctx))
+        yield X, F, {"domain": "least bend", **info}, None
 
 
 def solve_folds(X, F, fixed, before=None):

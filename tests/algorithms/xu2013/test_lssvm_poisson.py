@@ -726,7 +726,7 @@ def test_initial_patches_yield_every_domain_in_order_each_closing_the_hole_on_it
         assert np.array_equal(X[:k], ctx.points)
         validate_patch(Patch(X[k:], F), ctx.points, ctx.forbidden_edges)
         assert len(X) > k and off_plane(X) < 1e-12  # a planar hole gives a planar patch in every domain
-    assert domains == ["3d", "developed", "projected", "ears"] and failures == []
+    assert domains == ["3d", "developed", "projected", "ears", "least bend"] and failures == []
 
 
 def test_initial_patches_fall_back_lazily_and_record_why(monkeypatch):

@@ -1,0 +1,72 @@
+"""core.least_bend: the fallback for jagged borders, and the four filters closing a noisy scan's holes with it."""
+import functools
+
+import numpy as np
+import pytest
+
+from meshlab_holefill import fill_holes
+from meshlab_holefill.core.crossings import context_crossings
+from meshlab_holefill.core.holes import boundary_loops, hole_context
+from meshlab_holefill.core.least_bend import least_bend_triangulations
+from meshlab_holefill.evaluation.analytic import analytic_mesh
+from meshlab_holefill.evaluation.cut_holes import cut_holes
+from meshlab_holefill.evaluation.noisy import normal_noise
+
+from conftest import assert_filled_cleanly
+
+
+@functools.lru_cache(maxsize=None)
+def noisy_holes(surface, sigma, seed):
+    """(V, F): an analytic surface with scan-like noise along its normals and two holes cut (jagged borders)."""
+    V, F = analytic_mesh(surface)
+    V = normal_noise(V, F, sigma, seed)
+    _, holes = cut_holes(V, F, sizes=("large", "irregular"), seed=seed, strict=False)
+    removed = np.zeros(len(F), bool)
+    removed[np.concatenate([h.face_indices for h in holes])] = True
+    return V, F[~removed]
+
+
+def test_each_round_leaves_out_the_triangles_of_the_last_that_crossed_and_stops_at_one_that_crosses_nothing():
+    V, F = noisy_holes("sphere", 0.5, 1)
+    loop = max(boundary_loops(F), key=lambda lp: len(lp.vertices))
+    ctx = hole_context(V, F, loop, rings=3)
+    rounds = list(least_bend_triangulations(ctx, rounds=3))
+    assert 1 <= len(rounds) <= 3
+    for before, after in zip(rounds, rounds[1:]):
+        crossed = set(map(tuple, before[context_crossings(ctx, ctx.points, before)].tolist()))
+        assert crossed and not crossed & set(map(tuple, after.tolist()))
+    if len(rounds) < 3:
+        assert len(context_crossings(ctx, ctx.points, rounds[-1])) == 0
+
+
+@pytest.mark.parametrize("algorithm, surface, sigma, seed", [
+    ("min_angle_bilateral", "sphere", 0.5, 1),
+    ("curve_unfolding", "sphere", 0.5, 1),
+    ("lssvm_poisson", "torus", 0.5, 0),
+])
+def test_a_hole_with_a_jagged_noisy_border_is_closed_from_the_least_bend_triangulation(algorithm, surface, sigma, seed):
+    V, F = noisy_holes(surface, sigma, seed)
+    V2, F2, result = fill_holes(V, F, algorithm, workers=1, maxholesize=1000)
+    assert result["closed_holes"] == 2
+    assert "least bend" in {h.get("fallback") or h.get("afm_domain") for h in result["holes"]}
+    assert_filled_cleanly(V, F, V2, F2, faces_kept=algorithm != "lssvm_poisson")  # LS-SVM splits border faces
+
+
+def test_hpde_closes_a_long_jagged_loop_by_its_last_resort_on_the_least_bend_triangulation():
+    """The benchmark's cow_noisy 307-edge hole: every HPDE layout folds, and the loop is too long for the
+    plain-Python Liepa triangulation of the last resort (more than 60 edges)."""
+    import pymeshlab
+
+    from conftest import mesh_arrays, sample
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("cow.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    V = normal_noise(V, F, 0.3, seed=0)
+    _, holes = cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, strict=False)
+    F = np.delete(F, np.concatenate([h.face_indices for h in holes]), axis=0)
+    V2, F2, result = fill_holes(V, F, "differential_evolution", workers=1, maxholesize=1000)
+    assert result["closed_holes"] == 4
+    assert [h["layout"] for h in result["holes"] if h["boundary_edges"] > 300] == ["loop only"]
+    assert_filled_cleanly(V, F, V2, F2)
