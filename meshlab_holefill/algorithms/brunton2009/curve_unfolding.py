@@ -283,9 +283,22 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         energy = "area_interior" if energy == "area" and area_rows == "interior" else energy
         for vertices, faces in _least_bend_patches(ctx, energy, tangential):
             if not len(crossing_faces(ctx, vertices, faces)):
+                vertices, faces = _improved(ctx, vertices, faces, energy, swaps, tangential, slivers)
                 return Patch(vertices=vertices, faces=faces, info=dict(patch.info, crossing_faces=0,
                                                                        fallback="least bend"))
     return patch
+
+
+def _improved(ctx, vertices, faces, energy, swaps, tangential, slivers):
+    """A patch that crosses nothing after the quality swaps and the sliver repair, as the domains' patches get them."""
+    counts = CrossingCounts(ctx)
+    counts.remember(vertices, faces, 0)
+    if swaps:
+        vertices, faces, _ = improve_by_swaps(ctx, vertices, faces, energy, crossings=0, tangential=tangential,
+                                              count_crossings=counts)
+    if slivers:
+        vertices, faces, _ = repair_slivers(ctx, vertices, faces, counts)
+    return vertices, faces
 
 
 def _least_bend_patches(ctx, energy, tangential):
