@@ -285,15 +285,20 @@ def tangential_relaxation(X, F, free):
     before = cross_rows(X[star[:, 1]] - X[star[:, 0]], X[star[:, 2]] - X[star[:, 0]])
     # Where the patch is folded already, unfolding it flips the folded faces: a step that
     # leaves no fold is taken although it flips faces (one that leaves some, on a curved
-    # patch, can carry vertices far off the surface).
-    pairs = _face_pairs(star)
-    folds = _fold_count(before, pairs)
+    # patch, can carry vertices far off the surface). The folds are counted only once a step
+    # flips a face (most full steps flip none).
+    pairs, folds = None, 0
     alpha = 1.0
     for _ in range(5):
         Y = X.copy()
         Y[free] += alpha * step
         after = cross_rows(Y[star[:, 1]] - Y[star[:, 0]], Y[star[:, 2]] - Y[star[:, 0]])
-        if np.all(np.einsum("ij,ij->i", before, after) > 0.0) or (folds and _fold_count(after, pairs) == 0):
+        if np.all(np.einsum("ij,ij->i", before, after) > 0.0):
+            return Y
+        if pairs is None:
+            pairs = _face_pairs(star)
+            folds = _fold_count(before, pairs)
+        if folds and _fold_count(after, pairs) == 0:
             return Y
         alpha *= 0.5
     return X
