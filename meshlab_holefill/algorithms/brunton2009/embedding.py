@@ -32,7 +32,7 @@ import scipy.sparse.linalg as spla
 from ...geometry.laplacian import uniform_laplacian
 from ...geometry.quality import corner_sums, cross_rows, unique_edges
 from ...errors import HoleFillError
-from ._tangential_kernels import free_umbrella
+from ._tangential_kernels import face_cross, faces_touching, frame_pairs, free_frames, free_umbrella, rows_times
 
 __all__ = ["symmetric_lu", "umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy", "vertex_normals",
            "tangent_frames", "tangential_system", "tangential_relaxation", "embed_patch", "relax_patch"]
@@ -267,12 +267,10 @@ def tangential_relaxation(X, F, free):
     s = len(free)
     if s == 0:
         return X
-    is_free = np.zeros(len(X), bool)
-    is_free[free] = True
     # The free vertices' rows of U and their normals only see the faces around them: built on
     # those faces they are the same numbers (the same edges, degrees and sums, in the same order).
-    star = F[is_free[F].any(axis=1)]
-    b1, b2 = tangent_frames(vertex_normals(X, star)[free])
+    star = faces_touching(np.ascontiguousarray(F), free, len(X))
+    b1, b2 = free_frames(X, star, free)  # tangent_frames(vertex_normals(X, star)[free]), compiled
     A, U = tangential_system(star, X, free, (b1, b2))
     b = -np.concatenate([np.einsum("ij,ij->i", b1, U), np.einsum("ij,ij->i", b2, U)])
     try:
@@ -282,7 +280,7 @@ def tangential_relaxation(X, F, free):
     if not np.all(np.isfinite(t)):
         return X
     step = t[:s, None] * b1 + t[s:, None] * b2
-    before = cross_rows(X[star[:, 1]] - X[star[:, 0]], X[star[:, 2]] - X[star[:, 0]])
+    before = face_cross(X, star)
     # Where the patch is folded already, unfolding it flips the folded faces: a step that
     # leaves no fold is taken although it flips faces (one that leaves some, on a curved
     # patch, can carry vertices far off the surface). The folds are counted only once a step
@@ -292,7 +290,7 @@ def tangential_relaxation(X, F, free):
     for _ in range(5):
         Y = X.copy()
         Y[free] += alpha * step
-        after = cross_rows(Y[star[:, 1]] - Y[star[:, 0]], Y[star[:, 2]] - Y[star[:, 0]])
+        after = face_cross(Y, star)
         if np.all(np.einsum("ij,ij->i", before, after) > 0.0):
             return Y
         if pairs is None:
@@ -352,16 +350,13 @@ def tangential_system(star, X, free, frames, direct=True):
         np.ascontiguousarray(star, np.int64), np.ascontiguousarray(free, np.int64), n)
     if not ok:
         return _tangential_system_sparse(star, X, free, frames)
-    Wf = sp.csr_matrix((data, indices, indptr.astype(np.int32)), shape=(s, n))
-    Wf.has_sorted_indices = False
-    # The values as the reference computes them: the same einsum rows, entry by entry.
+    # The values as the reference computes them: the same einsum rows, entry by entry (the four
+    # blocks' rows in one call).
+    left, right = frame_pairs(*(np.ascontiguousarray(b, np.float64) for b in frames), r, c)
     values = np.empty(4 * len(w))
-    gathered_r, gathered_c = (frames[0][r], frames[1][r]), (frames[0][c], frames[1][c])
-    for i in range(2):
-        for j in range(2):
-            values[slots[2 * i + j]] = w * np.einsum("ij,ij->i", gathered_r[i], gathered_c[j])
+    values[slots.ravel()] = np.tile(w, 4) * np.einsum("ij,ij->i", left, right)
     A = sp.csc_matrix((values, a_indices, a_indptr.astype(np.int32)), shape=(2 * s, 2 * s))
-    return A, Wf @ X
+    return A, rows_times(indptr, indices, data, X)  # U[free] @ X as scipy's product sums it
 
 
 def _tangential_system_sparse(star, X, free, frames):

@@ -77,6 +77,42 @@ def test_tangential_system_takes_the_general_construction_for_degenerate_faces()
     assert _same_sparse(A, A_ref) and np.array_equal(U, U_ref)
 
 
+def test_tangential_kernels_equal_numpy():
+    # The relaxation's compiled steps against the numpy they replace, to the last bit.
+    from meshlab_holefill.algorithms.brunton2009 import _tangential_kernels as K
+    from meshlab_holefill.geometry.quality import cross_rows
+
+    rng = np.random.default_rng(2)
+    checked = 0
+    for ctx, patch in _filled_patches():
+        if len(patch.vertices) == 0:
+            continue
+        star, X, free, frames = _joint_system_inputs(ctx, patch.faces, patch.vertices)
+        k, n_ctx = ctx.size, len(ctx.vertices)
+        joint = np.concatenate([ctx.faces, np.where(patch.faces < k, patch.faces, patch.faces - k + n_ctx)])
+        assert np.array_equal(K.faces_touching(joint, free, len(X)), star)
+        b1, b2 = K.free_frames(X, star, free)
+        assert np.array_equal(b1, frames[0]) and np.array_equal(b2, frames[1])
+        assert np.array_equal(K.face_cross(X, star), cross_rows(X[star[:, 1]] - X[star[:, 0]],
+                                                                 X[star[:, 2]] - X[star[:, 0]]))
+        Wf = emb.umbrella_operator(star, len(X))[free]
+        assert np.array_equal(K.rows_times(Wf.indptr.astype(np.int64), Wf.indices, Wf.data, X), Wf @ X)
+        r, c = rng.integers(0, len(free), 50), rng.integers(0, len(free), 50)
+        left, right = K.frame_pairs(b1, b2, r, c)
+        blocks = [(b1, b1), (b1, b2), (b2, b1), (b2, b2)]
+        assert np.array_equal(left, np.concatenate([bi[r] for bi, _ in blocks]))
+        assert np.array_equal(right, np.concatenate([bj[c] for _, bj in blocks]))
+        checked += 1
+    assert checked >= 2
+    # Degenerate normals: a zero normal gives zero frames, as numpy's.
+    X = np.zeros((4, 3))
+    star = np.array([[0, 1, 2], [0, 2, 3]])
+    free = np.array([0, 2])
+    b1, b2 = K.free_frames(X, star, free)
+    ref = emb.tangent_frames(emb.vertex_normals(X, star)[free])
+    assert np.array_equal(b1, ref[0]) and np.array_equal(b2, ref[1])
+
+
 def _running_best(start, rounds, base, count):
     """The swaps' rule as a running best: a round is kept when it scores above the best so far and
     crosses no more than the input (the reference of ``_best_round``)."""
