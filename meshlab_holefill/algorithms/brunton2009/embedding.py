@@ -32,9 +32,11 @@ import scipy.sparse.linalg as spla
 from ...geometry.laplacian import uniform_laplacian
 from ...geometry.quality import corner_sums, cross_rows, unique_edges
 from ...errors import HoleFillError
+from ._embedding_kernels import area_normal_equations
 from ._tangential_kernels import face_cross, faces_touching, frame_pairs, free_frames, free_umbrella, rows_times
 
-__all__ = ["symmetric_lu", "umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy", "vertex_normals",
+__all__ = ["symmetric_lu", "umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy",
+           "minimise_area_energy", "vertex_normals",
            "tangent_frames", "tangential_system", "tangential_relaxation", "embed_patch", "relax_patch"]
 
 
@@ -198,6 +200,40 @@ def minimise_embedding_energy(X, R, free):
         # Singular (interior not connected to the boundary): least squares is still a minimiser.
         M = (A.T @ A).tocsc() + 1e-12 * sp.identity(len(fi), format="csc")
         X[fi] = spla.splu(M).solve(A.T @ b)
+    if not np.all(np.isfinite(X[fi])):
+        raise HoleFillError("embedding energy solve produced non-finite positions")
+    return X
+
+
+def minimise_area_energy(X, F, free):
+    """The least-squares mesh (E_AREA with the loop's rows, Sec. 3.3) over the faces F.
+
+    ``minimise_embedding_energy(X, energy_rows(F, len(X), free, 1, anchors=True), free)``, the
+    same bits, with the normal equations built compiled (:func:`._embedding_kernels.area_normal_equations`);
+    scipy's construction for what the kernel leaves to it (degenerate faces, no fixed row).
+
+    Parameters
+    ----------
+    X : (n, 3) float64  fixed rows set; free rows are ignored
+    F : (t, 3) int
+    free : (n,) bool
+
+    Returns
+    -------
+    X : (n, 3) float64  with the free rows solved
+    """
+    X = np.array(X, np.float64)
+    free = np.asarray(free, bool)
+    ok, indptr, indices, data, rhs = area_normal_equations(np.ascontiguousarray(F, np.int64), free, X)
+    if not ok:
+        return minimise_embedding_energy(X, energy_rows(F, len(X), free, 1, anchors=True), free)
+    fi = np.flatnonzero(free)
+    M = sp.csc_matrix((data, indices, indptr.astype(np.int32)), shape=(len(fi), len(fi)))
+    try:
+        X[fi] = symmetric_lu(M).solve(rhs)
+    except RuntimeError:
+        # Singular (interior not connected to the boundary): as minimise_embedding_energy.
+        X[fi] = spla.splu(M + 1e-12 * sp.identity(len(fi), format="csc")).solve(rhs)
     if not np.all(np.isfinite(X[fi])):
         raise HoleFillError("embedding energy solve produced non-finite positions")
     return X
@@ -425,8 +461,10 @@ def embed_patch(ctx, n_interior, F, energy="fairing", boundary=None, extra_faces
     if n_interior == 0:
         return np.zeros((0, 3))
     X, joint, free = _joint_mesh(ctx, n_interior, F, boundary, extra_faces)
-    R = energy_rows(joint, len(X), free, order=2 if energy == "fairing" else 1, anchors=energy == "area")
-    X = minimise_embedding_energy(X, R, free)
+    if energy == "area":
+        X = minimise_area_energy(X, joint, free)
+    else:
+        X = minimise_embedding_energy(X, energy_rows(joint, len(X), free, order=2 if energy == "fairing" else 1), free)
     if tangential:
         X = tangential_relaxation(X, joint, np.flatnonzero(free))
     return X[len(ctx.vertices):]

@@ -200,3 +200,55 @@ def test_area_rows_are_the_rows_touching_a_free_vertex():
         expected = W[rows].tocsr()
         assert R.shape == expected.shape and np.array_equal(R.toarray(), expected.toarray())
         assert len(rows) > len(free)  # the loop's rows are there
+
+
+def _scipy_normal_equations(F, X, is_free):
+    """R_f^T R_f and -R_f^T R_c X_c as minimise_embedding_energy builds them from energy_rows (anchors)."""
+    R = emb.energy_rows(F, len(X), is_free, order=1, anchors=True).tocsc()
+    A = R[:, np.flatnonzero(is_free)].tocsc()
+    b = -(R[:, np.flatnonzero(~is_free)] @ X[~is_free])
+    return (A.T @ A).tocsc(), A.T @ b
+
+
+@pytest.mark.parametrize("subset", ["patch", "scattered"])
+def test_area_normal_equations_equal_scipy_construction(subset):
+    # The compiled normal equations of the least-squares mesh are scipy's to the last bit, and the
+    # solve through them gives minimise_embedding_energy's positions.
+    from meshlab_holefill.algorithms.brunton2009._embedding_kernels import area_normal_equations
+
+    rng = np.random.default_rng(3)
+    checked = 0
+    for ctx, patch in _filled_patches():
+        if len(patch.vertices) == 0:
+            continue
+        _, X, free, _ = _joint_system_inputs(ctx, patch.faces, patch.vertices)
+        k, n_ctx = ctx.size, len(ctx.vertices)
+        joint = np.concatenate([ctx.faces, np.where(patch.faces < k, patch.faces, patch.faces - k + n_ctx)])
+        is_free = np.zeros(len(X), bool)
+        is_free[free] = True
+        if subset == "scattered":  # free vertices anywhere, some of them without a fixed neighbour
+            is_free = rng.random(len(X)) < 0.5
+        M, rhs = _scipy_normal_equations(joint, X, is_free)
+        ok, indptr, indices, data, rhs_k = area_normal_equations(joint, is_free, X)
+        assert ok
+        assert np.array_equal(indptr, M.indptr) and np.array_equal(indices, M.indices)
+        assert np.array_equal(data, M.data) and np.array_equal(rhs_k, rhs)
+        R = emb.energy_rows(joint, len(X), is_free, order=1, anchors=True)
+        assert np.array_equal(emb.minimise_area_energy(X, joint, is_free), emb.minimise_embedding_energy(X, R, is_free))
+        checked += 1
+    assert checked >= 2
+
+
+def test_area_normal_equations_leave_degenerate_and_square_cases_to_scipy():
+    from meshlab_holefill.algorithms.brunton2009._embedding_kernels import area_normal_equations
+
+    X = np.random.default_rng(4).standard_normal((5, 3))
+    fan = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+    centre = np.arange(5) == 4
+    assert area_normal_equations(np.array([[0, 1, 4], [4, 4, 1]]), centre, X)[0] is False  # a repeated vertex
+    assert area_normal_equations(fan, np.ones(5, bool), X)[0] is False  # every vertex free: no fixed row
+    assert area_normal_equations(fan, np.zeros(5, bool), X)[0] is False  # nothing to solve
+    assert area_normal_equations(np.zeros((0, 3), np.int64), centre, X)[0] is False
+    degenerate = np.concatenate([fan, [[4, 4, 1]]])
+    R = emb.energy_rows(degenerate, 5, centre, order=1, anchors=True)
+    assert np.array_equal(emb.minimise_area_energy(X, degenerate, centre), emb.minimise_embedding_energy(X, R, centre))
