@@ -252,3 +252,50 @@ def test_area_normal_equations_leave_degenerate_and_square_cases_to_scipy():
     degenerate = np.concatenate([fan, [[4, 4, 1]]])
     R = emb.energy_rows(degenerate, 5, centre, order=1, anchors=True)
     assert np.array_equal(emb.minimise_area_energy(X, degenerate, centre), emb.minimise_embedding_energy(X, R, centre))
+
+
+def _best_candidates_numpy(targets, todo, cand, A, B, C, best_score, best_face, best_w):
+    """The numpy steps best_candidates replaces (sample_patch's round over the k-d tree's candidates)."""
+    a, b, c = A[cand], B[cand], C[cand]
+    p = targets[todo][:, None, :]
+    v0, v1, v2 = b - a, c - a, p - a
+    den = v0[..., 0] * v1[..., 1] - v0[..., 1] * v1[..., 0]
+    den = np.where(den == 0.0, 1e-300, den)
+    w1 = (v2[..., 0] * v1[..., 1] - v2[..., 1] * v1[..., 0]) / den
+    w2 = (v0[..., 0] * v2[..., 1] - v0[..., 1] * v2[..., 0]) / den
+    w = np.stack([1.0 - w1 - w2, w1, w2], axis=-1)
+    score = w.min(axis=-1)
+    j = np.argmax(score, axis=1)
+    rows = np.arange(len(todo))
+    better = score[rows, j] > best_score[todo]
+    sel = todo[better]
+    best_score[sel] = score[rows, j][better]
+    best_face[sel] = cand[rows, j][better]
+    best_w[sel] = w[rows, j][better]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_best_candidates_equal_numpy(seed):
+    # Random triangles (some degenerate, some with NaN corners) and points inside, outside, on
+    # corners and NaN, over two rounds as sample_patch runs them: the same choices and coordinates.
+    from meshlab_holefill.algorithms.brunton2009._sampling_kernels import best_candidates
+
+    rng = np.random.default_rng(seed)
+    t, p = 60, 40
+    A, B, C = (rng.standard_normal((t, 2)) for _ in range(3))
+    C[:5] = A[:5] + 2.0 * (B[:5] - A[:5])  # collinear: den = 0 or rounding
+    B[5:8] = A[5:8]
+    A[8, 0] = np.nan
+    targets = rng.standard_normal((p, 2))
+    targets[:6] = A[10:16]  # on corners: ties between triangles
+    targets[6, 1] = np.nan
+    state = [np.full(p, -np.inf), np.zeros(p, np.int64), np.full((p, 3), np.nan)]
+    reference = [x.copy() for x in state]
+    for k in (4, 12):
+        todo = np.flatnonzero(state[0] < -1e-9)
+        assert np.array_equal(todo, np.flatnonzero(reference[0] < -1e-9))
+        cand = rng.integers(0, t, (len(todo), k))
+        best_candidates(targets, todo, cand, A, B, C, *state)
+        _best_candidates_numpy(targets, todo, cand, A, B, C, *reference)
+        for x, y in zip(state, reference):
+            assert np.array_equal(x.view(np.int64), y.view(np.int64))
