@@ -85,22 +85,30 @@ class PlanarDomains:
     epsilon : float  relative clearance, as :func:`fill`'s
     developments : bool  the repair may try the loop's developments
     max_domain_area : float  as :func:`fill`'s (0: no bound)
+    shared : dict, optional
+        The developments of this loop already made, shared by the domains of the fills of one hole
+        with the same parameters (``domain='smoothest'`` fills it on two domains): each is developed
+        once, each object still reports only what it was asked for.
     """
 
-    def __init__(self, P, gaps, epsilon, developments, max_domain_area):
+    def __init__(self, P, gaps, epsilon, developments, max_domain_area, shared=None):
         self.P, self.gaps, self.epsilon = P, gaps, epsilon
         self.developments, self.max_domain_area = developments, max_domain_area
         self.relax = None  # blend of the fallback development, once developed (None: none simple)
         self._fallback = self._all = None
+        self._shared = {} if shared is None else shared
 
     def fallback(self):
         """The development offered to :func:`.unfolding.unfold_loop`: the least relaxed simple one, else the plain one."""
         if self._fallback is None:
-            m = len(self.P)
-            h = polygon_perimeter(self.P) / m
-            self._fallback, self.relax = simple_development(self.P, self.gaps, self.epsilon * h)
-            if self._fallback is None:  # offered anyway: unfold_loop then names it in its failure
-                self._fallback = develop_loop(self.P, self.gaps)
+            if "fallback" not in self._shared:
+                m = len(self.P)
+                h = polygon_perimeter(self.P) / m
+                D, relax = simple_development(self.P, self.gaps, self.epsilon * h)
+                if D is None:  # offered anyway: unfold_loop then names it in its failure
+                    D = develop_loop(self.P, self.gaps)
+                self._shared["fallback"] = (D, relax)
+            self._fallback, self.relax = self._shared["fallback"]
         return self._fallback
 
     def _bounded(self):
@@ -126,7 +134,9 @@ class PlanarDomains:
             if self.developments:
                 m = len(self.P)
                 eps_abs = self.epsilon * polygon_perimeter(self.P) / m
-                domains += [(D, "development", r) for D, r in simple_developments(self.P, self.gaps, eps_abs)
+                if "developments" not in self._shared:
+                    self._shared["developments"] = simple_developments(self.P, self.gaps, eps_abs)
+                domains += [(D, "development", r) for D, r in self._shared["developments"]
                             if not (method == "development" and r == self.relax)]
             if self._bounded():
                 domains = domains_within_area(self.P, self.gaps, domains, self.max_domain_area)
