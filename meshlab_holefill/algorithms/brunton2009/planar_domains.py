@@ -14,7 +14,7 @@ from ...errors import HoleFillError
 __all__ = ["PlanarDomains", "domain_area_ratios", "domains_within_area", "development_domain"]
 
 
-def domain_area_ratios(P, gap_angles, domains):
+def domain_area_ratios(P, gap_angles, domains, reference=None):
     """Area of each planar domain, scaled to the loop's perimeter, over the missing surface's (beyond the paper).
 
     Parameters as :func:`domains_within_area`.
@@ -23,7 +23,8 @@ def domain_area_ratios(P, gap_angles, domains):
     -------
     list of float  (0 for every domain of a loop whose development has no area: nothing to compare with)
     """
-    reference = developed_area(P, gap_angles)
+    if reference is None:
+        reference = developed_area(P, gap_angles)
     if not reference > 0.0:
         return [0.0] * len(domains)
     perimeter = polygon_perimeter(P)
@@ -31,7 +32,7 @@ def domain_area_ratios(P, gap_angles, domains):
             for D, _, _ in domains]
 
 
-def domains_within_area(P, gap_angles, domains, max_ratio):
+def domains_within_area(P, gap_angles, domains, max_ratio, reference=None):
     """The planar domains whose area is at most ``max_ratio`` times the missing surface's (beyond the paper).
 
     Unfolding keeps the loop's edge lengths, not its shape: a long strip-shaped hole (a scan
@@ -49,6 +50,7 @@ def domains_within_area(P, gap_angles, domains, max_ratio):
     gap_angles : (m,) float64
     domains : list of ((m, 2) float64, str, float or None)  see :func:`repair_crossings`
     max_ratio : float
+    reference : float, optional  the missing surface's area, :func:`..geometry.development.developed_area` (P, gap_angles)
 
     Returns
     -------
@@ -59,7 +61,7 @@ def domains_within_area(P, gap_angles, domains, max_ratio):
     HoleFillError
         when no domain is small enough.
     """
-    ratios = domain_area_ratios(P, gap_angles, domains)
+    ratios = domain_area_ratios(P, gap_angles, domains, reference)
     kept = [d for d, r in zip(domains, ratios) if r <= max_ratio]
     if not kept:
         raise HoleFillError(
@@ -114,10 +116,17 @@ class PlanarDomains:
     def _bounded(self):
         return self.max_domain_area > 0 and self.gaps is not None
 
+    def _reference_area(self):
+        """The missing surface's area the domains are compared with (:func:`domain_area_ratios`)."""
+        if "reference" not in self._shared:
+            self._shared["reference"] = developed_area(self.P, self.gaps)
+        return self._shared["reference"]
+
     def first(self, Q, method):
         """[the unfolding's domain] if it is within the area bound, else every domain within it (:meth:`all`)."""
         first = [(Q, method, self.relax if method == "development" else None)]
-        if not self._bounded() or domain_area_ratios(self.P, self.gaps, first)[0] <= self.max_domain_area:
+        if not self._bounded() or (domain_area_ratios(self.P, self.gaps, first, self._reference_area())[0]
+                                   <= self.max_domain_area):
             return first
         return self.all(Q, method)
 
@@ -139,7 +148,8 @@ class PlanarDomains:
                 domains += [(D, "development", r) for D, r in self._shared["developments"]
                             if not (method == "development" and r == self.relax)]
             if self._bounded():
-                domains = domains_within_area(self.P, self.gaps, domains, self.max_domain_area)
+                domains = domains_within_area(self.P, self.gaps, domains, self.max_domain_area,
+                                              self._reference_area())
             self._all = domains
         return self._all
 
