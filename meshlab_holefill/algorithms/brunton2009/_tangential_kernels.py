@@ -9,13 +9,20 @@ numpy's (:func:`.embedding.tangential_system`), so the matrix SuperLU factorises
 last bit. Measured on the 219 systems of the benchmark's 45 cut holes (process time): scipy's
 construction (an operator over every vertex of the surroundings, fancy indexing, a COO to CSC
 conversion) 0.39 s against 0.53 s for their factorisations; this one 0.14 s.
+
+:func:`faces_touching`, :func:`free_frames` (the free vertices' tangent frames), :func:`rows_times`
+(U[free] @ X), :func:`frame_pairs` (the rows whose dot products are the system's values) and
+:func:`face_cross` repeat numpy's and scipy's arithmetic operation for operation (sums in the
+same order) or only copy: the numpy versions made a few dozen arrays per relaxation, most of its
+time outside the solve on the benchmark's many small patches. The dot products themselves stay
+numpy's einsum, whose order of summation depends on the processor's vector width.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-__all__ = ["free_umbrella"]
+__all__ = ["free_umbrella", "faces_touching", "free_frames", "rows_times", "frame_pairs", "face_cross"]
 
 
 @njit(cache=True)
@@ -156,3 +163,127 @@ def free_umbrella(star, free, n):
                     a_indices[slot] = rr[e] + i * s
                     slots[2 * i + j, e] = slot
     return True, indptr, indices, data, rr, cc, w, a_indptr, a_indices, slots
+
+
+@njit(cache=True)
+def _norm3(x, y, z):
+    """np.linalg.norm of a row of three: the squares summed left to right."""
+    return np.sqrt(x * x + y * y + z * z)
+
+
+@njit(cache=True)
+def free_frames(X, star, free):
+    """Tangent frames of the free vertices: ``tangent_frames(vertex_normals(X, star)[free])`` of :mod:`.embedding`, bit for bit.
+
+    The face cross products are summed at the corners in bincount's order (every face's first
+    corner, then the second ones, then the third ones, from zero), normalised (a zero sum stays
+    zero), and each frame is the unit cross product with the x axis (the y axis where the
+    normal's x component reaches 0.9 or is NaN) and the normal's cross product with that.
+
+    Parameters
+    ----------
+    X : (n, 3) float64
+    star : (t, 3) int64  the faces touching a free vertex
+    free : (s,) int64
+
+    Returns
+    -------
+    b1, b2 : (s, 3) float64
+    """
+    s = free.shape[0]
+    pos = np.full(X.shape[0], -1, np.int64)
+    for r in range(s):
+        pos[free[r]] = r
+    C = face_cross(X, star)
+    N = np.zeros((s, 3))
+    for k in range(3):
+        for f in range(star.shape[0]):
+            r = pos[star[f, k]]
+            if r >= 0:
+                for d in range(3):
+                    N[r, d] += C[f, d]
+    b1, b2 = np.empty((s, 3)), np.empty((s, 3))
+    for r in range(s):
+        length = _norm3(N[r, 0], N[r, 1], N[r, 2])
+        if not length > 0.0:
+            length = 1.0
+        n0, n1, n2 = N[r, 0] / length, N[r, 1] / length, N[r, 2] / length
+        h0, h1, h2 = (1.0, 0.0, 0.0) if abs(n0) < 0.9 else (0.0, 1.0, 0.0)
+        c0, c1, c2 = n1 * h2 - n2 * h1, n2 * h0 - n0 * h2, n0 * h1 - n1 * h0
+        length = _norm3(c0, c1, c2)
+        if length < 1e-300:  # np.maximum(length, 1e-300): NaN stays NaN
+            length = 1e-300
+        c0, c1, c2 = c0 / length, c1 / length, c2 / length
+        b1[r, 0], b1[r, 1], b1[r, 2] = c0, c1, c2
+        b2[r, 0], b2[r, 1], b2[r, 2] = n1 * c2 - n2 * c1, n2 * c0 - n0 * c2, n0 * c1 - n1 * c0
+    return b1, b2
+
+
+@njit(cache=True)
+def rows_times(indptr, indices, data, X):
+    """CSR rows (indptr, indices, data) times the dense X, (rows, X.shape[1]): scipy's csr_matvecs, entries in storage order."""
+    rows = indptr.shape[0] - 1
+    out = np.zeros((rows, X.shape[1]))
+    for i in range(rows):
+        for e in range(indptr[i], indptr[i + 1]):
+            j, a = indices[e], data[e]
+            for k in range(X.shape[1]):
+                out[i, k] += a * X[j, k]
+    return out
+
+
+@njit(cache=True)
+def faces_touching(F, free, n):
+    """The rows of F with a vertex in ``free`` (n vertices), in F's order: ``F[is_free[F].any(axis=1)]``."""
+    is_free = np.zeros(n, np.bool_)
+    for r in range(free.shape[0]):
+        is_free[free[r]] = True
+    keep = np.zeros(F.shape[0], np.bool_)
+    count = 0
+    for f in range(F.shape[0]):
+        if is_free[F[f, 0]] or is_free[F[f, 1]] or is_free[F[f, 2]]:
+            keep[f] = True
+            count += 1
+    out = np.empty((count, 3), np.int64)
+    k = 0
+    for f in range(F.shape[0]):
+        if keep[f]:
+            out[k, 0], out[k, 1], out[k, 2] = F[f, 0], F[f, 1], F[f, 2]
+            k += 1
+    return out
+
+
+@njit(cache=True)
+def frame_pairs(b1, b2, r, c):
+    """Left and right rows of the tangential system's values, (4 f, 3) each, f = len(r).
+
+    Block k = 2 i + j (rows k f .. (k + 1) f) holds frame i at the entries' rows r and frame j at
+    their columns c (frames b1, b2): its row-wise dot products, times the umbrella weights, are
+    the matrix's block (i, j).
+    """
+    f = r.shape[0]
+    left, right = np.empty((4 * f, 3)), np.empty((4 * f, 3))
+    for i in range(2):
+        bi = b1 if i == 0 else b2
+        for j in range(2):
+            bj = b1 if j == 0 else b2
+            base = (2 * i + j) * f
+            for e in range(f):
+                for d in range(3):
+                    left[base + e, d] = bi[r[e], d]
+                    right[base + e, d] = bj[c[e], d]
+    return left, right
+
+
+@njit(cache=True)
+def face_cross(X, F):
+    """Unnormalised face normals, ``cross_rows(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]])``, (t, 3)."""
+    out = np.empty((F.shape[0], 3))
+    for f in range(F.shape[0]):
+        a, b, c = F[f, 0], F[f, 1], F[f, 2]
+        u0, u1, u2 = X[b, 0] - X[a, 0], X[b, 1] - X[a, 1], X[b, 2] - X[a, 2]
+        v0, v1, v2 = X[c, 0] - X[a, 0], X[c, 1] - X[a, 1], X[c, 2] - X[a, 2]
+        out[f, 0] = u1 * v2 - u2 * v1
+        out[f, 1] = u2 * v0 - u0 * v2
+        out[f, 2] = u0 * v1 - u1 * v0
+    return out

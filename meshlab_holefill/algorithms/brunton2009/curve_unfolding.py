@@ -320,14 +320,15 @@ def _least_bend_patches(ctx, energy, tangential):
 
 def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,
                 repair, swaps, tangential, seed, area_rows, max_domain_area, density, slivers, lengths, domain,
-                filled=None):
+                filled=None, developed=None):
     """The steps of :func:`fill` with its parameters, without its last fallback.
 
     ``filled`` maps (planar domain, its kind, its blend) to the patch made on it: everything after
     the unfolding depends on these alone, so a domain met again reuses that patch with its own
-    unfolding figures.
+    unfolding figures. ``developed`` holds the loop's developments made so far
+    (:class:`.planar_domains.PlanarDomains`' ``shared``), for the other domain's fill.
     """
-    params = {name: value for name, value in locals().items() if name not in ("ctx", "filled")}
+    params = {name: value for name, value in locals().items() if name not in ("ctx", "filled", "developed")}
     P = ctx.points
     m = ctx.size
     rng = np.random.default_rng(seed)
@@ -335,12 +336,14 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
         energy = "area_interior"  # the embedding's name for E_AREA summed over P_Int only
     t0 = time.perf_counter()
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m) if m > 3 else None
-    planar_domains = PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area)
+    developed = {} if developed is None else developed
+    planar_domains = PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area, developed)
     unfolding_only = domain == "smoothest" and m > 3 and not development_is_candidate(gaps)
     if domain == "smoothest" and m > 3 and not unfolding_only and development_domain(planar_domains)[0] is not None:
         # Where the annealing gives up, the unfolding is the development: that patch is made once.
         filled = {}
-        return smoothest_patch(ctx, lambda choice: _fill_steps(ctx, **dict(params, domain=choice), filled=filled))
+        return smoothest_patch(ctx, lambda choice: _fill_steps(ctx, **dict(params, domain=choice), filled=filled,
+                                                               developed=developed))
     Q, unfold_info = development_domain(planar_domains) if domain == "development" and m > 3 else (None, None)
     if Q is None:
         Q, unfold_info = unfold_loop(P, rng, k=k, temperature=temperature, epsilon=epsilon,

@@ -32,9 +32,11 @@ import scipy.sparse.linalg as spla
 from ...geometry.laplacian import uniform_laplacian
 from ...geometry.quality import corner_sums, cross_rows, unique_edges
 from ...errors import HoleFillError
-from ._tangential_kernels import free_umbrella
+from ._embedding_kernels import area_normal_equations
+from ._tangential_kernels import face_cross, faces_touching, frame_pairs, free_frames, free_umbrella, rows_times
 
-__all__ = ["symmetric_lu", "umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy", "vertex_normals",
+__all__ = ["symmetric_lu", "umbrella_operator", "energy_rows", "embedding_energy", "minimise_embedding_energy",
+           "minimise_area_energy", "vertex_normals",
            "tangent_frames", "tangential_system", "tangential_relaxation", "embed_patch", "relax_patch"]
 
 
@@ -203,6 +205,40 @@ def minimise_embedding_energy(X, R, free):
     return X
 
 
+def minimise_area_energy(X, F, free):
+    """The least-squares mesh (E_AREA with the loop's rows, Sec. 3.3) over the faces F.
+
+    ``minimise_embedding_energy(X, energy_rows(F, len(X), free, 1, anchors=True), free)``, the
+    same bits, with the normal equations built compiled (:func:`._embedding_kernels.area_normal_equations`);
+    scipy's construction for what the kernel leaves to it (degenerate faces, no fixed row).
+
+    Parameters
+    ----------
+    X : (n, 3) float64  fixed rows set; free rows are ignored
+    F : (t, 3) int
+    free : (n,) bool
+
+    Returns
+    -------
+    X : (n, 3) float64  with the free rows solved
+    """
+    X = np.array(X, np.float64)
+    free = np.asarray(free, bool)
+    ok, indptr, indices, data, rhs = area_normal_equations(np.ascontiguousarray(F, np.int64), free, X)
+    if not ok:
+        return minimise_embedding_energy(X, energy_rows(F, len(X), free, 1, anchors=True), free)
+    fi = np.flatnonzero(free)
+    M = sp.csc_matrix((data, indices, indptr.astype(np.int32)), shape=(len(fi), len(fi)))
+    try:
+        X[fi] = symmetric_lu(M).solve(rhs)
+    except RuntimeError:
+        # Singular (interior not connected to the boundary): as minimise_embedding_energy.
+        X[fi] = spla.splu(M + 1e-12 * sp.identity(len(fi), format="csc")).solve(rhs)
+    if not np.all(np.isfinite(X[fi])):
+        raise HoleFillError("embedding energy solve produced non-finite positions")
+    return X
+
+
 def vertex_normals(X, F):
     """Area-weighted unit vertex normals, (n, 3) (zero rows for isolated vertices)."""
     X = np.asarray(X, np.float64)
@@ -267,12 +303,10 @@ def tangential_relaxation(X, F, free):
     s = len(free)
     if s == 0:
         return X
-    is_free = np.zeros(len(X), bool)
-    is_free[free] = True
     # The free vertices' rows of U and their normals only see the faces around them: built on
     # those faces they are the same numbers (the same edges, degrees and sums, in the same order).
-    star = F[is_free[F].any(axis=1)]
-    b1, b2 = tangent_frames(vertex_normals(X, star)[free])
+    star = faces_touching(np.ascontiguousarray(F), free, len(X))
+    b1, b2 = free_frames(X, star, free)  # tangent_frames(vertex_normals(X, star)[free]), compiled
     A, U = tangential_system(star, X, free, (b1, b2))
     b = -np.concatenate([np.einsum("ij,ij->i", b1, U), np.einsum("ij,ij->i", b2, U)])
     try:
@@ -282,18 +316,23 @@ def tangential_relaxation(X, F, free):
     if not np.all(np.isfinite(t)):
         return X
     step = t[:s, None] * b1 + t[s:, None] * b2
-    before = cross_rows(X[star[:, 1]] - X[star[:, 0]], X[star[:, 2]] - X[star[:, 0]])
+    before = face_cross(X, star)
     # Where the patch is folded already, unfolding it flips the folded faces: a step that
     # leaves no fold is taken although it flips faces (one that leaves some, on a curved
-    # patch, can carry vertices far off the surface).
-    pairs = _face_pairs(star)
-    folds = _fold_count(before, pairs)
+    # patch, can carry vertices far off the surface). The folds are counted only once a step
+    # flips a face (most full steps flip none).
+    pairs, folds = None, 0
     alpha = 1.0
     for _ in range(5):
         Y = X.copy()
         Y[free] += alpha * step
-        after = cross_rows(Y[star[:, 1]] - Y[star[:, 0]], Y[star[:, 2]] - Y[star[:, 0]])
-        if np.all(np.einsum("ij,ij->i", before, after) > 0.0) or (folds and _fold_count(after, pairs) == 0):
+        after = face_cross(Y, star)
+        if np.all(np.einsum("ij,ij->i", before, after) > 0.0):
+            return Y
+        if pairs is None:
+            pairs = _face_pairs(star)
+            folds = _fold_count(before, pairs)
+        if folds and _fold_count(after, pairs) == 0:
             return Y
         alpha *= 0.5
     return X
@@ -347,16 +386,13 @@ def tangential_system(star, X, free, frames, direct=True):
         np.ascontiguousarray(star, np.int64), np.ascontiguousarray(free, np.int64), n)
     if not ok:
         return _tangential_system_sparse(star, X, free, frames)
-    Wf = sp.csr_matrix((data, indices, indptr.astype(np.int32)), shape=(s, n))
-    Wf.has_sorted_indices = False
-    # The values as the reference computes them: the same einsum rows, entry by entry.
+    # The values as the reference computes them: the same einsum rows, entry by entry (the four
+    # blocks' rows in one call).
+    left, right = frame_pairs(*(np.ascontiguousarray(b, np.float64) for b in frames), r, c)
     values = np.empty(4 * len(w))
-    gathered_r, gathered_c = (frames[0][r], frames[1][r]), (frames[0][c], frames[1][c])
-    for i in range(2):
-        for j in range(2):
-            values[slots[2 * i + j]] = w * np.einsum("ij,ij->i", gathered_r[i], gathered_c[j])
+    values[slots.ravel()] = np.tile(w, 4) * np.einsum("ij,ij->i", left, right)
     A = sp.csc_matrix((values, a_indices, a_indptr.astype(np.int32)), shape=(2 * s, 2 * s))
-    return A, Wf @ X
+    return A, rows_times(indptr, indices, data, X)  # U[free] @ X as scipy's product sums it
 
 
 def _tangential_system_sparse(star, X, free, frames):
@@ -425,8 +461,10 @@ def embed_patch(ctx, n_interior, F, energy="fairing", boundary=None, extra_faces
     if n_interior == 0:
         return np.zeros((0, 3))
     X, joint, free = _joint_mesh(ctx, n_interior, F, boundary, extra_faces)
-    R = energy_rows(joint, len(X), free, order=2 if energy == "fairing" else 1, anchors=energy == "area")
-    X = minimise_embedding_energy(X, R, free)
+    if energy == "area":
+        X = minimise_area_energy(X, joint, free)
+    else:
+        X = minimise_embedding_energy(X, energy_rows(joint, len(X), free, order=2 if energy == "fairing" else 1), free)
     if tangential:
         X = tangential_relaxation(X, joint, np.flatnonzero(free))
     return X[len(ctx.vertices):]

@@ -14,7 +14,7 @@ from ...errors import HoleFillError
 __all__ = ["PlanarDomains", "domain_area_ratios", "domains_within_area", "development_domain"]
 
 
-def domain_area_ratios(P, gap_angles, domains):
+def domain_area_ratios(P, gap_angles, domains, reference=None):
     """Area of each planar domain, scaled to the loop's perimeter, over the missing surface's (beyond the paper).
 
     Parameters as :func:`domains_within_area`.
@@ -23,7 +23,8 @@ def domain_area_ratios(P, gap_angles, domains):
     -------
     list of float  (0 for every domain of a loop whose development has no area: nothing to compare with)
     """
-    reference = developed_area(P, gap_angles)
+    if reference is None:
+        reference = developed_area(P, gap_angles)
     if not reference > 0.0:
         return [0.0] * len(domains)
     perimeter = polygon_perimeter(P)
@@ -31,7 +32,7 @@ def domain_area_ratios(P, gap_angles, domains):
             for D, _, _ in domains]
 
 
-def domains_within_area(P, gap_angles, domains, max_ratio):
+def domains_within_area(P, gap_angles, domains, max_ratio, reference=None):
     """The planar domains whose area is at most ``max_ratio`` times the missing surface's (beyond the paper).
 
     Unfolding keeps the loop's edge lengths, not its shape: a long strip-shaped hole (a scan
@@ -49,6 +50,7 @@ def domains_within_area(P, gap_angles, domains, max_ratio):
     gap_angles : (m,) float64
     domains : list of ((m, 2) float64, str, float or None)  see :func:`repair_crossings`
     max_ratio : float
+    reference : float, optional  the missing surface's area, :func:`..geometry.development.developed_area` (P, gap_angles)
 
     Returns
     -------
@@ -59,7 +61,7 @@ def domains_within_area(P, gap_angles, domains, max_ratio):
     HoleFillError
         when no domain is small enough.
     """
-    ratios = domain_area_ratios(P, gap_angles, domains)
+    ratios = domain_area_ratios(P, gap_angles, domains, reference)
     kept = [d for d, r in zip(domains, ratios) if r <= max_ratio]
     if not kept:
         raise HoleFillError(
@@ -85,31 +87,46 @@ class PlanarDomains:
     epsilon : float  relative clearance, as :func:`fill`'s
     developments : bool  the repair may try the loop's developments
     max_domain_area : float  as :func:`fill`'s (0: no bound)
+    shared : dict, optional
+        The developments of this loop already made, shared by the domains of the fills of one hole
+        with the same parameters (``domain='smoothest'`` fills it on two domains): each is developed
+        once, each object still reports only what it was asked for.
     """
 
-    def __init__(self, P, gaps, epsilon, developments, max_domain_area):
+    def __init__(self, P, gaps, epsilon, developments, max_domain_area, shared=None):
         self.P, self.gaps, self.epsilon = P, gaps, epsilon
         self.developments, self.max_domain_area = developments, max_domain_area
         self.relax = None  # blend of the fallback development, once developed (None: none simple)
         self._fallback = self._all = None
+        self._shared = {} if shared is None else shared
 
     def fallback(self):
         """The development offered to :func:`.unfolding.unfold_loop`: the least relaxed simple one, else the plain one."""
         if self._fallback is None:
-            m = len(self.P)
-            h = polygon_perimeter(self.P) / m
-            self._fallback, self.relax = simple_development(self.P, self.gaps, self.epsilon * h)
-            if self._fallback is None:  # offered anyway: unfold_loop then names it in its failure
-                self._fallback = develop_loop(self.P, self.gaps)
+            if "fallback" not in self._shared:
+                m = len(self.P)
+                h = polygon_perimeter(self.P) / m
+                D, relax = simple_development(self.P, self.gaps, self.epsilon * h)
+                if D is None:  # offered anyway: unfold_loop then names it in its failure
+                    D = develop_loop(self.P, self.gaps)
+                self._shared["fallback"] = (D, relax)
+            self._fallback, self.relax = self._shared["fallback"]
         return self._fallback
 
     def _bounded(self):
         return self.max_domain_area > 0 and self.gaps is not None
 
+    def _reference_area(self):
+        """The missing surface's area the domains are compared with (:func:`domain_area_ratios`)."""
+        if "reference" not in self._shared:
+            self._shared["reference"] = developed_area(self.P, self.gaps)
+        return self._shared["reference"]
+
     def first(self, Q, method):
         """[the unfolding's domain] if it is within the area bound, else every domain within it (:meth:`all`)."""
         first = [(Q, method, self.relax if method == "development" else None)]
-        if not self._bounded() or domain_area_ratios(self.P, self.gaps, first)[0] <= self.max_domain_area:
+        if not self._bounded() or (domain_area_ratios(self.P, self.gaps, first, self._reference_area())[0]
+                                   <= self.max_domain_area):
             return first
         return self.all(Q, method)
 
@@ -126,10 +143,13 @@ class PlanarDomains:
             if self.developments:
                 m = len(self.P)
                 eps_abs = self.epsilon * polygon_perimeter(self.P) / m
-                domains += [(D, "development", r) for D, r in simple_developments(self.P, self.gaps, eps_abs)
+                if "developments" not in self._shared:
+                    self._shared["developments"] = simple_developments(self.P, self.gaps, eps_abs)
+                domains += [(D, "development", r) for D, r in self._shared["developments"]
                             if not (method == "development" and r == self.relax)]
             if self._bounded():
-                domains = domains_within_area(self.P, self.gaps, domains, self.max_domain_area)
+                domains = domains_within_area(self.P, self.gaps, domains, self.max_domain_area,
+                                              self._reference_area())
             self._all = domains
         return self._all
 

@@ -15,6 +15,7 @@ import numpy as np
 from ...geometry.quality import edge_lengths
 from ...geometry.triangulate import polygon_perimeter, triangulate_polygon
 from ...errors import HoleFillError
+from ._sampling_kernels import best_candidates
 from .embedding import embed_patch, relax_patch
 
 __all__ = ["constrained_delaunay", "scale_to_loop", "area_bound", "refine_planar", "surrounding_edge_length",
@@ -177,23 +178,9 @@ def sample_patch(points, F, X, targets):
             break
         kq = min(kk, len(F))
         _, cand = tree.query(targets[todo], k=kq)
-        cand = np.asarray(cand).reshape(len(todo), kq)
-        a, b, c = A[cand], B[cand], C[cand]
-        p = targets[todo][:, None, :]
-        v0, v1, v2 = b - a, c - a, p - a
-        den = v0[..., 0] * v1[..., 1] - v0[..., 1] * v1[..., 0]
-        den = np.where(den == 0.0, 1e-300, den)
-        w1 = (v2[..., 0] * v1[..., 1] - v2[..., 1] * v1[..., 0]) / den
-        w2 = (v0[..., 0] * v2[..., 1] - v0[..., 1] * v2[..., 0]) / den
-        w = np.stack([1.0 - w1 - w2, w1, w2], axis=-1)
-        score = w.min(axis=-1)
-        j = np.argmax(score, axis=1)
-        rows = np.arange(len(todo))
-        better = score[rows, j] > best_score[todo]
-        sel = todo[better]
-        best_score[sel] = score[rows, j][better]
-        best_face[sel] = cand[rows, j][better]
-        best_w[sel] = w[rows, j][better]
+        cand = np.asarray(cand, np.int64).reshape(len(todo), kq)
+        # each point's candidate of largest smallest barycentric coordinate, kept where it beats the point's best
+        best_candidates(targets, todo, cand, A, B, C, best_score, best_face, best_w)
         if kq == len(F):
             break
     w = np.clip(best_w, 0.0, None)

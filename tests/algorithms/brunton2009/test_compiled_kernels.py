@@ -77,6 +77,42 @@ def test_tangential_system_takes_the_general_construction_for_degenerate_faces()
     assert _same_sparse(A, A_ref) and np.array_equal(U, U_ref)
 
 
+def test_tangential_kernels_equal_numpy():
+    # The relaxation's compiled steps against the numpy they replace, to the last bit.
+    from meshlab_holefill.algorithms.brunton2009 import _tangential_kernels as K
+    from meshlab_holefill.geometry.quality import cross_rows
+
+    rng = np.random.default_rng(2)
+    checked = 0
+    for ctx, patch in _filled_patches():
+        if len(patch.vertices) == 0:
+            continue
+        star, X, free, frames = _joint_system_inputs(ctx, patch.faces, patch.vertices)
+        k, n_ctx = ctx.size, len(ctx.vertices)
+        joint = np.concatenate([ctx.faces, np.where(patch.faces < k, patch.faces, patch.faces - k + n_ctx)])
+        assert np.array_equal(K.faces_touching(joint, free, len(X)), star)
+        b1, b2 = K.free_frames(X, star, free)
+        assert np.array_equal(b1, frames[0]) and np.array_equal(b2, frames[1])
+        assert np.array_equal(K.face_cross(X, star), cross_rows(X[star[:, 1]] - X[star[:, 0]],
+                                                                 X[star[:, 2]] - X[star[:, 0]]))
+        Wf = emb.umbrella_operator(star, len(X))[free]
+        assert np.array_equal(K.rows_times(Wf.indptr.astype(np.int64), Wf.indices, Wf.data, X), Wf @ X)
+        r, c = rng.integers(0, len(free), 50), rng.integers(0, len(free), 50)
+        left, right = K.frame_pairs(b1, b2, r, c)
+        blocks = [(b1, b1), (b1, b2), (b2, b1), (b2, b2)]
+        assert np.array_equal(left, np.concatenate([bi[r] for bi, _ in blocks]))
+        assert np.array_equal(right, np.concatenate([bj[c] for _, bj in blocks]))
+        checked += 1
+    assert checked >= 2
+    # Degenerate normals: a zero normal gives zero frames, as numpy's.
+    X = np.zeros((4, 3))
+    star = np.array([[0, 1, 2], [0, 2, 3]])
+    free = np.array([0, 2])
+    b1, b2 = K.free_frames(X, star, free)
+    ref = emb.tangent_frames(emb.vertex_normals(X, star)[free])
+    assert np.array_equal(b1, ref[0]) and np.array_equal(b2, ref[1])
+
+
 def _running_best(start, rounds, base, count):
     """The swaps' rule as a running best: a round is kept when it scores above the best so far and
     crosses no more than the input (the reference of ``_best_round``)."""
@@ -164,3 +200,102 @@ def test_area_rows_are_the_rows_touching_a_free_vertex():
         expected = W[rows].tocsr()
         assert R.shape == expected.shape and np.array_equal(R.toarray(), expected.toarray())
         assert len(rows) > len(free)  # the loop's rows are there
+
+
+def _scipy_normal_equations(F, X, is_free):
+    """R_f^T R_f and -R_f^T R_c X_c as minimise_embedding_energy builds them from energy_rows (anchors)."""
+    R = emb.energy_rows(F, len(X), is_free, order=1, anchors=True).tocsc()
+    A = R[:, np.flatnonzero(is_free)].tocsc()
+    b = -(R[:, np.flatnonzero(~is_free)] @ X[~is_free])
+    return (A.T @ A).tocsc(), A.T @ b
+
+
+@pytest.mark.parametrize("subset", ["patch", "scattered"])
+def test_area_normal_equations_equal_scipy_construction(subset):
+    # The compiled normal equations of the least-squares mesh are scipy's to the last bit, and the
+    # solve through them gives minimise_embedding_energy's positions.
+    from meshlab_holefill.algorithms.brunton2009._embedding_kernels import area_normal_equations
+
+    rng = np.random.default_rng(3)
+    checked = 0
+    for ctx, patch in _filled_patches():
+        if len(patch.vertices) == 0:
+            continue
+        _, X, free, _ = _joint_system_inputs(ctx, patch.faces, patch.vertices)
+        k, n_ctx = ctx.size, len(ctx.vertices)
+        joint = np.concatenate([ctx.faces, np.where(patch.faces < k, patch.faces, patch.faces - k + n_ctx)])
+        is_free = np.zeros(len(X), bool)
+        is_free[free] = True
+        if subset == "scattered":  # free vertices anywhere, some of them without a fixed neighbour
+            is_free = rng.random(len(X)) < 0.5
+        M, rhs = _scipy_normal_equations(joint, X, is_free)
+        ok, indptr, indices, data, rhs_k = area_normal_equations(joint, is_free, X)
+        assert ok
+        assert np.array_equal(indptr, M.indptr) and np.array_equal(indices, M.indices)
+        assert np.array_equal(data, M.data) and np.array_equal(rhs_k, rhs)
+        R = emb.energy_rows(joint, len(X), is_free, order=1, anchors=True)
+        assert np.array_equal(emb.minimise_area_energy(X, joint, is_free), emb.minimise_embedding_energy(X, R, is_free))
+        checked += 1
+    assert checked >= 2
+
+
+def test_area_normal_equations_leave_degenerate_and_square_cases_to_scipy():
+    from meshlab_holefill.algorithms.brunton2009._embedding_kernels import area_normal_equations
+
+    X = np.random.default_rng(4).standard_normal((5, 3))
+    fan = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+    centre = np.arange(5) == 4
+    assert area_normal_equations(np.array([[0, 1, 4], [4, 4, 1]]), centre, X)[0] is False  # a repeated vertex
+    assert area_normal_equations(fan, np.ones(5, bool), X)[0] is False  # every vertex free: no fixed row
+    assert area_normal_equations(fan, np.zeros(5, bool), X)[0] is False  # nothing to solve
+    assert area_normal_equations(np.zeros((0, 3), np.int64), centre, X)[0] is False
+    degenerate = np.concatenate([fan, [[4, 4, 1]]])
+    R = emb.energy_rows(degenerate, 5, centre, order=1, anchors=True)
+    assert np.array_equal(emb.minimise_area_energy(X, degenerate, centre), emb.minimise_embedding_energy(X, R, centre))
+
+
+def _best_candidates_numpy(targets, todo, cand, A, B, C, best_score, best_face, best_w):
+    """The numpy steps best_candidates replaces (sample_patch's round over the k-d tree's candidates)."""
+    a, b, c = A[cand], B[cand], C[cand]
+    p = targets[todo][:, None, :]
+    v0, v1, v2 = b - a, c - a, p - a
+    den = v0[..., 0] * v1[..., 1] - v0[..., 1] * v1[..., 0]
+    den = np.where(den == 0.0, 1e-300, den)
+    w1 = (v2[..., 0] * v1[..., 1] - v2[..., 1] * v1[..., 0]) / den
+    w2 = (v0[..., 0] * v2[..., 1] - v0[..., 1] * v2[..., 0]) / den
+    w = np.stack([1.0 - w1 - w2, w1, w2], axis=-1)
+    score = w.min(axis=-1)
+    j = np.argmax(score, axis=1)
+    rows = np.arange(len(todo))
+    better = score[rows, j] > best_score[todo]
+    sel = todo[better]
+    best_score[sel] = score[rows, j][better]
+    best_face[sel] = cand[rows, j][better]
+    best_w[sel] = w[rows, j][better]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_best_candidates_equal_numpy(seed):
+    # Random triangles (some degenerate, some with NaN corners) and points inside, outside, on
+    # corners and NaN, over two rounds as sample_patch runs them: the same choices and coordinates.
+    from meshlab_holefill.algorithms.brunton2009._sampling_kernels import best_candidates
+
+    rng = np.random.default_rng(seed)
+    t, p = 60, 40
+    A, B, C = (rng.standard_normal((t, 2)) for _ in range(3))
+    C[:5] = A[:5] + 2.0 * (B[:5] - A[:5])  # collinear: den = 0 or rounding
+    B[5:8] = A[5:8]
+    A[8, 0] = np.nan
+    targets = rng.standard_normal((p, 2))
+    targets[:6] = A[10:16]  # on corners: ties between triangles
+    targets[6, 1] = np.nan
+    state = [np.full(p, -np.inf), np.zeros(p, np.int64), np.full((p, 3), np.nan)]
+    reference = [x.copy() for x in state]
+    for k in (4, 12):
+        todo = np.flatnonzero(state[0] < -1e-9)
+        assert np.array_equal(todo, np.flatnonzero(reference[0] < -1e-9))
+        cand = rng.integers(0, t, (len(todo), k))
+        best_candidates(targets, todo, cand, A, B, C, *state)
+        _best_candidates_numpy(targets, todo, cand, A, B, C, *reference)
+        for x, y in zip(state, reference):
+            assert np.array_equal(x.view(np.int64), y.view(np.int64))

@@ -867,6 +867,29 @@ def test_domains_much_larger_than_the_missing_surface_are_refused():
         planar_domains.domains_within_area(ctx.points, gaps, [round_polygon], 5.0)
 
 
+def test_planar_domains_sharing_their_developments_answer_as_fresh_ones(monkeypatch):
+    # Two fills of one hole (domain='smoothest') share the developments: each is made once, and
+    # every object reports only what it was asked for (no blend before its fallback is asked).
+    V, F = flat_strip_hole()
+    (loop,) = [lp for lp in boundary_loops(F) if len(lp) < 100]
+    ctx = hole_context(V, F, loop, rings=2)
+    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, ctx.size)
+    Q = develop_loop(ctx.points, gaps, relax=1.0)
+    calls = []
+    counted = planar_domains.simple_development
+    monkeypatch.setattr(planar_domains, "simple_development", lambda *a: calls.append(a) or counted(*a))
+    fresh = [planar_domains.PlanarDomains(ctx.points, gaps, 1e-5, True, 6.0) for _ in range(2)]
+    shared = {}
+    first, second = (planar_domains.PlanarDomains(ctx.points, gaps, 1e-5, True, 6.0, shared) for _ in range(2))
+    assert first.fallback() is second.fallback() and np.array_equal(first.fallback(), fresh[0].fallback())
+    assert len(calls) == 2  # one for the fresh object, one for both shared ones
+    assert first.relax == second.relax == fresh[0].relax
+    third = planar_domains.PlanarDomains(ctx.points, gaps, 1e-5, True, 6.0, shared)
+    assert third.relax is None  # not asked yet
+    for a, b in zip(third.all(Q, "annealing"), fresh[1].all(Q, "annealing")):
+        assert np.array_equal(a[0], b[0]) and a[1:] == b[1:]
+
+
 def test_max_domain_area_reaches_the_filter_and_fails_the_hole_cleanly():
     V, F = flat_strip_hole()
     ms = meshset_from_arrays(V, F)
