@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._de_kernels import (mutate_crossover, reflect_gather_terms, reflect_moved, renew_variation, select,
-                          select_variation, trial_changed_terms_into, turning_terms)
+from ._de_kernels import (mutate_crossover, reflect_moved, renew_variation, select, select_reflect_terms,
+                          trial_changed_terms_into, turning_terms)
 
 __all__ = ["reflect_into_bounds", "de_rand_1_bin"]
 
@@ -221,16 +221,13 @@ def _turning_generation(objective, state, draws, F, CR):
     trial = state.trial
     c = trial_changed_terms_into(state.X, u_index, u_rn, u_take, state.pop, state.dims, float(F), float(CR), seg_x,
                                  seg_y_add, trial.U, trial.changed, trial.cross, trial.dot)
-    angles = trial.angles
-    np.copyto(angles, state.angles)
-    angles.ravel()[trial.changed[:c]] = np.arctan2(trial.cross[:c], trial.dot[:c])
-    square_sum, total = objective.angle_sums(angles)
-    select_variation(state.X, state.fX, trial.U, square_sum, total, count, state.active, state.angles, angles)
-    Xr, order, counts, cross, dot = reflect_gather_terms(state.X, state.lower, state.upper, state.active, seg_x,
-                                                         seg_y_add)
+    beta = np.arctan2(trial.cross[:c], trial.dot[:c])
+    square_sum, total = objective.changed_angle_sums(state.angles, trial.changed[:c], beta, trial.angles)
+    order, counts, cross, dot = select_reflect_terms(state.X, state.fX, trial.U, square_sum, total, count, state.active,
+                                                     state.angles, trial.angles, state.lower, state.upper, seg_x,
+                                                     seg_y_add)
     if order.shape[1] == 0:
         return
-    state.X = Xr
     reflected = np.arctan2(cross, dot)
     square_sum, total = objective.angle_sums(reflected)
     renew_variation(state.fX, order, counts, square_sum, total, count, state.angles, reflected)
