@@ -366,6 +366,12 @@ def test_edge_adjacency_equals_sorted_edges_and_scipy_csr():
     assert np.array_equal(indptr, A_ref.indptr) and np.array_equal(indices, A_ref.indices)
     _, A = O.adjacency(F, n)
     assert (A != A_ref).nnz == 0 and A.dtype == np.int8
+    # any face list: repeated and reversed faces, many faces on a vertex, a vertex twice in a face
+    F = np.random.default_rng(16).integers(0, 40, size=(300, 3))
+    F[::9] = F[1::9][: len(F[::9])][:, ::-1]
+    E, indptr, indices = KO.edge_adjacency(F, 45)
+    assert np.array_equal(E, O.sorted_edges(F, 45))
+    assert np.array_equal(indptr[1:] - indptr[:-1], np.bincount(E.ravel(), minlength=45))
 
 
 
