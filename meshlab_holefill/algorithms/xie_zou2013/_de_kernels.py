@@ -159,7 +159,7 @@ def trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y
     every component but its crossover ones (Eq. 3) from its parent X[b, i], so its terms
     are its parent's except those within two places after a crossover component: only
     these are computed (the same operations as :func:`turning_terms`, so the same numbers).
-    :func:`trial_changed_terms_into` with new arrays.
+    :func:`trial_changed_terms_into` with new arrays (the padding rows of U are their parents').
 
     Returns
     -------
@@ -169,7 +169,7 @@ def trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y
     """
     B, N, n = X.shape
     size = B * N * (n + 2)
-    U = np.empty_like(X)
+    U = X.copy()
     changed = np.empty(size, np.int64)
     cross = np.empty(size)
     dot = np.empty(size)
@@ -187,10 +187,12 @@ def trial_changed_terms_into(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, 
     as the arithmetic. One pass per individual copies its parent, lists its crossover
     components (ascending), computes those by Eq. 2 and then the terms at j, j + 1, j + 2 of
     each (each term once, ascending): the same numbers as :func:`mutate_crossover` and
-    :func:`turning_terms`. The crossover test is counted, not branched on, and the chain's y
-    come from the trial row padded with two zeros on each side (:func:`_padded_chain_y`):
-    the branches of the sparse crossover (5 %) and of the chain's ends were mispredicted
-    often enough to cost a third of the kernel.
+    :func:`turning_terms`. The padding rows (i >= pop[b], a tenth of the suite's) are left
+    out: Eq. 4 never takes them, so their rows of U are not written and none of their terms
+    listed. The crossover test is counted, not branched on, and the chain's y come from the
+    trial row padded with two zeros on each side (:func:`_padded_chain_y`): the branches of
+    the sparse crossover (5 %) and of the chain's ends were mispredicted often enough to cost
+    a third of the kernel.
     """
     B, N, n = X.shape
     K = n + 2
@@ -200,7 +202,7 @@ def trial_changed_terms_into(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, 
     for b in range(B):
         Nb = np.float64(pop[b])
         db = np.float64(dims[b])
-        for i in range(N):
+        for i in range(pop[b]):  # the padding rows are never selected
             r1, r2, r3, r = _individual_draws(u_index, u_rn, b, i, Nb, db)
             t = 0
             for j in range(n):

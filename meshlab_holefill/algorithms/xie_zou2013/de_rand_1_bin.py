@@ -94,7 +94,7 @@ class _Population:
 class _TrialArrays:
     """What a fused generation writes and then reads once, kept for the next: the trials, their changed terms, angles."""
 
-    U: np.ndarray  # (B, N, n) trial vectors
+    U: np.ndarray  # (B, N, n) trial vectors (the padding rows, which no generation writes, their parents')
     changed: np.ndarray  # (B N (n + 2),) flat indices of the terms a crossover changed (the first c)
     cross: np.ndarray  # (B N (n + 2),) their arctan2 arguments
     dot: np.ndarray
@@ -103,7 +103,7 @@ class _TrialArrays:
     @classmethod
     def like(cls, X, angles):
         size = angles.size
-        return cls(np.empty_like(X), np.empty(size, np.int64), np.empty(size), np.empty(size), np.empty_like(angles))
+        return cls(X.copy(), np.empty(size, np.int64), np.empty(size), np.empty(size), np.empty_like(angles))
 
 
 def _problem_sizes(lower, upper, pop_size, dims, bounds):
