@@ -7,8 +7,8 @@ against the numpy reference kept there). The transcendental step (arctan2 of the
 angles) stays in numpy, whose SIMD arctan2 differs from libm's in the last bits, and so does the
 sum of squares (numpy's einsum accumulates with fused multiply-adds): a generation of the Eq. 14
 objective is one kernel for the trial vectors and the turning terms their crossover changed,
-numpy's arctan2 of those, sum and einsum, then one kernel for the selection, the reflection and
-the terms of the reflected ones.
+numpy's arctan2 of those, one kernel for the trial angles and their sums, numpy's einsum, then
+one kernel for the selection, the reflection and the terms of the reflected ones.
 """
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import numpy as np
 from numba import njit
 
 __all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms", "trial_changed_terms",
-           "trial_changed_terms_into", "select_variation", "reflect_gather_terms", "select_reflect_terms", "renew_variation", "masked_row_sums",
-           "changed_masked_row_sums"]
+           "trial_changed_terms_into", "select_variation", "reflect_gather_terms", "select_reflect_terms",
+           "renew_variation", "masked_row_sums", "changed_masked_row_sums"]
 
 
 @njit(cache=True)
@@ -330,7 +330,7 @@ def select_reflect_terms(X, fX, U, square_sum, total, count, active, angles, tri
 
 @njit(cache=True)
 def _take_reflected(X, U, lower, upper, b, i):
-    """X[b, i] = U[b, i] reflected into the bounds (Eq. 5, as :func:`reflect_moved`); True if that moved any component."""
+    """X[b, i] = U[b, i] reflected into the bounds (Eq. 5, as :func:`reflect_moved`); True if any component moved."""
     moved = False
     for j in range(X.shape[2]):
         x = U[b, i, j]
@@ -348,7 +348,7 @@ def _take_reflected(X, U, lower, upper, b, i):
 
 @njit(cache=True)
 def _gather_moved(X, moved, counts):
-    """(order (B, K), G (B, K, n)): per problem the moved rows, then the others up to K = max counts, and their rows of X."""
+    """(order (B, K), G (B, K, n)): per problem the moved rows, then the others, up to K = max counts; their X rows."""
     B, N, n = X.shape
     K = counts.max() if B else 0
     order = np.empty((B, K), np.int64)

@@ -250,8 +250,10 @@ def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0
         once per generation on all trial individuals (vectorised over population and batch).
         An objective of the turning-angle form of Eq. 14 may say so with the attribute
         ``turning_chain`` = (seg_x, seg_y_add, count) of :func:`._de_kernels.turning_terms`
-        and the method ``angle_sums(beta) -> (sum of squared angles, sum of angles)`` of the
-        angles beta = arctan2(cross, dot), masked by it in place (as
+        and the methods ``angle_sums(beta) -> (sum of squared angles, sum of angles)`` of the
+        angles beta = arctan2(cross, dot), masked by it in place, and
+        ``changed_angle_sums(parent, changed, beta, out)``, the same of the angles ``parent``
+        with ``out.flat[changed] = beta`` written into ``out`` (as
         :class:`.prediction.AngleVariation`); with ``bounds='paper'`` its generations
         then run fused (the same arithmetic, fewer calls).
     lower, upper : (B, n) or (n,) float64

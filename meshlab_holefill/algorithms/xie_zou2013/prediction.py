@@ -268,8 +268,9 @@ class AngleVariation:
 
     Also exposes its parts to the fused DE generation of :func:`.de_rand_1_bin.de_rand_1_bin`:
     ``turning_chain`` (the chain constants of :func:`turning_angles` and the number of angles
-    per plane), :meth:`angle_sums` and :meth:`changed_angle_sums`; :func:`_de_kernels.select_variation` finishes
-    ``np.maximum(square_sum - total * total / count, 0)`` as :func:`angle_variation` does.
+    per plane), :meth:`angle_sums` and :meth:`changed_angle_sums`;
+    :func:`_de_kernels.select_reflect_terms` finishes ``np.maximum(square_sum - total * total / count, 0)``
+    as :func:`angle_variation` does.
     """
 
     def __init__(self, problem):
