@@ -7,8 +7,8 @@ against the numpy reference kept there). The transcendental step (arctan2 of the
 angles) stays in numpy, whose SIMD arctan2 differs from libm's in the last bits, and so does the
 sum of squares (numpy's einsum accumulates with fused multiply-adds): a generation of the Eq. 14
 objective is one kernel for the trial vectors and the turning terms their crossover changed,
-numpy's arctan2 of those, sum and einsum, then one kernel for the selection, the reflection and
-the terms of the reflected ones.
+numpy's arctan2 of those, one kernel for the trial angles and their sums, numpy's einsum, then
+one kernel for the selection, the reflection and the terms of the reflected ones.
 """
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ import numpy as np
 from numba import njit
 
 __all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms", "trial_changed_terms",
-           "trial_changed_terms_into", "select_variation", "reflect_gather_terms", "renew_variation", "masked_row_sums"]
+           "trial_changed_terms_into", "select_variation", "reflect_gather_terms", "select_reflect_terms",
+           "renew_variation", "masked_row_sums", "changed_masked_row_sums"]
 
 
 @njit(cache=True)
@@ -158,7 +159,7 @@ def trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y
     every component but its crossover ones (Eq. 3) from its parent X[b, i], so its terms
     are its parent's except those within two places after a crossover component: only
     these are computed (the same operations as :func:`turning_terms`, so the same numbers).
-    :func:`trial_changed_terms_into` with new arrays.
+    :func:`trial_changed_terms_into` with new arrays (the padding rows of U are their parents').
 
     Returns
     -------
@@ -168,7 +169,7 @@ def trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, seg_y
     """
     B, N, n = X.shape
     size = B * N * (n + 2)
-    U = np.empty_like(X)
+    U = X.copy()
     changed = np.empty(size, np.int64)
     cross = np.empty(size)
     dot = np.empty(size)
@@ -186,43 +187,61 @@ def trial_changed_terms_into(X, u_index, u_rn, u_take, pop, dims, F, CR, seg_x, 
     as the arithmetic. One pass per individual copies its parent, lists its crossover
     components (ascending), computes those by Eq. 2 and then the terms at j, j + 1, j + 2 of
     each (each term once, ascending): the same numbers as :func:`mutate_crossover` and
-    :func:`turning_terms`.
+    :func:`turning_terms`. The padding rows (i >= pop[b], a tenth of the suite's) are left
+    out: Eq. 4 never takes them, so their rows of U are not written and none of their terms
+    listed. The crossover test is counted, not branched on, and the chain's y come from the
+    trial row padded with two zeros on each side (:func:`_padded_chain_y`): the branches of
+    the sparse crossover (5 %) and of the chain's ends were mispredicted often enough to cost
+    a third of the kernel.
     """
     B, N, n = X.shape
     K = n + 2
-    sy = np.empty(n + 3)
     taken = np.empty(n, np.int64)
+    padded = np.zeros(n + 4)  # [0, 0, U[b, i], 0, 0]
     c = 0
     for b in range(B):
         Nb = np.float64(pop[b])
         db = np.float64(dims[b])
-        for i in range(N):
+        for i in range(pop[b]):  # the padding rows are never selected
             r1, r2, r3, r = _individual_draws(u_index, u_rn, b, i, Nb, db)
             t = 0
             for j in range(n):
-                U[b, i, j] = X[b, i, j]
-                if u_take[b, i, j] <= CR or j == r:
-                    taken[t] = j
-                    t += 1
-            if t == 0:
-                continue
+                x = X[b, i, j]
+                U[b, i, j] = x
+                padded[j + 2] = x
+                taken[t] = j  # t <= j: kept only if j is a crossover component
+                t += (u_take[b, i, j] <= CR) | (j == r)
             for q in range(t):
                 j = taken[q]
-                U[b, i, j] = X[b, r1, j] + F * (X[b, r2, j] - X[b, r3, j])
-            _chain_ys(sy, U, b, i, seg_y_add)
+                v = X[b, r1, j] + F * (X[b, r2, j] - X[b, r3, j])
+                U[b, i, j] = v
+                padded[j + 2] = v
             base = (b * N + i) * K
             after = 0  # terms before this one are already out
             for q in range(t):
                 j = taken[q]
-                for k in range(max(j, after), j + 3):
+                first = max(j, after)
+                y0 = _padded_chain_y(padded, seg_y_add, b, first)
+                for k in range(first, j + 3):
+                    y1 = _padded_chain_y(padded, seg_y_add, b, k + 1)
                     x0, x1 = seg_x[b, k], seg_x[b, k + 1]
-                    y0, y1 = sy[k], sy[k + 1]
                     changed[c] = base + k
                     cross[c] = x0 * y1 - y0 * x1
                     dot[c] = x0 * x1 + y0 * y1
                     c += 1
+                    y0 = y1
                 after = j + 3
     return c
+
+
+@njit(cache=True)
+def _padded_chain_y(padded, seg_y_add, b, k):
+    """y of chain segment k (the sy[k] of :func:`_chain_ys`) from padded = [0, 0, Y[a, i], 0, 0].
+
+    (padded[k + 1] - padded[k]) + seg_y_add[b, k]: at the ends the difference is 0.0 - 0.0 or
+    y - 0.0 or 0.0 - y, the very operations of :func:`_chain_ys` (0.0 - 0.0 is +0.0 exactly).
+    """
+    return (padded[k + 1] - padded[k]) + seg_y_add[b, k]
 
 
 @njit(cache=True)
@@ -272,6 +291,65 @@ def reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add):
             moved[b, i] = moved[b, i] and active[b, i]
             if moved[b, i]:
                 counts[b] += 1
+    order, G = _gather_moved(Xr, moved, counts)
+    cross, dot = turning_terms(G, seg_x, seg_y_add)
+    return Xr, order, counts, cross, dot
+
+
+@njit(cache=True)
+def select_reflect_terms(X, fX, U, square_sum, total, count, active, angles, trial_angles, lower, upper, seg_x,
+                         seg_y_add):
+    """:func:`select_variation` then :func:`reflect_gather_terms`, with X reflected in place.
+
+    Every individual of X is inside the bounds after a generation (Eq. 5 maps into [l, u]), so
+    only the trials just taken can have moved: the reflection (Eq. 5, as :func:`reflect_moved`)
+    runs on their rows alone, and the rows that keep their parent stay as they are, which is
+    what reflecting them gives. The same X, fX, angles and the same (order, counts, cross, dot)
+    as the two kernels, without their pass over the whole population.
+
+    Returns
+    -------
+    order, counts, cross, dot : as :func:`reflect_gather_terms`
+    """
+    B, N, n = X.shape
+    moved = np.zeros((B, N), np.bool_)
+    counts = np.zeros(B, np.int64)
+    for b in range(B):
+        for i in range(N):
+            if active[b, i]:
+                f = _variation(square_sum[b, i], total[b, i], count[b])
+                if f <= fX[b, i]:
+                    fX[b, i] = f
+                    angles[b, i] = trial_angles[b, i]
+                    moved[b, i] = _take_reflected(X, U, lower, upper, b, i)
+                    counts[b] += moved[b, i]
+    order, G = _gather_moved(X, moved, counts)
+    cross, dot = turning_terms(G, seg_x, seg_y_add)
+    return order, counts, cross, dot
+
+
+@njit(cache=True)
+def _take_reflected(X, U, lower, upper, b, i):
+    """X[b, i] = U[b, i] reflected into the bounds (Eq. 5, as :func:`reflect_moved`); True if any component moved."""
+    moved = False
+    for j in range(X.shape[2]):
+        x = U[b, i, j]
+        lo = lower[b, j]
+        hi = upper[b, j]
+        y = x
+        if x < lo:
+            y = min(2.0 * lo - x, hi)
+        if y > hi:
+            y = max(2.0 * hi - y, lo)
+        X[b, i, j] = y
+        moved |= y != x
+    return moved
+
+
+@njit(cache=True)
+def _gather_moved(X, moved, counts):
+    """(order (B, K), G (B, K, n)): per problem the moved rows, then the others, up to K = max counts; their X rows."""
+    B, N, n = X.shape
     K = counts.max() if B else 0
     order = np.empty((B, K), np.int64)
     G = np.empty((B, K, n))
@@ -287,9 +365,8 @@ def reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add):
                 r += 1
         for r in range(K):
             for j in range(n):
-                G[b, r, j] = Xr[b, order[b, r], j]
-    cross, dot = turning_terms(G, seg_x, seg_y_add)
-    return Xr, order, counts, cross, dot
+                G[b, r, j] = X[b, order[b, r], j]
+    return order, G
 
 
 @njit(cache=True)
@@ -350,4 +427,29 @@ def masked_row_sums(beta, valid):
             for k in range(K):
                 row[k] = row[k] * valid[a, k]
             total[a, i] = 0.0 + _pairwise_sum(row, K)
+    return total
+
+
+@njit(cache=True)
+def changed_masked_row_sums(parent, changed, beta, valid, out):
+    """out = parent but out.flat[changed] = beta * valid there; returns out.sum(axis=2) in numpy's order, (p, N).
+
+    The trial angles of a fused generation and their :func:`masked_row_sums` in one pass:
+    parent (p, N, K) holds masked angles (masking them again changes no bit), changed (c,)
+    ascending flat indices into (p, N, K), beta (c,) their unmasked angles, valid (p, K).
+    For K <= PAIRWISE_BLOCK.
+    """
+    p, N, K = parent.shape
+    total = np.empty((p, N))
+    c = 0
+    for a in range(p):
+        for i in range(N):
+            for k in range(K):  # element by element: a slice assignment per row cost more than the copy
+                out[a, i, k] = parent[a, i, k]
+            base = (a * N + i) * K
+            while c < len(changed) and changed[c] < base + K:
+                k = changed[c] - base
+                out[a, i, k] = beta[c] * valid[a, k]
+                c += 1
+            total[a, i] = 0.0 + _pairwise_sum(out[a, i], K)
     return total

@@ -14,7 +14,7 @@ from numba import njit
 
 from ...geometry._tri_kernels import _cross, _dot, _norm, _npmin, _sub
 
-__all__ = ["pair_agreements"]
+__all__ = ["pair_agreements", "fold_swap_scores"]
 
 
 @njit(cache=True)
@@ -63,9 +63,34 @@ def pair_agreements(V, faces, border_normals):
     proper = np.empty((T, s), np.bool_)
     for t in range(T):
         for i in range(s):
-            fa, fb = faces[2 * t, i], faces[2 * t + 1, i]
-            na, nb = _unit_normal(V, fa), _unit_normal(V, fb)
-            across = _npmin(_border_agreement(fa, na, border_normals), _border_agreement(fb, nb, border_normals))
-            agreement[t, i] = _npmin(_dot(na, nb), across)
-            proper[t, i] = (na[0] != 0 or na[1] != 0 or na[2] != 0) and (nb[0] != 0 or nb[1] != 0 or nb[2] != 0)
+            agreement[t, i], proper[t, i] = _agreement(V, faces[2 * t, i], faces[2 * t + 1, i], border_normals)
     return agreement, proper
+
+
+@njit(cache=True)
+def fold_swap_scores(V, old1, old2, new1, new2, border_normals):
+    """(old, new): the scores of folds.unfold_by_swaps, the agreements of :func:`pair_agreements` on (s, 3) faces.
+
+    old = the agreement of the pairs (old1[i], old2[i]); new = that of (new1[i], new2[i]) where
+    old < 0 and both new faces are non-degenerate, else -inf (only folds are swapped). The
+    swapped pair is scored only for the folded edges, a few of a patch's.
+    """
+    s = old1.shape[0]
+    old = np.empty(s)
+    new = np.full(s, -np.inf)
+    for i in range(s):
+        old[i] = _agreement(V, old1[i], old2[i], border_normals)[0]
+        if old[i] < 0.0:
+            agreement, proper = _agreement(V, new1[i], new2[i], border_normals)
+            if proper:
+                new[i] = agreement
+    return old, new
+
+
+@njit(cache=True)
+def _agreement(V, fa, fb, border_normals):
+    """(agreement, proper) of the face pair (fa, fb), as :func:`pair_agreements` computes them."""
+    na, nb = _unit_normal(V, fa), _unit_normal(V, fb)
+    across = _npmin(_border_agreement(fa, na, border_normals), _border_agreement(fb, nb, border_normals))
+    proper = (na[0] != 0 or na[1] != 0 or na[2] != 0) and (nb[0] != 0 or nb[1] != 0 or nb[2] != 0)
+    return _npmin(_dot(na, nb), across), proper

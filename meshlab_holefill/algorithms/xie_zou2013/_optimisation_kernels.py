@@ -57,6 +57,10 @@ def independent_link_edges(indptr, indices, a, b, n):
 def edge_adjacency(F, n):
     """Unique edges and the CSR vertex adjacency of a face list on n vertices.
 
+    The face edges are grouped by their smaller end and each group (a vertex's few edges)
+    sorted by insertion (:func:`_edges_by_smaller_end`): the same rows as sorting the keys
+    a n + b of all 3 m face edges, in a fifth of the time.
+
     Returns
     -------
     E : (e, 2) int64  rows (a, b), a < b, in lexicographic order (optimisation.sorted_edges)
@@ -65,23 +69,21 @@ def edge_adjacency(F, n):
         the pairs (a, b) and (b, a)): one pass over E in order appends b to row a and a to
         row b, and every row's smaller neighbours come from edges before its larger ones.
     """
-    m = F.shape[0]
-    keys = np.empty(3 * m, np.int64)
-    for f in range(m):
-        for c in range(3):
-            u, w = F[f, c], F[f, (c + 1) % 3]
-            keys[3 * f + c] = min(u, w) * np.int64(n) + max(u, w)
-    keys.sort()
+    start, higher = _edges_by_smaller_end(F, n)
     e = 0
-    for r in range(len(keys)):  # unique, in place
-        if r == 0 or keys[r] != keys[e - 1]:
-            keys[e] = keys[r]
-            e += 1
+    for v in range(n):
+        for p in range(start[v], start[v + 1]):
+            e += p == start[v] or higher[p] != higher[p - 1]
     E = np.empty((e, 2), np.int64)
+    r = 0
+    for v in range(n):  # the distinct edges (v, b), b ascending
+        for p in range(start[v], start[v + 1]):
+            if p == start[v] or higher[p] != higher[p - 1]:
+                E[r, 0] = v
+                E[r, 1] = higher[p]
+                r += 1
     indptr = np.zeros(n + 1, np.int64)
     for r in range(e):
-        E[r, 0] = keys[r] // n
-        E[r, 1] = keys[r] % n
         indptr[E[r, 0] + 1] += 1
         indptr[E[r, 1] + 1] += 1
     for v in range(n):
@@ -95,6 +97,38 @@ def edge_adjacency(F, n):
         indices[fill[b]] = a
         fill[b] += 1
     return E, indptr, indices
+
+
+@njit(cache=True)
+def _edges_by_smaller_end(F, n):
+    """(start (n + 1,), higher (3 m,)): the larger ends of the face edges, grouped by the smaller end, ascending.
+
+    higher[start[v]:start[v + 1]] are the larger ends of the face edges whose smaller end is v
+    (an edge twice if two faces hold it).
+    """
+    m = F.shape[0]
+    start = np.zeros(n + 1, np.int64)
+    for f in range(m):
+        for c in range(3):
+            start[min(F[f, c], F[f, (c + 1) % 3]) + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    higher = np.empty(3 * m, np.int64)
+    for f in range(m):
+        for c in range(3):
+            u, w = F[f, c], F[f, (c + 1) % 3]
+            higher[fill[min(u, w)]] = max(u, w)
+            fill[min(u, w)] += 1
+    for v in range(n):  # insertion sort of each group
+        for p in range(start[v] + 1, start[v + 1]):
+            x = higher[p]
+            q = p - 1
+            while q >= start[v] and higher[q] > x:
+                higher[q + 1] = higher[q]
+                q -= 1
+            higher[q + 1] = x
+    return start, higher
 
 
 @njit(cache=True)

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._de_kernels import (mutate_crossover, reflect_gather_terms, reflect_moved, renew_variation, select,
-                          select_variation, trial_changed_terms_into, turning_terms)
+from ._de_kernels import (mutate_crossover, reflect_moved, renew_variation, select, select_reflect_terms,
+                          trial_changed_terms_into, turning_terms)
 
 __all__ = ["reflect_into_bounds", "de_rand_1_bin"]
 
@@ -94,7 +94,7 @@ class _Population:
 class _TrialArrays:
     """What a fused generation writes and then reads once, kept for the next: the trials, their changed terms, angles."""
 
-    U: np.ndarray  # (B, N, n) trial vectors
+    U: np.ndarray  # (B, N, n) trial vectors (the padding rows, which no generation writes, their parents')
     changed: np.ndarray  # (B N (n + 2),) flat indices of the terms a crossover changed (the first c)
     cross: np.ndarray  # (B N (n + 2),) their arctan2 arguments
     dot: np.ndarray
@@ -103,7 +103,7 @@ class _TrialArrays:
     @classmethod
     def like(cls, X, angles):
         size = angles.size
-        return cls(np.empty_like(X), np.empty(size, np.int64), np.empty(size), np.empty(size), np.empty_like(angles))
+        return cls(X.copy(), np.empty(size, np.int64), np.empty(size), np.empty(size), np.empty_like(angles))
 
 
 def _problem_sizes(lower, upper, pop_size, dims, bounds):
@@ -221,16 +221,13 @@ def _turning_generation(objective, state, draws, F, CR):
     trial = state.trial
     c = trial_changed_terms_into(state.X, u_index, u_rn, u_take, state.pop, state.dims, float(F), float(CR), seg_x,
                                  seg_y_add, trial.U, trial.changed, trial.cross, trial.dot)
-    angles = trial.angles
-    np.copyto(angles, state.angles)
-    angles.ravel()[trial.changed[:c]] = np.arctan2(trial.cross[:c], trial.dot[:c])
-    square_sum, total = objective.angle_sums(angles)
-    select_variation(state.X, state.fX, trial.U, square_sum, total, count, state.active, state.angles, angles)
-    Xr, order, counts, cross, dot = reflect_gather_terms(state.X, state.lower, state.upper, state.active, seg_x,
-                                                         seg_y_add)
+    beta = np.arctan2(trial.cross[:c], trial.dot[:c])
+    square_sum, total = objective.changed_angle_sums(state.angles, trial.changed[:c], beta, trial.angles)
+    order, counts, cross, dot = select_reflect_terms(state.X, state.fX, trial.U, square_sum, total, count, state.active,
+                                                     state.angles, trial.angles, state.lower, state.upper, seg_x,
+                                                     seg_y_add)
     if order.shape[1] == 0:
         return
-    state.X = Xr
     reflected = np.arctan2(cross, dot)
     square_sum, total = objective.angle_sums(reflected)
     renew_variation(state.fX, order, counts, square_sum, total, count, state.angles, reflected)
@@ -253,8 +250,10 @@ def de_rand_1_bin(objective, lower, upper, pop_size=None, dims=None, F=0.8, CR=0
         once per generation on all trial individuals (vectorised over population and batch).
         An objective of the turning-angle form of Eq. 14 may say so with the attribute
         ``turning_chain`` = (seg_x, seg_y_add, count) of :func:`._de_kernels.turning_terms`
-        and the method ``angle_sums(beta) -> (sum of squared angles, sum of angles)`` of the
-        angles beta = arctan2(cross, dot), masked by it in place (as
+        and the methods ``angle_sums(beta) -> (sum of squared angles, sum of angles)`` of the
+        angles beta = arctan2(cross, dot), masked by it in place, and
+        ``changed_angle_sums(parent, changed, beta, out)``, the same of the angles ``parent``
+        with ``out.flat[changed] = beta`` written into ``out`` (as
         :class:`.prediction.AngleVariation`); with ``bounds='paper'`` its generations
         then run fused (the same arithmetic, fewer calls).
     lower, upper : (B, n) or (n,) float64

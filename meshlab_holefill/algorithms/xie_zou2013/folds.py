@@ -15,7 +15,7 @@ from ...core.crossings import context_crossings
 from ...geometry.intersections import faces_intersecting
 from ...geometry.quality import cross_rows, face_normals
 from ...geometry.topology import edge_pair_set, interior_edges
-from ._fold_kernels import pair_agreements
+from ._fold_kernels import fold_swap_scores
 from .optimisation import adjacency
 
 __all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_folds", "unfold_by_swaps",
@@ -190,12 +190,11 @@ def unfold_by_swaps(V, F, forbidden_edges=(), border_normals=None, max_rounds=20
     across = np.zeros((0, 3)) if border_normals is None else np.ascontiguousarray(border_normals, np.float64)
 
     def agreement_gain(V, old1, old2, new1, new2):
-        # _pair_agreement of both pairs, compiled (same bits, _fold_kernels).
-        faces = np.stack([old1, old2, new1, new2]).astype(np.int64, copy=False)
-        agreement, proper = pair_agreements(np.ascontiguousarray(V, np.float64), faces, across)
-        old, new, proper = agreement[0], agreement[1], proper[1]
-        # Only folds (negative agreement) are swapped, the worst first.
-        return old, np.where((old < 0.0) & proper, new, -np.inf), -old
+        # _pair_agreement of both pairs, compiled (same bits, _fold_kernels); only folds (negative
+        # agreement) are swapped, the worst first, so the swapped pair is scored for them alone.
+        faces = (np.ascontiguousarray(f, np.int64) for f in (old1, old2, new1, new2))
+        old, new = fold_swap_scores(np.ascontiguousarray(V, np.float64), *faces, across)
+        return old, new, -old
 
     return relax_edges(V, F, forbidden_edges, max_rounds=max_rounds, criterion=agreement_gain, normal_cos=None)
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import sections
-from ._de_kernels import PAIRWISE_BLOCK, masked_row_sums, turning_terms
+from ._de_kernels import PAIRWISE_BLOCK, changed_masked_row_sums, masked_row_sums, turning_terms
 from .de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
 
 __all__ = ["arc_points", "arc_height", "circle_start_angle", "forward_tangents", "prediction_counts",
@@ -268,8 +268,9 @@ class AngleVariation:
 
     Also exposes its parts to the fused DE generation of :func:`.de_rand_1_bin.de_rand_1_bin`:
     ``turning_chain`` (the chain constants of :func:`turning_angles` and the number of angles
-    per plane) and :meth:`angle_sums`; :func:`_de_kernels.select_variation` finishes
-    ``np.maximum(square_sum - total * total / count, 0)`` as :func:`angle_variation` does.
+    per plane), :meth:`angle_sums` and :meth:`changed_angle_sums`;
+    :func:`_de_kernels.select_reflect_terms` finishes ``np.maximum(square_sum - total * total / count, 0)``
+    as :func:`angle_variation` does.
     """
 
     def __init__(self, problem):
@@ -294,6 +295,19 @@ class AngleVariation:
             beta *= self.valid
             total = beta.sum(axis=2)
         return np.einsum("pnk,pnk->pn", beta, beta), total
+
+    def changed_angle_sums(self, parent, changed, beta, out):
+        """:meth:`angle_sums` of out = parent (masked angles) with out.flat[changed] = beta, written into out.
+
+        The trial angles of a fused DE generation: its parents' but at the turning terms its
+        crossover changed (ascending flat indices, their arctan2 in beta).
+        """
+        if out.shape[2] <= PAIRWISE_BLOCK:
+            total = changed_masked_row_sums(parent, changed, beta, self.valid[:, 0, :], out)  # one pass, numpy's order
+            return np.einsum("pnk,pnk->pn", out, out), total
+        np.copyto(out, parent)
+        out.ravel()[changed] = beta
+        return self.angle_sums(out)
 
 
 def initial_population(problem, pop_size, rng, spread=0.5):

@@ -17,6 +17,7 @@ from ...geometry.pca import fit_plane, plane_frame
 from ...geometry.topology import interior_edges, undirected_keys
 from ...geometry.triangulate import polygon_signed_area, triangulate_polygon
 from ...errors import HoleFillError
+from . import _triangulation_kernels as _kernels
 from . import folds
 from . import sections
 
@@ -99,23 +100,21 @@ class PlaneMap:
 
 
 def points_in_polygon(Q, X):
-    """Even-odd rule: which 2D points lie inside the closed polygon Q, (q,) bool."""
-    a, b = Q, np.roll(Q, -1, axis=0)
-    px, py = X[:, 0:1], X[:, 1:2]
-    crosses = (a[None, :, 1] > py) != (b[None, :, 1] > py)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xint = a[None, :, 0] + (py - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
-    return (np.count_nonzero(crosses & (px < xint), axis=1) % 2) == 1
+    """Even-odd rule: which 2D points lie inside the closed polygon Q, (q,) bool.
+
+    Compiled (:func:`._triangulation_kernels.points_in_polygon`): the (q, k) numpy arrays of
+    the crossings cost more than the test on the suite's large holes.
+    """
+    return _kernels.points_in_polygon(np.ascontiguousarray(Q, np.float64), np.ascontiguousarray(X, np.float64))
 
 
 def distance_to_polygon(Q, X):
-    """Distance of 2D points to the edges of the closed polygon Q, (q,)."""
-    a, b = Q[None, :, :], np.roll(Q, -1, axis=0)[None, :, :]
-    d = b - a
-    t = np.einsum("qkd,qkd->qk", X[:, None, :] - a, d) / np.maximum(np.einsum("qkd,qkd->qk", d, d), 1e-300)
-    t = np.clip(t, 0, 1)
-    closest = a + t[..., None] * d
-    return np.linalg.norm(X[:, None, :] - closest, axis=2).min(axis=1)
+    """Distance of 2D points to the edges of the closed polygon Q, (q,).
+
+    Compiled (:func:`._triangulation_kernels.distance_to_polygon`, the same numbers as the
+    (q, k) numpy expression, 4 % of the filter's time on the benchmark suite's holes).
+    """
+    return _kernels.distance_to_polygon(np.ascontiguousarray(Q, np.float64), np.ascontiguousarray(X, np.float64))
 
 
 def disc_coordinates(loop_arc, perimeter, base_count, pair_a, pair_b, fraction, offsets=None):

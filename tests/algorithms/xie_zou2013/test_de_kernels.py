@@ -108,7 +108,10 @@ def test_trial_changed_terms_are_the_trial_terms_that_differ_from_the_parents():
     X, pop, dims, seg_x, seg_y_add = _chained_batch(rng)
     u_index, u_rn, u_take = _generation_draws(rng, X.shape)
     U, changed, cross, dot = K.trial_changed_terms(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05, seg_x, seg_y_add)
-    assert U.tobytes() == K.mutate_crossover(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05).tobytes()
+    # the padding rows, which no selection takes, keep their parents
+    active = (np.arange(X.shape[1])[None, :] < pop[:, None])[..., None]
+    want = np.where(active, K.mutate_crossover(X, u_index, u_rn, u_take, pop, dims, 0.8, 0.05), X)
+    assert U.tobytes() == want.tobytes()
     cross_U, dot_U = K.turning_terms(U, seg_x, seg_y_add)
     cross_X, dot_X = K.turning_terms(X, seg_x, seg_y_add)
     assert np.all(np.diff(changed) > 0) and 0 < len(changed) < cross_U.size
@@ -132,7 +135,8 @@ def test_trial_changed_terms_into_reused_arrays_gives_the_fresh_result():
         fresh = K.trial_changed_terms(X, *draws, pop, dims, 0.8, 0.05, seg_x, seg_y_add)
         c = K.trial_changed_terms_into(X, *draws, pop, dims, 0.8, 0.05, seg_x, seg_y_add, U, changed, cross, dot)
         assert c == len(fresh[1])
-        assert U.tobytes() == fresh[0].tobytes()
+        active = np.arange(N)[None, :] < pop[:, None]
+        assert U[active].tobytes() == fresh[0][active].tobytes() and np.isnan(U[~active]).all()
         assert changed[:c].tobytes() == fresh[1].tobytes()
         assert cross[:c].tobytes() == fresh[2].tobytes() and dot[:c].tobytes() == fresh[3].tobytes()
 
@@ -278,6 +282,49 @@ def test_masked_row_sums_equal_numpy_sum():
         assert got.tobytes() == ref.tobytes() and total.tobytes() == ref.sum(axis=2).tobytes()
 
 
+def test_select_reflect_terms_equal_select_then_reflect_gather():
+    # X inside its bounds (as after every generation), trials partly outside: the in-place
+    # reflection of the taken rows gives what selecting and then reflecting everything gives.
+    rng = np.random.default_rng(16)
+    X0, lower, upper = _problem(rng, B=3, N=8, n=4)
+    X0 = reflect_into_bounds(X0, lower, upper)
+    U, _, _ = _problem(rng, B=3, N=8, n=4)
+    U[0, 1, 0] = -0.0
+    active = np.ones((3, 8), bool)
+    active[2, 5:] = False
+    seg_x, seg_y_add = rng.normal(size=(3, 7)), rng.normal(size=(3, 7))
+    square_sum, total = rng.random((3, 8)) * 4.0, rng.normal(size=(3, 8))
+    count = np.array([6, 5, 6], np.int64)
+    fX0 = rng.random((3, 8))
+    fX0[1, 2] = K._variation(square_sum[1, 2], total[1, 2], count[1])  # ties select the trial
+    angles0, trial_angles = rng.normal(size=(3, 8, 6)), rng.normal(size=(3, 8, 6))
+    X, fX, angles = X0.copy(), fX0.copy(), angles0.copy()
+    K.select_variation(X, fX, U, square_sum, total, count, active, angles, trial_angles)
+    Xr, *want = K.reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add)
+    X, fX, angles = X0.copy(), fX0.copy(), angles0.copy()
+    got = K.select_reflect_terms(X, fX, U, square_sum, total, count, active, angles, trial_angles, lower, upper,
+                                 seg_x, seg_y_add)
+    assert 0 < got[1].sum() < active.sum()
+    assert X.tobytes() == Xr.tobytes() and all(g.tobytes() == w.tobytes() for g, w in zip(got, want))
+    K.select_variation(X0, fX0, U, square_sum, total, count, active, angles0, trial_angles)
+    assert fX.tobytes() == fX0.tobytes() and angles.tobytes() == angles0.tobytes()
+
+
+def test_changed_masked_row_sums_equal_numpy_scatter_and_sum():
+    rng = np.random.default_rng(17)
+    for shape in [(1, 1, 1), (2, 5, 8), (3, 4, 9), (2, 3, 64), (1, 2, 128)]:
+        valid = (rng.random((shape[0], shape[2])) < 0.8).astype(np.float64)
+        parent = rng.normal(size=shape) * valid[:, None, :]
+        changed = np.flatnonzero(rng.random(parent.size) < 0.2)
+        beta = rng.normal(size=len(changed)) * 10.0 ** rng.integers(-8, 8, size=len(changed))
+        ref = parent.copy()
+        ref.ravel()[changed] = beta
+        ref *= valid[:, None, :]
+        out = np.full_like(parent, np.nan)
+        total = K.changed_masked_row_sums(parent, changed, beta, valid, out)
+        assert out.tobytes() == ref.tobytes() and total.tobytes() == ref.sum(axis=2).tobytes()
+
+
 def test_umbrella_passes_equal_the_sparse_expression():
     import pymeshlab
     import scipy.sparse as sp
@@ -323,6 +370,12 @@ def test_edge_adjacency_equals_sorted_edges_and_scipy_csr():
     assert np.array_equal(indptr, A_ref.indptr) and np.array_equal(indices, A_ref.indices)
     _, A = O.adjacency(F, n)
     assert (A != A_ref).nnz == 0 and A.dtype == np.int8
+    # any face list: repeated and reversed faces, many faces on a vertex, a vertex twice in a face
+    F = np.random.default_rng(16).integers(0, 40, size=(300, 3))
+    F[::9] = F[1::9][: len(F[::9])][:, ::-1]
+    E, indptr, indices = KO.edge_adjacency(F, 45)
+    assert np.array_equal(E, O.sorted_edges(F, 45))
+    assert np.array_equal(indptr[1:] - indptr[:-1], np.bincount(E.ravel(), minlength=45))
 
 
 

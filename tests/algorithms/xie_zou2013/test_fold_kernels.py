@@ -58,3 +58,25 @@ def test_pair_agreements_equal_the_numpy_agreement_bit_for_bit(poison):
                 np.testing.assert_array_equal(agreement[t], want_a)
                 np.testing.assert_array_equal(proper[t], want_p)
 
+
+
+@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
+@pytest.mark.parametrize("poison", [None, np.nan, np.inf])
+def test_fold_swap_scores_are_the_agreements_of_the_folded_edges(poison):
+    from meshlab_holefill.algorithms.xie_zou2013._fold_kernels import fold_swap_scores
+
+    rng = np.random.default_rng(12)
+    for trial in range(50):
+        n, k, s = 14, int(rng.integers(3, 9)), int(rng.integers(0, 40))
+        V = rng.normal(size=(n, 3))
+        V[rng.integers(n)] = V[rng.integers(n)]
+        if poison is not None:
+            V[rng.integers(n)] = poison
+        border = rng.normal(size=(k, 3))
+        border /= np.linalg.norm(border, axis=1, keepdims=True)
+        faces = np.stack([_faces(rng, n, k, s) for _ in range(4)])
+        for given in (border, np.zeros((0, 3))):
+            agreement, proper = pair_agreements(V, faces, given)
+            old, new = fold_swap_scores(V, *faces, given)
+            np.testing.assert_array_equal(old, agreement[0])
+            np.testing.assert_array_equal(new, np.where((agreement[0] < 0.0) & proper[1], agreement[1], -np.inf))
