@@ -39,6 +39,16 @@ def test_each_round_leaves_out_the_triangles_of_the_last_that_crossed_and_stops_
         assert len(context_crossings(ctx, ctx.points, rounds[-1])) == 0
 
 
+def test_a_loop_longer_than_the_cap_gets_no_triangulation(monkeypatch):
+    from meshlab_holefill.core import least_bend
+
+    V, F = noisy_holes("sphere", 0.5, 1)
+    loop = max(boundary_loops(F), key=lambda lp: len(lp.vertices))
+    ctx = hole_context(V, F, loop, rings=3)
+    monkeypatch.setattr(least_bend, "MAX_EDGES", ctx.size - 1)
+    assert list(least_bend_triangulations(ctx)) == []
+
+
 @pytest.mark.parametrize("algorithm, surface, sigma, seed", [
     ("min_angle_bilateral", "sphere", 0.5, 1),
     ("curve_unfolding", "sphere", 0.5, 1),
