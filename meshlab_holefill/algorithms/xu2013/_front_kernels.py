@@ -239,28 +239,34 @@ def front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_
 
 
 @njit(cache=True)
-def near_any(nodes, points, r2, P, node_vertex, node_alive, two):
-    """Per node of ``nodes``: 1 when its vertex is within sqrt(r2) of one of ``points``, 0 when
-    not, -1 when the node is dead (:func:`._front_loop._release_blocked_near`)."""
-    out = np.empty(nodes.shape[0], np.int64)
-    for i in range(nodes.shape[0]):
-        b = nodes[i]
-        if not node_alive[b]:
-            out[i] = -1
-            continue
-        X = P[node_vertex[b]]
-        out[i] = 0
-        for j in range(points.shape[0]):
-            if not _beyond(X, points[j], r2, two):
-                out[i] = 1
-                break
-    return out
+def near_any(x0, x1, x2, points, r2, two):
+    """Is (x0, x1, x2) within sqrt(r2) of one of ``points`` (m, 3)? (:func:`._front_loop._release_blocked_near`)"""
+    for j in range(points.shape[0]):
+        if not _beyond_xyz(x0, x1, x2, points[j], r2, two):
+            return True
+    return False
 
 
 # ---------------------------------------------------------------------------------------------
 # Obstacle faces indexed by grid cell (_front_obstacles.FrontObstacles): ``keys`` the sorted
 # linear keys of the non-empty cells of a box of cells from ``base`` with ``dims``, the faces
 # of cell keys[i] in faces[starts[i]:starts[i + 1]].
+
+
+@njit(cache=True)
+def _search_sorted(keys, key):
+    """``np.searchsorted(keys, key)`` (the first index whose key is >= key), as a plain bisection.
+
+    numpy's takes and drops references on ``keys`` at each call, which cost more than the search.
+    """
+    lo, hi = 0, keys.shape[0]
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if keys[mid] < key:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @njit(cache=True)
@@ -281,7 +287,7 @@ def obstacle_candidates(lo, hi, cell, base, dims, keys, starts, faces, face_lo, 
         for iy in range(max(y0, 0), min(y1, dims[1] - 1) + 1):
             for iz in range(max(z0, 0), min(z1, dims[2] - 1) + 1):
                 key = (ix * dims[1] + iy) * dims[2] + iz
-                at = np.searchsorted(keys, key)
+                at = _search_sorted(keys, key)
                 if at == keys.shape[0] or keys[at] != key:
                     continue
                 for j in range(starts[at], starts[at + 1]):

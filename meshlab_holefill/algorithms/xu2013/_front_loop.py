@@ -19,6 +19,14 @@ front edges (``fkeys``, with the normal of the triangle behind in ``fvals``, NaN
 are open-addressing hash tables of vertex pairs (:func:`_find`, :func:`_insert`). Scalars sit
 in the int array ``C`` (indices below) and ``max_edge`` in ``Fs[0]``.
 
+A compiled function that receives a tuple of arrays takes and drops a reference on each of
+them (atomic operations) unless numba's reference-count pruning proves the pair redundant; with
+26 arrays in the state that cost several times a step's arithmetic. The pruning fails once the
+function frees an array of its own or takes one from a tuple (or a row view of one) after a
+branch. So the step functions allocate nothing (their per-step arrays are the scratch arrays of
+:func:`new_scratch`), take the arrays they use from the tuples first, read coordinates as
+scalars, and the helpers they call in their loops take arrays, not the tuples.
+
 Compiling the loop (once: ``cache=True`` keeps it on disk) takes about a minute of CPU on the
 benchmark machine, against about 10 s for the per-step kernels alone; loading it from the
 cache takes about 0.25 s per process (:func:`.advancing_front.warm_up`).
@@ -65,24 +73,29 @@ def _direction_angle(r0, r1, r2, d0, d1, d2, m0, m1, m2):
 
 
 @njit(cache=True)
-def front_angle(V, Pp, Q, n_ref, min_sin, min_cos):
-    """Front angle at V between its neighbours Pp and Q and its plane's normal (``_front_predicates.front_angle``)."""
-    a0, a1, a2 = Q[0] - V[0], Q[1] - V[1], Q[2] - V[2]
-    b0, b1, b2 = Pp[0] - V[0], Pp[1] - V[1], Pp[2] - V[2]
+def front_angle(P, N, v, p, q, min_sin, min_cos):
+    """Front angle at vertex v between its neighbours p and q, and its plane's normal.
+
+    The operations of ``_front_predicates.front_angle``, on the coordinates of P (n, 3) and the
+    reference normal N[v] read as scalars (a row view takes and drops a reference on the array).
+    """
+    a0, a1, a2 = P[q, 0] - P[v, 0], P[q, 1] - P[v, 1], P[q, 2] - P[v, 2]
+    b0, b1, b2 = P[p, 0] - P[v, 0], P[p, 1] - P[v, 1], P[p, 2] - P[v, 2]
     c0, c1, c2 = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
     s = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
     la = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
     lb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+    r0, r1, r2 = N[v, 0], N[v, 1], N[v, 2]
     if la == 0.0 or lb == 0.0:
-        return 0.0, n_ref[0], n_ref[1], n_ref[2]
-    cos_ref = c0 * n_ref[0] + c1 * n_ref[1] + c2 * n_ref[2]
+        return 0.0, r0, r1, r2
+    cos_ref = c0 * r0 + c1 * r1 + c2 * r2
     if s > min_sin * la * lb and abs(cos_ref) >= min_cos * s:
         sign = 1.0 if cos_ref >= 0.0 else -1.0
         f = sign / s
         m0, m1, m2 = c0 * f, c1 * f, c2 * f
         theta = math.atan2(sign * s, a0 * b0 + a1 * b1 + a2 * b2)
     else:
-        m0, m1, m2 = n_ref[0], n_ref[1], n_ref[2]
+        m0, m1, m2 = r0, r1, r2
         theta = _direction_angle(a0, a1, a2, b0, b1, b2, m0, m1, m2)
     if theta < 0.0:
         theta += 2.0 * math.pi
@@ -218,13 +231,13 @@ def _empty_table(n):
 
 
 @njit(cache=True)
-def _has_edge(st, a, b):
-    return _find(st.ekeys, min(a, b), max(a, b)) >= 0
+def _has_edge(ekeys, a, b):
+    return _find(ekeys, min(a, b), max(a, b)) >= 0
 
 
 @njit(cache=True)
-def _add_edge(st, a, b):
-    _insert(st.ekeys, min(a, b), max(a, b), st.C, E_USED)
+def _add_edge(ekeys, C, a, b):
+    _insert(ekeys, min(a, b), max(a, b), C, E_USED)
 
 
 # --------------------------------------------------------------------------- the state
@@ -241,8 +254,21 @@ FrontParams = namedtuple("FrontParams", [
 FrontObstacleArrays = namedtuple("FrontObstacleArrays", [
     "has", "V", "F", "base", "dims", "keys", "starts", "cell_faces", "lo", "hi", "stamp", "out"])
 # Per-step scratch: faces of a step (temporary ids -1, -2 for new vertices), their positions and
-# presence, the front sequence replacing v, a position.
-Scratch = namedtuple("Scratch", ["faces", "new_pos", "has_new", "sequence", "pos"])
+# presence, the front sequence replacing v, a position; the checks' directed edges (da, db), new
+# edges and their nodes on the front, normals behind the faces' edges, query box (lo, hi) and
+# corners; the update's vertex ids, node chain, nodes to update, face normals, release points.
+Scratch = namedtuple("Scratch", ["faces", "new_pos", "has_new", "sequence", "pos", "da", "db", "new_edges",
+                                 "edge_nodes", "behind", "lo", "hi", "corners", "ids", "chain", "dirty", "normals",
+                                 "points"])
+
+
+def new_scratch():
+    """The per-step scratch arrays of :func:`run_front`, sized for a step of at most 3 faces."""
+    return Scratch(np.zeros((3, 3), np.int64), np.zeros((2, 3)), np.zeros(2, np.bool_), np.zeros(2, np.int64),
+                   np.zeros(3), np.zeros(9, np.int64), np.zeros(9, np.int64), np.zeros((9, 2), np.int64),
+                   np.zeros((9, 2), np.int64), np.zeros((3, 3, 3)), np.zeros(3), np.zeros(3), np.zeros((3, 3, 3)),
+                   np.zeros(2, np.int64), np.zeros(4, np.int64), np.zeros(12, np.int64), np.zeros((3, 3)),
+                   np.zeros((9, 3)))
 
 
 @njit(cache=True)
@@ -270,16 +296,22 @@ def _copy_rows(dst, src):
 
 
 @njit(cache=True)
+def _has_room(st):
+    """Has the state room for one more step: 2 vertices, 2 nodes, 4 faces, a split's label, the heap's
+    pushes, 12 pairs in each hash table (kept at most half full)?"""
+    C, n_vert, n_nodes, n_faces, n_heap = st.C, st.P.shape[0], st.nvert.shape[0], st.faces.shape[0], st.ht.shape[0]
+    n_labels, n_blocked = st.fsize.shape[0], st.blocked.shape[0]
+    n_ekeys, n_fkeys = st.ekeys.shape[0], st.fkeys.shape[0]
+    return (C[N_VERT] + 2 < n_vert and C[N_NODES] + 2 < n_nodes and C[N_FACES] + 4 < n_faces
+            and C[N_HEAP] + C[N_BLOCKED] + 32 < n_heap and C[NEXT_LABEL] + 2 < n_labels
+            and C[N_BLOCKED] + 1 < n_blocked and 2 * (C[E_USED] + 16) < n_ekeys and 2 * (C[F_USED] + 16) < n_fkeys)
+
+
+@njit(cache=True)
 def _with_room(st):
-    """The state with room for one more step: 2 vertices, 2 nodes, 4 faces, a split's label, the heap's
-    pushes, 12 pairs in each hash table (kept at most half full)."""
+    """The state grown to have room for one more step (see :func:`_has_room`)."""
     C = st.C
     nv, nn = C[N_VERT] + 2, C[N_NODES] + 2
-    if (nv < st.P.shape[0] and nn < st.nvert.shape[0] and C[N_FACES] + 4 < st.faces.shape[0]
-            and C[N_HEAP] + C[N_BLOCKED] + 32 < st.ht.shape[0] and C[NEXT_LABEL] + 2 < st.fsize.shape[0]
-            and C[N_BLOCKED] + 1 < st.blocked.shape[0] and 2 * (C[E_USED] + 16) < st.ekeys.shape[0]
-            and 2 * (C[F_USED] + 16) < st.fkeys.shape[0]):
-        return st
     nh = C[N_HEAP] + C[N_BLOCKED] + 32
     fsize = _grown(st.fsize, C[NEXT_LABEL] + 2)
     for i in range(st.fsize.shape[0], fsize.shape[0]):
@@ -344,30 +376,30 @@ def _link(st, a, b):
 
 
 @njit(cache=True)
-def _node_on_front(st, u, label, skip):
+def _node_on_front(vhead, nvnext, nalive, nfront, u, label, skip):
     """An alive node of vertex u on front ``label`` other than ``skip``, or -1.
 
     A vertex has at most one node on a front except for the moment between a merge and the
     split it causes (on the benchmark's holes never more than one candidate either way).
     """
-    x = st.vhead[u]
+    x = vhead[u]
     while x >= 0:
-        if x != skip and st.nalive[x] and st.nfront[x] == label:
+        if x != skip and nalive[x] and nfront[x] == label:
             return x
-        x = st.nvnext[x]
+        x = nvnext[x]
     return -1
 
 
 @njit(cache=True)
 def _update_node(st, pr, i):
     """Front angle of node i (Sec. 3.2, Step 2), its version advanced and pushed on the heap."""
-    v = st.nvert[i]
-    theta, m0, m1, m2 = front_angle(st.P[v], st.P[st.nvert[st.nprev[i]]], st.P[st.nvert[st.nnext[i]]], st.N[v],
-                                    pr.min_sin, pr.min_cos)
-    st.ntheta[i] = theta
-    st.nplane[i, 0], st.nplane[i, 1], st.nplane[i, 2] = m0, m1, m2
-    st.nversion[i] += 1
-    heap_push(st.ht, st.hn, st.hv, st.C, theta, i, st.nversion[i])
+    P, N, nvert, nprev, nnext = st.P, st.N, st.nvert, st.nprev, st.nnext
+    ntheta, nplane, nversion, ht, hn, hv, C = st.ntheta, st.nplane, st.nversion, st.ht, st.hn, st.hv, st.C
+    theta, m0, m1, m2 = front_angle(P, N, nvert[i], nvert[nprev[i]], nvert[nnext[i]], pr.min_sin, pr.min_cos)
+    ntheta[i] = theta
+    nplane[i, 0], nplane[i, 1], nplane[i, 2] = m0, m1, m2
+    nversion[i] += 1
+    heap_push(ht, hn, hv, C, theta, i, nversion[i])
 
 
 @njit(cache=True)
@@ -391,15 +423,15 @@ def _release_blocked(st):
 
 
 @njit(cache=True)
-def _release_blocked_near(st, pr, f0, f1):
+def _release_blocked_near(st, pr, sc, f0, f1):
     """Put back on the heap the refused nodes within reach of the step's new faces f0..f1.
 
     See ``advancing_front`` (module docstring): a step whose triangles have no vertex within
     3 max_edge + (1 + merge_factor) S_max + longest_edge of a refused node's vertex leaves
     that node's verdict as it was.
     """
-    P, faces, Fs = st.P, st.faces, st.Fs
-    verts = np.empty(3 * (f1 - f0), np.int64)
+    P, faces, Fs, points = st.P, st.faces, st.Fs, sc.points
+    n_points = 3 * (f1 - f0)  # repeated vertices do not change which nodes are near
     for f in range(f0, f1):
         for j in range(3):
             x, y = faces[f, j], faces[f, (j + 1) % 3]
@@ -407,7 +439,8 @@ def _release_blocked_near(st, pr, f0, f1):
                           + (P[x, 2] - P[y, 2]) * (P[x, 2] - P[y, 2]))
             if d > Fs[0]:
                 Fs[0] = d
-            verts[3 * (f - f0) + j] = x
+            t = 3 * (f - f0) + j
+            points[t, 0], points[t, 1], points[t, 2] = P[x, 0], P[x, 1], P[x, 2]
     reach = 3.0 * Fs[0] + (1.0 + pr.merge_factor) * pr.S_max + pr.longest_edge
     C = st.C
     if C[RELEASED_NEAR] == 0:
@@ -415,14 +448,15 @@ def _release_blocked_near(st, pr, f0, f1):
     n = C[N_BLOCKED]
     if n == 0:
         return
-    points = P[verts]  # repeated vertices do not change which nodes are near
-    near = near_any(st.blocked[:n], points, reach * reach, P, st.nvert, st.nalive, pr.two)
     kept = 0
     for t in range(n):
         b = st.blocked[t]
-        if near[t] > 0:
+        if not st.nalive[b]:
+            continue
+        v = st.nvert[b]
+        if near_any(P[v, 0], P[v, 1], P[v, 2], points[:n_points], reach * reach, pr.two):
             heap_push(st.ht, st.hn, st.hv, C, st.ntheta[b], b, st.nversion[b])
-        elif near[t] == 0:
+        else:
             st.blocked[kept] = b
             kept += 1
     C[KEPT_BLOCKED] += kept
@@ -491,7 +525,8 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
     v = st.nvert[node]
     prev, nxt = st.nprev[node], st.nnext[node]
     p, q = st.nvert[prev], st.nvert[nxt]
-    ids = np.zeros(2, np.int64)
+    ids = sc.ids
+    ids[0], ids[1] = 0, 0
     n_ids = 0
     if sc.has_new[0] or sc.has_new[1]:
         size = (S[v] + S[p] + S[q]) / 3.0
@@ -510,12 +545,12 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
     for t in range(n_seq):
         x = sc.sequence[t]
         sc.sequence[t] = ids[-x - 1] if x < 0 else x
-    _update_front_edges(st, f0, nf)
+    _update_front_edges(st, sc, f0, nf)
     C[RULE1 + rule - 1] += 1
     C[MERGES] += n_seq - n_ids
     # Linked-list surgery: p -> sequence -> q replaces p -> v -> q.
     _kill_node(st, node)
-    chain = np.empty(n_seq + 2, np.int64)
+    chain = sc.chain  # n_seq + 2 nodes
     chain[0], chain[n_seq + 1] = prev, nxt
     for t in range(n_seq):
         chain[t + 1] = _new_node(st, sc.sequence[t], label)
@@ -529,7 +564,7 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
                 _kill_node(st, x)
         st.fsize[label] = 0
         return
-    dirty = np.empty(n_seq + 2 + 4 * n_seq, np.int64)
+    dirty = sc.dirty  # up to n_seq + 2 + 4 n_seq nodes
     for t in range(n_seq + 2):
         dirty[t] = chain[t]
     n_dirty = n_seq + 2
@@ -538,7 +573,7 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
         w = chain[t]
         if not st.nalive[w]:
             continue
-        other = _node_on_front(st, st.nvert[w], st.nfront[w], w)
+        other = _node_on_front(st.vhead, st.nvnext, st.nalive, st.nfront, st.nvert[w], st.nfront[w], w)
         if other >= 0:
             dirty[n_dirty], dirty[n_dirty + 1], dirty[n_dirty + 2], dirty[n_dirty + 3] = _split(st, w, other)
             n_dirty += 4
@@ -552,12 +587,10 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
 
 
 @njit(cache=True)
-def _update_front_edges(st, f0, nf):
+def _update_front_edges(st, sc, f0, nf):
     """Record the edges of faces f0..f0+nf; consume the front edges they cover, add the others reversed."""
-    faces, P = st.faces, st.P
-    da = np.empty(3 * nf, np.int64)
-    db = np.empty(3 * nf, np.int64)
-    normals = np.empty((nf, 3))
+    faces, P, ekeys, fkeys, fvals, C = st.faces, st.P, st.ekeys, st.fkeys, st.fvals, st.C
+    da, db, normals = sc.da, sc.db, sc.normals
     for f in range(nf):
         a, b, c = faces[f0 + f, 0], faces[f0 + f, 1], faces[f0 + f, 2]
         normals[f, 0], normals[f, 1], normals[f, 2] = _face_unit_normal(P, a, b, c)
@@ -565,10 +598,10 @@ def _update_front_edges(st, f0, nf):
             da[3 * f + j], db[3 * f + j] = faces[f0 + f, j], faces[f0 + f, (j + 1) % 3]
     for i in range(3 * nf):
         a, b = da[i], db[i]
-        _add_edge(st, a, b)
-        slot = _find(st.fkeys, a, b)
+        _add_edge(ekeys, C, a, b)
+        slot = _find(fkeys, a, b)
         if slot >= 0:
-            st.fkeys[slot] = DELETED
+            fkeys[slot] = DELETED
         else:
             reverse_in_step = False
             for j in range(3 * nf):
@@ -576,7 +609,8 @@ def _update_front_edges(st, f0, nf):
                     reverse_in_step = True
             if not reverse_in_step:
                 f = i // 3
-                st.fvals[_insert(st.fkeys, b, a, st.C, F_USED)] = normals[f]
+                slot = _insert(fkeys, b, a, C, F_USED)
+                fvals[slot, 0], fvals[slot, 1], fvals[slot, 2] = normals[f, 0], normals[f, 1], normals[f, 2]
 
 
 @njit(cache=True)
@@ -588,68 +622,66 @@ def _build(st, pr, sc, node, rule):
     next to one of v's neighbours, a merge would make an ear of too wide an angle, or both new
     vertices merge with one vertex.
     """
-    P, S = st.P, st.S
-    v = st.nvert[node]
-    p = st.nvert[st.nprev[node]]
-    q = st.nvert[st.nnext[node]]
-    sc.has_new[0], sc.has_new[1] = False, False
+    # The arrays taken from the tuples first, coordinates read as scalars: see the module docstring.
+    P, S, nvert, nprev, nnext, nfront = st.P, st.S, st.nvert, st.nprev, st.nnext, st.nfront
+    ntheta, nplane, alive, C = st.ntheta, st.nplane, st.alive, st.C
+    F, has_new, new_pos, pos, sequence = sc.faces, sc.has_new, sc.new_pos, sc.pos, sc.sequence
+    v = nvert[node]
+    p = nvert[nprev[node]]
+    q = nvert[nnext[node]]
+    has_new[0], has_new[1] = False, False
     if rule == 1:
-        sc.faces[0, 0], sc.faces[0, 1], sc.faces[0, 2] = p, v, q
+        F[0, 0], F[0, 1], F[0, 2] = p, v, q
         return True, 1, 0
-    theta, m = st.ntheta[node], st.nplane[node]
-    V = P[v]
+    theta, m0, m1, m2 = ntheta[node], nplane[node, 0], nplane[node, 1], nplane[node, 2]
+    V0, V1, V2 = P[v, 0], P[v, 1], P[v, 2]
     length = (S[v] + S[p] + S[q]) / 3.0
-    a0, a1, a2 = P[q, 0] - V[0], P[q, 1] - V[1], P[q, 2] - V[2]
-    am = a0 * m[0] + a1 * m[1] + a2 * m[2]
-    u0, u1, u2 = _unit(a0 - m[0] * am, a1 - m[1] * am, a2 - m[2] * am)
-    t0, t1, t2 = m[1] * u2 - m[2] * u1, m[2] * u0 - m[0] * u2, m[0] * u1 - m[1] * u0
+    a0, a1, a2 = P[q, 0] - V0, P[q, 1] - V1, P[q, 2] - V2
+    am = a0 * m0 + a1 * m1 + a2 * m2
+    u0, u1, u2 = _unit(a0 - m0 * am, a1 - m1 * am, a2 - m2 * am)
+    t0, t1, t2 = m1 * u2 - m2 * u1, m2 * u0 - m0 * u2, m0 * u1 - m1 * u0
     count = rule - 1
     radius = pr.merge_factor * length
-    ids = np.zeros(2, np.int64)
+    id1, id2 = 0, 0  # the vertices of the new positions j = 1, 2 (temporary ids -1, -2 if new)
     two = pr.two
     for j in range(1, count + 1):
         phi = theta * j / (count + 1)
         c, s = math.cos(phi) * length, math.sin(phi) * length
-        pos = sc.pos
-        pos[0], pos[1], pos[2] = V[0] + c * u0 + s * t0, V[1] + c * u1 + s * t1, V[2] + c * u2 + s * t2
+        pos[0], pos[1], pos[2] = V0 + c * u0 + s * t0, V1 + c * u1 + s * t1, V2 + c * u2 + s * t2
         for u in (p, q):
             if (pos[0] - P[u, 0]) ** two + (pos[1] - P[u, 1]) ** two + (pos[2] - P[u, 2]) ** two < radius * radius:
                 return False, 0, 0
-        target = merge_target(pos, radius, v, p, q, st.nfront[node], P, st.nvert, st.nfront, st.alive,
-                              st.C[N_ALIVE], pr.cell, two)
+        target = merge_target(pos, radius, v, p, q, nfront[node], P, nvert, nfront, alive, C[N_ALIVE], pr.cell, two)
         if target < 0:
             target = -j
-            sc.new_pos[j - 1] = pos
-            sc.has_new[j - 1] = True
-        ids[j - 1] = target
+            new_pos[j - 1, 0], new_pos[j - 1, 1], new_pos[j - 1, 2] = pos[0], pos[1], pos[2]
+            has_new[j - 1] = True
+        if j == 1:
+            id1 = target
+        else:
+            id2 = target
     # A merge with the vertex beyond p (or q) makes the triangle at p (or q) an ear that
     # closes p's whole front angle: allowed only where a single triangle fits the angle.
-    prev2 = st.nvert[st.nprev[st.nprev[node]]]
-    next2 = st.nvert[st.nnext[st.nnext[node]]]
-    if ids[count - 1] == prev2 and st.ntheta[st.nprev[node]] > pr.merge_ear_max:
+    prev2 = nvert[nprev[nprev[node]]]
+    next2 = nvert[nnext[nnext[node]]]
+    if (id1 if count == 1 else id2) == prev2 and ntheta[nprev[node]] > pr.merge_ear_max:
         return False, 0, 0
-    if ids[0] == next2 and st.ntheta[st.nnext[node]] > pr.merge_ear_max:
+    if id1 == next2 and ntheta[nnext[node]] > pr.merge_ear_max:
         return False, 0, 0
-    F = sc.faces
     if rule == 2:
-        w = ids[0]
+        w = id1
         F[0, 0], F[0, 1], F[0, 2] = v, q, w
         F[1, 0], F[1, 1], F[1, 2] = p, v, w
-        sc.sequence[0] = w
+        sequence[0] = w
         return True, 2, 1
-    w1, w2 = ids[0], ids[1]
+    w1, w2 = id1, id2
     if w1 == w2:
         return False, 0, 0
     F[0, 0], F[0, 1], F[0, 2] = v, q, w1
     F[1, 0], F[1, 1], F[1, 2] = v, w1, w2
     F[2, 0], F[2, 1], F[2, 2] = p, v, w2
-    sc.sequence[0], sc.sequence[1] = w2, w1
+    sequence[0], sequence[1] = w2, w1
     return True, 3, 2
-
-
-@njit(cache=True)
-def _position(st, sc, x):
-    return sc.new_pos[-x - 1] if x < 0 else st.P[x]
 
 
 @njit(cache=True)
@@ -660,24 +692,26 @@ def _valid(st, pr, ob, sc, node, nf):
     end of a new edge on this front; then :func:`._front_kernels.step_geometry_valid`; then,
     with obstacles, the clearance of the new vertices and no crossing of a mesh face.
     """
-    label = st.nfront[node]
+    P, S, nvert, nnext, nfront, nplane, ntheta = st.P, st.S, st.nvert, st.nnext, st.nfront, st.nplane, st.ntheta
+    vhead, nvnext, nalive, alive = st.vhead, st.nvnext, st.nalive, st.alive
+    ekeys, fkeys, fvals, n_alive = st.ekeys, st.fkeys, st.fvals, st.C[N_ALIVE]
+    faces, new_pos, da, db = sc.faces, sc.new_pos, sc.da, sc.db
+    new_edges, edge_nodes, behind = sc.new_edges, sc.edge_nodes, sc.behind
+    label = nfront[node]
     nd = 3 * nf
-    da = np.empty(nd, np.int64)
-    db = np.empty(nd, np.int64)
     for f in range(nf):
         for j in range(3):
-            da[3 * f + j], db[3 * f + j] = sc.faces[f, j], sc.faces[f, (j + 1) % 3]
+            da[3 * f + j], db[3 * f + j] = faces[f, j], faces[f, (j + 1) % 3]
     for i in range(nd):
         for j in range(i):
             if da[i] == da[j] and db[i] == db[j]:
                 return False
-    new_edges = np.empty((nd, 2), np.int64)
     ne = 0
     for i in range(nd):
         a, b = da[i], db[i]
-        if _find(st.fkeys, a, b) >= 0:
+        if _find(fkeys, a, b) >= 0:
             continue
-        if a >= 0 and b >= 0 and _has_edge(st, a, b):
+        if a >= 0 and b >= 0 and _has_edge(ekeys, a, b):
             return False
         if a > b:
             reverse_in_step = False
@@ -690,26 +724,24 @@ def _valid(st, pr, ob, sc, node, nf):
         ne += 1
     # The node of each existing end of a new edge, on this front (a new edge must leave from
     # inside its front angle there).
-    edge_nodes = np.full((ne, 2), -1, np.int64)
     for i in range(ne):
         for j in range(2):
             x = new_edges[i, j]
+            edge_nodes[i, j] = -1
             if x >= 0:
-                edge_nodes[i, j] = _node_on_front(st, x, label, -1)
+                edge_nodes[i, j] = _node_on_front(vhead, nvnext, nalive, nfront, x, label, -1)
                 if edge_nodes[i, j] < 0:
                     return False
-    behind = np.full((nf, 3, 3), np.nan)
     for f in range(nf):
         for j in range(3):
-            slot = _find(st.fkeys, sc.faces[f, j], sc.faces[f, (j + 1) % 3])
-            if slot >= 0:
-                behind[f, j] = st.fvals[slot]
-    v = st.nvert[node]
-    scale = st.S[v]
-    if not step_geometry_valid(sc.faces[:nf], sc.new_pos, behind, st.nplane[node], 1e-10 * scale * scale,
-                               pr.fold_min_cos, new_edges[:ne], edge_nodes, pr.angle_margin, st.P[v],
-                               pr.longest_edge, st.P, st.nvert, st.nnext, st.nplane, st.ntheta, st.alive,
-                               st.C[N_ALIVE], pr.cell, pr.two):
+            slot = _find(fkeys, faces[f, j], faces[f, (j + 1) % 3])
+            for i in range(3):
+                behind[f, j, i] = fvals[slot, i] if slot >= 0 else np.nan
+    v = nvert[node]
+    scale = S[v]
+    if not step_geometry_valid(faces[:nf], new_pos, behind[:nf], nplane[node], 1e-10 * scale * scale,
+                               pr.fold_min_cos, new_edges[:ne], edge_nodes[:ne], pr.angle_margin, P[v],
+                               pr.longest_edge, P, nvert, nnext, nplane, ntheta, alive, n_alive, pr.cell, pr.two):
         return False
     if not ob.has:
         return True
@@ -722,40 +754,42 @@ def _clear_of_obstacles(st, pr, ob, sc, nf, clearance):
 
     :meth:`._front_obstacles.FrontObstacles.distance` and ``crossed`` on its arrays.
     """
-    lo = np.empty(3)
-    hi = np.empty(3)
+    P, C = st.P, st.C
+    new_pos, faces, has_new, lo, hi, T = sc.new_pos, sc.faces, sc.has_new, sc.lo, sc.hi, sc.corners
+    V, F, base, dims, keys, starts, cell_faces = ob.V, ob.F, ob.base, ob.dims, ob.keys, ob.starts, ob.cell_faces
+    face_lo, face_hi, stamp, out = ob.lo, ob.hi, ob.stamp, ob.out
     for t in range(2):
-        if not sc.has_new[t]:
+        if not has_new[t]:
             continue
-        X = sc.new_pos[t]
+        X = new_pos[t]
         for i in range(3):
             lo[i], hi[i] = X[i] - clearance, X[i] + clearance
-        count = obstacle_candidates(lo, hi, pr.cell, ob.base, ob.dims, ob.keys, ob.starts, ob.cell_faces, ob.lo,
-                                    ob.hi, ob.stamp, ob.out)
-        if count and min_point_triangle_distance(X, ob.V, ob.F, ob.out[:count], clearance) < clearance:
+        count = obstacle_candidates(lo, hi, pr.cell, base, dims, keys, starts, cell_faces, face_lo, face_hi, stamp,
+                                    out)
+        if count and min_point_triangle_distance(X, V, F, out[:count], clearance) < clearance:
             return False
-    T = np.empty((nf, 3, 3))
     for f in range(nf):
         for j in range(3):
-            T[f, j] = _position(st, sc, sc.faces[f, j])
+            x = faces[f, j]
+            for i in range(3):
+                T[f, j, i] = new_pos[-x - 1, i] if x < 0 else P[x, i]
     for i in range(3):
         lo[i], hi[i] = T[0, 0, i], T[0, 0, i]
         for f in range(nf):
             for j in range(3):
                 lo[i], hi[i] = min(lo[i], T[f, j, i]), max(hi[i], T[f, j, i])
-    count = obstacle_candidates(lo, hi, pr.cell, ob.base, ob.dims, ob.keys, ob.starts, ob.cell_faces, ob.lo, ob.hi,
-                                ob.stamp, ob.out)
+    count = obstacle_candidates(lo, hi, pr.cell, base, dims, keys, starts, cell_faces, face_lo, face_hi, stamp, out)
     if count == 0:
         return True
-    st.C[OBSTACLE_TESTS] += 1
-    return not triangles_cross_faces(sc.faces[:nf], T, ob.V, ob.F, ob.out, count, pr.k, 1e-9 * pr.cell)
+    C[OBSTACLE_TESTS] += 1
+    return not triangles_cross_faces(faces[:nf], T[:nf], V, F, out, count, pr.k, 1e-9 * pr.cell)
 
 
 @njit(cache=True)
 def _advance(st, pr, ob, sc, node):
     """Apply the angle rule at ``node`` (Sec. 3.2, Step 3) or its first valid fallback; whether one was applied."""
-    theta = st.ntheta[node]
-    if st.fsize[st.nfront[node]] == 3 or theta <= pr.one_max:
+    theta, size = st.ntheta[node], st.fsize[st.nfront[node]]
+    if size == 3 or theta <= pr.one_max:
         first, last = 1, 1
     elif theta <= pr.two_max:
         first, last = 2, 1
@@ -797,7 +831,7 @@ def _close_small_front(st):
                     ring[j] = st.nvert[cycle[(shift + j) % size]]
                 ok = True
                 for j in range(2, size - 1):
-                    if _has_edge(st, ring[0], ring[j]):
+                    if _has_edge(st.ekeys, ring[0], ring[j]):
                         ok = False
                 for j in range(1, size - 1):
                     a, b, c = ring[0], ring[j], ring[j + 1]
@@ -814,7 +848,7 @@ def _close_small_front(st):
                     st.faces[f, 0], st.faces[f, 1], st.faces[f, 2] = ring[0], ring[j], ring[j + 1]
                     for i in range(3):
                         x, y = st.faces[f, i], st.faces[f, (i + 1) % 3]
-                        _add_edge(st, x, y)
+                        _add_edge(st.ekeys, C, x, y)
                 for j in range(size):
                     slot = _find(st.fkeys, ring[j], ring[(j + 1) % size])
                     if slot >= 0:
@@ -918,7 +952,8 @@ def run_front(st, pr, ob, sc):
         C[MAX_FRONT] = max(C[MAX_FRONT], size)
         if size > pr.limit:
             return GREW, size, st
-        st = _with_room(st)
+        if not _has_room(st):
+            st = _with_room(st)  # only then: returning the tuple takes a reference on each array
         node = _pop(st)
         if node < 0:
             if _close_small_front(st):
@@ -930,7 +965,7 @@ def run_front(st, pr, ob, sc):
             if C[MERGES] + C[SPLITS] != n_topology:
                 _release_blocked(st)  # a split relabels a whole front: any refusal may change
             else:
-                _release_blocked_near(st, pr, n_faces, C[N_FACES])
+                _release_blocked_near(st, pr, sc, n_faces, C[N_FACES])
         else:
             C[REJECTED] += 1
             st.blocked[C[N_BLOCKED]] = node

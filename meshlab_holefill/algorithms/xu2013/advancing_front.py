@@ -61,7 +61,7 @@ import numpy as np
 from ...errors import HoleFillError
 from ._front_loop import (CLOSED, FAN_CLOSURES, GREW, KEPT_BLOCKED, LEFT_BALL, MAX_FRONT, MERGES, N_FACES,
                           N_VERT, OBSTACLE_TESTS, REJECTED, RELEASED_NEAR, RULE1, RULE2, RULE3, SPLITS, STEPS, STUCK,
-                          FrontObstacleArrays, FrontParams, Scratch, initial_state, run_front)
+                          FrontObstacleArrays, FrontParams, initial_state, new_scratch, run_front)
 from ._front_obstacles import FrontObstacles
 from ._front_predicates import PLANE_MIN_COS, PLANE_MIN_SIN
 
@@ -148,9 +148,7 @@ def _run(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ea
     normals = np.ascontiguousarray(np.broadcast_to(n_ref, (k, 3)), np.float64)
     forbidden = np.ascontiguousarray(np.asarray(forbidden_edges, np.int64).reshape(-1, 2))
     st = initial_state(P, normals, S, forbidden, border_faces, ob.V, params)
-    scratch = Scratch(np.zeros((3, 3), np.int64), np.zeros((2, 3)), np.zeros(2, np.bool_), np.zeros(2, np.int64),
-                      np.zeros(3))
-    outcome, size, st = run_front(st, params, ob, scratch)
+    outcome, size, st = run_front(st, params, ob, new_scratch())
     C = st.C
     if outcome == GREW:
         raise HoleFillError(f"advancing front grew to {size} vertices from {k}: it left the hole")

@@ -126,16 +126,12 @@ def test_front_edges_crossed_equals_python(seed, longest_edge, m):
 def test_near_any_equals_python(seed, r):
     rng = np.random.default_rng(seed)
     P, nv, nn, nf, alive = _random_front(rng)
-    node_alive = np.zeros(len(nv), np.bool_)
-    node_alive[alive] = True
     blocked = rng.integers(0, len(nv), 12)
     points = P[rng.integers(0, len(P), 3)] + rng.normal(size=(3, 3))
-    got = K.near_any(blocked.astype(np.int64), points, r * r, P, nv, node_alive, TWO).tolist()
-    for b, hit in zip(blocked.tolist(), got):
+    for b in blocked.tolist():
         X = P[nv[b]]
-        ref = -1 if not node_alive[b] else int(any((X[0] - Y[0]) ** 2 + (X[1] - Y[1]) ** 2 + (X[2] - Y[2]) ** 2
-                                                   <= r * r for Y in points.tolist()))
-        assert hit == ref
+        ref = any((X[0] - Y[0]) ** 2 + (X[1] - Y[1]) ** 2 + (X[2] - Y[2]) ** 2 <= r * r for Y in points.tolist())
+        assert K.near_any(X[0], X[1], X[2], points, r * r, TWO) is ref
 
 
 def _obstacle_crossed_python(obstacles, faces, corners, cand):

@@ -359,14 +359,15 @@ class PythonFront(FrontState):
         reach = 3.0 * self.max_edge + (1.0 + self.merge_factor) * self.S_max + self.longest_edge
         r2 = reach * reach
         still = []
-        if self.blocked:
-            near = near_any(np.array(self.blocked, np.int64), self.Pa[sorted(verts)], r2, self.Pa, self.na_vertex,
-                            self.na_alive, TWO)
-            for b, hit in zip(self.blocked, near.tolist()):
-                if hit > 0:
-                    heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
-                elif hit == 0:
-                    still.append(b)
+        points = self.Pa[sorted(verts)]
+        for b in self.blocked:
+            if not self.na_alive[b]:
+                continue
+            X = self.Pa[self.na_vertex[b]]
+            if near_any(X[0], X[1], X[2], points, r2, TWO):
+                heapq.heappush(self.heap, (self.node_theta[b], b, self.node_version[b]))
+            else:
+                still.append(b)
         self.stats["kept_blocked"] = self.stats.get("kept_blocked", 0) + len(still)
         self.blocked = still
 
