@@ -309,6 +309,23 @@ def _cross_into(a0, a1, a2, b0, b1, b2):
 
 
 @njit(cache=True)
+def _edge_side(U, W, P0, d0, d1, d2):
+    """Side of the direction d of the triangle edge U W seen from P0: ((U - P0) x (W - P0)) . d."""
+    c0, c1, c2 = _cross_into(U[0] - P0[0], U[1] - P0[1], U[2] - P0[2], W[0] - P0[0], W[1] - P0[1], W[2] - P0[2])
+    return c0 * d0 + c1 * d1 + c2 * d2
+
+
+@njit(cache=True)
+def _other_two(f0, f1, f2, s):
+    """Positions, in order, of the two corners of the face (f0, f1, f2) other than vertex s (one of them)."""
+    if f0 == s:
+        return 1, 2
+    if f1 == s:
+        return 0, 2
+    return 0, 1
+
+
+@njit(cache=True)
 def segment_hits_triangle(P0, P1, A, B, C, tol):
     """One row of :func:`._front_predicates.segments_hit_triangles` (the same operations)."""
     n0, n1, n2 = _cross_into(B[0] - A[0], B[1] - A[1], B[2] - A[2], C[0] - A[0], C[1] - A[1], C[2] - A[2])
@@ -321,15 +338,11 @@ def segment_hits_triangle(P0, P1, A, B, C, tol):
     if abs(s0) <= eps and abs(s1) <= eps:
         return False
     d0, d1, d2 = P1[0] - P0[0], P1[1] - P0[1], P1[2] - P0[2]
-    e = np.empty(3)
-    for j in range(3):
-        U = A if j == 0 else (B if j == 1 else C)
-        W = B if j == 0 else (C if j == 1 else A)
-        c0, c1, c2 = _cross_into(U[0] - P0[0], U[1] - P0[1], U[2] - P0[2], W[0] - P0[0], W[1] - P0[1], W[2] - P0[2])
-        e[j] = c0 * d0 + c1 * d1 + c2 * d2
+    e0 = _edge_side(A, B, P0, d0, d1, d2)
+    e1 = _edge_side(B, C, P0, d0, d1, d2)
+    e2 = _edge_side(C, A, P0, d0, d1, d2)
     lim = tol * math.sqrt(scale) * math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    return ((e[0] >= -lim and e[1] >= -lim and e[2] >= -lim)
-            or (e[0] <= lim and e[1] <= lim and e[2] <= lim))
+    return (e0 >= -lim and e1 >= -lim and e2 >= -lim) or (e0 <= lim and e1 <= lim and e2 <= lim)
 
 
 @njit(cache=True)
@@ -354,19 +367,11 @@ def triangles_cross_faces(new_faces, corners, V, F, cand, n_cand, k, tol):
                 continue
             A, B, C = V[o[0]], V[o[1]], V[o[2]]
             if n_shared == 1:
-                ta = np.empty((2, 3))
-                ob = np.empty((2, 3))
-                na = nb = 0
-                for j in range(3):
-                    if new_faces[i, j] != s:
-                        ta[na] = T[j]
-                        na += 1
-                    if o[j] != s:
-                        ob[nb] = V[o[j]]
-                        nb += 1
-                if segment_hits_triangle(ta[0], ta[1], A, B, C, tol):
+                ja, jb = _other_two(new_faces[i, 0], new_faces[i, 1], new_faces[i, 2], s)
+                ka, kb = _other_two(o[0], o[1], o[2], s)
+                if segment_hits_triangle(T[ja], T[jb], A, B, C, tol):
                     return True
-                if segment_hits_triangle(ob[0], ob[1], T[0], T[1], T[2], tol):
+                if segment_hits_triangle(V[o[ka]], V[o[kb]], T[0], T[1], T[2], tol):
                     return True
             else:
                 for j in range(3):
@@ -387,51 +392,55 @@ def _direction_angle(r0, r1, r2, d0, d1, d2, m):
 
 
 @njit(cache=True)
-def _at(x, new_pos, P):
-    """Position of vertex x: a temporary id -1, -2 of the step is row -x - 1 of new_pos."""
-    return new_pos[-x - 1] if x < 0 else P[x]
+def _coords(x, new_pos, P):
+    """Coordinates of vertex x, a temporary id -1, -2 of the step being row -x - 1 of new_pos (scalars: a row
+    view would take and drop a reference on its array)."""
+    if x < 0:
+        return new_pos[-x - 1, 0], new_pos[-x - 1, 1], new_pos[-x - 1, 2]
+    return P[x, 0], P[x, 1], P[x, 2]
 
 
 @njit(cache=True)
-def step_geometry_valid(faces, new_pos, behind, m, tiny, fold_min_cos, edge_ids, edge_nodes, angle_margin, V,
+def step_geometry_valid(faces, nf, new_pos, behind, m, tiny, fold_min_cos, edge_ids, edge_nodes, ne, angle_margin, V,
                         longest_edge, P, node_vertex, node_next, node_plane, node_theta, alive, n_alive, cell, two):
     """The geometric checks of one step (:func:`._front_loop._valid`, before the obstacles).
 
-    Each new triangle of ``faces`` (f, 3) (vertex ids, temporary ids for ``new_pos``) faces
-    the way of m by more than ``tiny`` and does not fold onto the triangle behind a front edge
-    it consumes (``behind[f, j]`` the normal behind its edge j, NaN where none) by more than
-    arccos(fold_min_cos); each new edge ``edge_ids[i]`` leaves its existing ends (nodes
-    ``edge_nodes[i]``, -1 for a new vertex) strictly inside their front angles,
-    ``angle_margin`` from either side; no new edge crosses a nearby front edge
-    (:func:`front_edges_crossed`).
+    Each new triangle of the first nf rows of ``faces`` (vertex ids, temporary ids for
+    ``new_pos``) faces the way of m by more than ``tiny`` and does not fold onto the triangle
+    behind a front edge it consumes (``behind[f, j]`` the normal behind its edge j, NaN where
+    none) by more than arccos(fold_min_cos); each of the first ne new edges ``edge_ids[i]``
+    leaves its existing ends (nodes ``edge_nodes[i]``, -1 for a new vertex) strictly inside
+    their front angles, ``angle_margin`` from either side; no new edge crosses a nearby front
+    edge (:func:`front_edges_crossed`). Counts rather than slices: the caller passes its scratch
+    arrays whole (a slice branches, which defeats numba's pruning of reference counts).
     """
-    for f in range(faces.shape[0]):
-        A, B, C = _at(faces[f, 0], new_pos, P), _at(faces[f, 1], new_pos, P), _at(faces[f, 2], new_pos, P)
-        n0, n1, n2 = _cross_into(B[0] - A[0], B[1] - A[1], B[2] - A[2], C[0] - A[0], C[1] - A[1], C[2] - A[2])
+    for f in range(nf):
+        a0, a1, a2 = _coords(faces[f, 0], new_pos, P)
+        b0, b1, b2 = _coords(faces[f, 1], new_pos, P)
+        c0, c1, c2 = _coords(faces[f, 2], new_pos, P)
+        n0, n1, n2 = _cross_into(b0 - a0, b1 - a1, b2 - a2, c0 - a0, c1 - a1, c2 - a2)
         if n0 * m[0] + n1 * m[1] + n2 * m[2] <= tiny:
             return False
         for j in range(3):
-            b = behind[f, j]
-            if not math.isnan(b[0]) and b[0] * n0 + b[1] * n1 + b[2] * n2 < fold_min_cos * _norm3(n0, n1, n2):
+            h0, h1, h2 = behind[f, j, 0], behind[f, j, 1], behind[f, j, 2]
+            if not math.isnan(h0) and h0 * n0 + h1 * n1 + h2 * n2 < fold_min_cos * _norm3(n0, n1, n2):
                 return False
-    ne = edge_ids.shape[0]
     for i in range(ne):
         for j in range(2):
             nx = edge_nodes[i, j]
             if nx < 0:
                 continue
-            X = P[node_vertex[nx]]
-            R = P[node_vertex[node_next[nx]]]
-            Y = _at(edge_ids[i, 1 - j], new_pos, P)
-            phi = _direction_angle(R[0] - X[0], R[1] - X[1], R[2] - X[2], Y[0] - X[0], Y[1] - X[1], Y[2] - X[2],
-                                   node_plane[nx])
+            x, r = node_vertex[nx], node_vertex[node_next[nx]]
+            y0, y1, y2 = _coords(edge_ids[i, 1 - j], new_pos, P)
+            phi = _direction_angle(P[r, 0] - P[x, 0], P[r, 1] - P[x, 1], P[r, 2] - P[x, 2], y0 - P[x, 0],
+                                   y1 - P[x, 1], y2 - P[x, 2], node_plane[nx])
             if not (angle_margin < phi < node_theta[nx] - angle_margin):
                 return False
     if ne == 0:
         return True
     seg = np.empty((ne, 2, 3))
     for i in range(ne):
-        seg[i, 0] = _at(edge_ids[i, 0], new_pos, P)
-        seg[i, 1] = _at(edge_ids[i, 1], new_pos, P)
+        for j in range(2):
+            seg[i, j, 0], seg[i, j, 1], seg[i, j, 2] = _coords(edge_ids[i, j], new_pos, P)
     return not front_edges_crossed(edge_ids, seg, V, m, longest_edge, P, node_vertex, node_next, alive, n_alive,
                                    cell, two)

@@ -22,8 +22,8 @@ in the int array ``C`` (indices below) and ``max_edge`` in ``Fs[0]``.
 A compiled function that receives a tuple of arrays takes and drops a reference on each of
 them (atomic operations) unless numba's reference-count pruning proves the pair redundant; with
 26 arrays in the state that cost several times a step's arithmetic. The pruning fails once the
-function frees an array of its own or takes one from a tuple (or a row view of one) after a
-branch. So the step functions allocate nothing (their per-step arrays are the scratch arrays of
+function frees an array of its own or takes one from a tuple (or a row view or a slice, which
+branches) after a branch. So the step functions allocate nothing (their per-step arrays are the scratch arrays of
 :func:`new_scratch`), take the arrays they use from the tuples first, read coordinates as
 scalars, and the helpers they call in their loops take arrays, not the tuples.
 
@@ -358,21 +358,26 @@ def _new_node(st, vertex, label):
 
 @njit(cache=True)
 def _kill_node(st, i):
-    if st.nalive[i]:
-        st.nalive[i] = False
-        # Swap-remove from the alive list.
-        C = st.C
-        at, last = st.alive_at[i], st.alive[C[N_ALIVE] - 1]
-        st.alive[at] = last
-        st.alive_at[last] = at
-        C[N_ALIVE] -= 1
-    st.nversion[i] += 1
+    _kill(st.nalive, st.nversion, st.alive, st.alive_at, st.C, i)
 
 
 @njit(cache=True)
-def _link(st, a, b):
-    st.nnext[a] = b
-    st.nprev[b] = a
+def _kill(nalive, nversion, alive, alive_at, C, i):
+    """:func:`_kill_node` on the arrays it changes."""
+    if nalive[i]:
+        nalive[i] = False
+        # Swap-remove from the alive list.
+        at, last = alive_at[i], alive[C[N_ALIVE] - 1]
+        alive[at] = last
+        alive_at[last] = at
+        C[N_ALIVE] -= 1
+    nversion[i] += 1
+
+
+@njit(cache=True)
+def _link(nprev, nnext, a, b):
+    nnext[a] = b
+    nprev[b] = a
 
 
 @njit(cache=True)
@@ -430,7 +435,8 @@ def _release_blocked_near(st, pr, sc, f0, f1):
     3 max_edge + (1 + merge_factor) S_max + longest_edge of a refused node's vertex leaves
     that node's verdict as it was.
     """
-    P, faces, Fs, points = st.P, st.faces, st.Fs, sc.points
+    P, faces, Fs, C, blocked, nalive, nvert = st.P, st.faces, st.Fs, st.C, st.blocked, st.nalive, st.nvert
+    ntheta, nversion, ht, hn, hv, points = st.ntheta, st.nversion, st.ht, st.hn, st.hv, sc.points
     n_points = 3 * (f1 - f0)  # repeated vertices do not change which nodes are near
     for f in range(f0, f1):
         for j in range(3):
@@ -442,7 +448,6 @@ def _release_blocked_near(st, pr, sc, f0, f1):
             t = 3 * (f - f0) + j
             points[t, 0], points[t, 1], points[t, 2] = P[x, 0], P[x, 1], P[x, 2]
     reach = 3.0 * Fs[0] + (1.0 + pr.merge_factor) * pr.S_max + pr.longest_edge
-    C = st.C
     if C[RELEASED_NEAR] == 0:
         C[RELEASED_NEAR] = 1 + C[FAN_CLOSURES]  # key order of the stats: after a fan closure or before
     n = C[N_BLOCKED]
@@ -450,14 +455,14 @@ def _release_blocked_near(st, pr, sc, f0, f1):
         return
     kept = 0
     for t in range(n):
-        b = st.blocked[t]
-        if not st.nalive[b]:
+        b = blocked[t]
+        if not nalive[b]:
             continue
-        v = st.nvert[b]
+        v = nvert[b]
         if near_any(P[v, 0], P[v, 1], P[v, 2], points[:n_points], reach * reach, pr.two):
-            heap_push(st.ht, st.hn, st.hv, C, st.ntheta[b], b, st.nversion[b])
+            heap_push(ht, hn, hv, C, ntheta[b], b, nversion[b])
         else:
-            st.blocked[kept] = b
+            blocked[kept] = b
             kept += 1
     C[KEPT_BLOCKED] += kept
     C[N_BLOCKED] = kept
@@ -482,8 +487,8 @@ def _split(st, w, u):
     C[SPLITS] += 1
     label = st.nfront[w]
     wn, un = nnext[w], nnext[u]
-    _link(st, w, un)
-    _link(st, u, wn)
+    _link(st.nprev, nnext, w, un)
+    _link(st.nprev, nnext, u, wn)
     # Walk both cycles in lockstep: the shorter one is found in O(its length).
     a, b, la, lb = nnext[w], nnext[u], 1, 1
     while a != w and b != u:
@@ -549,19 +554,19 @@ def _apply(st, pr, sc, node, rule, nf, n_seq):
     C[RULE1 + rule - 1] += 1
     C[MERGES] += n_seq - n_ids
     # Linked-list surgery: p -> sequence -> q replaces p -> v -> q.
-    _kill_node(st, node)
+    _kill(st.nalive, st.nversion, st.alive, st.alive_at, C, node)
     chain = sc.chain  # n_seq + 2 nodes
     chain[0], chain[n_seq + 1] = prev, nxt
     for t in range(n_seq):
         chain[t + 1] = _new_node(st, sc.sequence[t], label)
     for t in range(n_seq + 1):
-        _link(st, chain[t], chain[t + 1])
+        _link(st.nprev, st.nnext, chain[t], chain[t + 1])
     st.fsize[label] += n_seq - 1
     if st.fsize[label] <= 2:
         # The last triangle of this front consumed all its edges.
         for x in (prev, nxt):
             if st.nalive[x]:
-                _kill_node(st, x)
+                _kill(st.nalive, st.nversion, st.alive, st.alive_at, C, x)
         st.fsize[label] = 0
         return
     dirty = sc.dirty  # up to n_seq + 2 + 4 n_seq nodes
@@ -692,11 +697,9 @@ def _valid(st, pr, ob, sc, node, nf):
     end of a new edge on this front; then :func:`._front_kernels.step_geometry_valid`; then,
     with obstacles, the clearance of the new vertices and no crossing of a mesh face.
     """
-    P, S, nvert, nnext, nfront, nplane, ntheta = st.P, st.S, st.nvert, st.nnext, st.nfront, st.nplane, st.ntheta
-    vhead, nvnext, nalive, alive = st.vhead, st.nvnext, st.nalive, st.alive
-    ekeys, fkeys, fvals, n_alive = st.ekeys, st.fkeys, st.fvals, st.C[N_ALIVE]
-    faces, new_pos, da, db = sc.faces, sc.new_pos, sc.da, sc.db
-    new_edges, edge_nodes, behind = sc.new_edges, sc.edge_nodes, sc.behind
+    nfront, vhead, nvnext, nalive = st.nfront, st.vhead, st.nvnext, st.nalive
+    ekeys, fkeys, fvals = st.ekeys, st.fkeys, st.fvals
+    faces, da, db, new_edges, edge_nodes, behind = sc.faces, sc.da, sc.db, sc.new_edges, sc.edge_nodes, sc.behind
     label = nfront[node]
     nd = 3 * nf
     for f in range(nf):
@@ -737,11 +740,11 @@ def _valid(st, pr, ob, sc, node, nf):
             slot = _find(fkeys, faces[f, j], faces[f, (j + 1) % 3])
             for i in range(3):
                 behind[f, j, i] = fvals[slot, i] if slot >= 0 else np.nan
-    v = nvert[node]
-    scale = S[v]
-    if not step_geometry_valid(faces[:nf], new_pos, behind[:nf], nplane[node], 1e-10 * scale * scale,
-                               pr.fold_min_cos, new_edges[:ne], edge_nodes[:ne], pr.angle_margin, P[v],
-                               pr.longest_edge, P, nvert, nnext, nplane, ntheta, alive, n_alive, pr.cell, pr.two):
+    v = st.nvert[node]
+    scale = st.S[v]
+    if not step_geometry_valid(faces, nf, sc.new_pos, behind, st.nplane[node], 1e-10 * scale * scale, pr.fold_min_cos,
+                               new_edges, edge_nodes, ne, pr.angle_margin, st.P[v], pr.longest_edge, st.P, st.nvert,
+                               st.nnext, st.nplane, st.ntheta, st.alive, st.C[N_ALIVE], pr.cell, pr.two):
         return False
     if not ob.has:
         return True
@@ -786,23 +789,16 @@ def _clear_of_obstacles(st, pr, ob, sc, nf, clearance):
 
 
 @njit(cache=True)
-def _advance(st, pr, ob, sc, node):
-    """Apply the angle rule at ``node`` (Sec. 3.2, Step 3) or its first valid fallback; whether one was applied."""
+def _rules(st, pr, node):
+    """The angle rule at ``node`` (Sec. 3.2, Step 3) and the last fallback to try: (first, last), tried downwards."""
     theta, size = st.ntheta[node], st.fsize[st.nfront[node]]
     if size == 3 or theta <= pr.one_max:
-        first, last = 1, 1
-    elif theta <= pr.two_max:
-        first, last = 2, 1
-    elif theta <= pr.fallback_one_max:
-        first, last = 3, 1
-    else:
-        first, last = 3, 2
-    for rule in range(first, last - 1, -1):
-        ok, nf, n_seq = _build(st, pr, sc, node, rule)
-        if ok and _valid(st, pr, ob, sc, node, nf):
-            _apply(st, pr, sc, node, rule, nf, n_seq)
-            return True
-    return False
+        return 1, 1
+    if theta <= pr.two_max:
+        return 2, 1
+    if theta <= pr.fallback_one_max:
+        return 3, 1
+    return 3, 2
 
 
 @njit(cache=True)
@@ -960,7 +956,17 @@ def run_front(st, pr, ob, sc):
                 continue
             return STUCK, size, st
         n_faces, n_topology = C[N_FACES], C[MERGES] + C[SPLITS]
-        if _advance(st, pr, ob, sc, node):
+        # The angle rule at the node or its first valid fallback, here rather than in a function
+        # of its own: a call passing the three tuples costs a reference on each of their arrays.
+        first, last = _rules(st, pr, node)
+        applied = False
+        for rule in range(first, last - 1, -1):
+            ok, nf, n_seq = _build(st, pr, sc, node, rule)
+            if ok and _valid(st, pr, ob, sc, node, nf):
+                _apply(st, pr, sc, node, rule, nf, n_seq)
+                applied = True
+                break
+        if applied:
             C[STEPS] += 1
             if C[MERGES] + C[SPLITS] != n_topology:
                 _release_blocked(st)  # a split relabels a whole front: any refusal may change

@@ -520,10 +520,11 @@ class PythonFront(FrontState):
             positions[-temp - 1] = pos
         behind = [[self.front_edges.get(e) or _NO_NORMAL for e in ((a, b), (b, c), (c, a))] for a, b, c in faces]
         if not step_geometry_valid(
-                np.array(faces, np.int64), positions, np.array(behind), self.na_plane[node], 1e-10 * scale * scale,
-                FOLD_MIN_COS, np.array(new_edges, np.int64).reshape(-1, 2), np.array(edge_nodes, np.int64).reshape(-1, 2),
-                ANGLE_MARGIN, self.Pa[v], self.longest_edge, self.Pa, self.na_vertex, self.na_next, self.na_plane,
-                self.na_theta, self.alive, self.n_alive, self.cell, TWO):
+                np.array(faces, np.int64), len(faces), positions, np.array(behind), self.na_plane[node],
+                1e-10 * scale * scale, FOLD_MIN_COS, np.array(new_edges, np.int64).reshape(-1, 2),
+                np.array(edge_nodes, np.int64).reshape(-1, 2), len(new_edges), ANGLE_MARGIN, self.Pa[v],
+                self.longest_edge, self.Pa, self.na_vertex, self.na_next, self.na_plane, self.na_theta, self.alive,
+                self.n_alive, self.cell, TWO):
             return False
         if self.obstacles is None:
             return True
