@@ -690,12 +690,12 @@ def _build(st, pr, sc, node, rule):
 
 
 @njit(cache=True)
-def _valid(st, pr, ob, sc, node, nf):
+def _valid(st, pr, sc, node, nf):
     """Topological and geometric checks of one step (``advancing_front``, module docstring), in order.
 
     No directed edge twice; an existing edge only as a front edge it consumes; each existing
-    end of a new edge on this front; then :func:`._front_kernels.step_geometry_valid`; then,
-    with obstacles, the clearance of the new vertices and no crossing of a mesh face.
+    end of a new edge on this front; then :func:`._front_kernels.step_geometry_valid`. (With
+    obstacles :func:`_clear_of_obstacles` follows.)
     """
     nfront, vhead, nvnext, nalive = st.nfront, st.vhead, st.nvnext, st.nalive
     ekeys, fkeys, fvals = st.ekeys, st.fkeys, st.fvals
@@ -742,18 +742,16 @@ def _valid(st, pr, ob, sc, node, nf):
                 behind[f, j, i] = fvals[slot, i] if slot >= 0 else np.nan
     v = st.nvert[node]
     scale = st.S[v]
-    if not step_geometry_valid(faces, nf, sc.new_pos, behind, st.nplane[node], 1e-10 * scale * scale, pr.fold_min_cos,
+    return step_geometry_valid(faces, nf, sc.new_pos, behind, st.nplane[node], 1e-10 * scale * scale, pr.fold_min_cos,
                                new_edges, edge_nodes, ne, pr.angle_margin, st.P[v], pr.longest_edge, st.P, st.nvert,
-                               st.nnext, st.nplane, st.ntheta, st.alive, st.C[N_ALIVE], pr.cell, pr.two):
-        return False
-    if not ob.has:
-        return True
-    return _clear_of_obstacles(st, pr, ob, sc, nf, pr.hover * scale)
+                               st.nnext, st.nplane, st.ntheta, st.alive, st.C[N_ALIVE], pr.cell, pr.two)
 
 
 @njit(cache=True)
 def _clear_of_obstacles(st, pr, ob, sc, nf, clearance):
     """New vertices at least ``clearance`` from the surrounding mesh, new triangles crossing none of its faces.
+
+    The last check of a step (after :func:`_valid`); ``clearance`` is ``hover`` times the sizing value at the node.
 
     :meth:`._front_obstacles.FrontObstacles.distance` and ``crossed`` on its arrays.
     """
@@ -962,7 +960,8 @@ def run_front(st, pr, ob, sc):
         applied = False
         for rule in range(first, last - 1, -1):
             ok, nf, n_seq = _build(st, pr, sc, node, rule)
-            if ok and _valid(st, pr, ob, sc, node, nf):
+            if ok and _valid(st, pr, sc, node, nf) and (
+                    not ob.has or _clear_of_obstacles(st, pr, ob, sc, nf, pr.hover * st.S[st.nvert[node]])):
                 _apply(st, pr, sc, node, rule, nf, n_seq)
                 applied = True
                 break
