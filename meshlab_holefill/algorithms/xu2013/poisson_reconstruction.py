@@ -77,10 +77,11 @@ def solve_poisson(X, F, free, rhs, boundary=None, cotangents=None):
     L = normalized_cotangent_laplacian(allX, allF, cotangents=cotangents)
     known = np.ones(len(allX), bool)
     known[free_idx] = False
-    R = np.concatenate([free_idx, rows])
-    A = L[R][:, free_idx].tocsc()
-    B = np.concatenate([rhs, rhs_rows]) - L[R][:, known] @ allX[known]
-    return spla.splu((A.T @ A).tocsc()).solve(A.T @ B)
+    LR = L[np.concatenate([free_idx, rows])]
+    A = LR[:, free_idx].tocsc()
+    B = np.concatenate([rhs, rhs_rows]) - LR[:, known] @ allX[known]
+    At = A.T
+    return spla.splu((At @ A).tocsc()).solve(At @ B)
 
 
 def poisson_reposition(X, F, fixed, regressors=None, iterations=1, update_rhs=False, relax_ctx=None, boundary_ctx=None,
