@@ -6,7 +6,7 @@ triangles sharing an edge, or between a triangle on a loop edge and the mesh fac
 smallest, ties broken by the least area. Where the border is jagged (a border cut through
 triangles, a noisy scan) the mesh faces beside the hole tilt every way, and a triangulation that
 looks at the loop alone folds onto them; bending against them is what this one avoids.
-O(k^3) time and O(k^2) memory for k loop vertices (0.3 s at k = 270).
+O(k^3) time and O(k^2) memory for k loop vertices (0.05-0.2 s at k = 300-500, 1.7 s at k = 1000).
 """
 from __future__ import annotations
 
