@@ -21,6 +21,17 @@ __all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turn
 
 
 @njit(cache=True)
+def _reflected(x, lo, hi):
+    """Eq. 5: a component below ``lo`` reflected about it, then one above ``hi`` about that (kept within the bounds)."""
+    y = x
+    if x < lo:
+        y = min(2.0 * lo - x, hi)
+    if y > hi:
+        y = max(2.0 * hi - y, lo)
+    return y
+
+
+@njit(cache=True)
 def reflect_moved(X, lower, upper):
     """(reflected X, moved): Eq. 5 on X (B, N, n) with bounds (B, n); moved (B, N) bool: any component changed."""
     B, N, n = X.shape
@@ -30,13 +41,7 @@ def reflect_moved(X, lower, upper):
         for i in range(N):
             for j in range(n):
                 x = X[b, i, j]
-                lo = lower[b, j]
-                hi = upper[b, j]
-                y = x
-                if x < lo:
-                    y = min(2.0 * lo - x, hi)
-                if y > hi:
-                    y = max(2.0 * hi - y, lo)
+                y = _reflected(x, lower[b, j], upper[b, j])
                 out[b, i, j] = y
                 if y != x:
                     moved[b, i] = True
@@ -334,13 +339,7 @@ def _take_reflected(X, U, lower, upper, b, i):
     moved = False
     for j in range(X.shape[2]):
         x = U[b, i, j]
-        lo = lower[b, j]
-        hi = upper[b, j]
-        y = x
-        if x < lo:
-            y = min(2.0 * lo - x, hi)
-        if y > hi:
-            y = max(2.0 * hi - y, lo)
+        y = _reflected(x, lower[b, j], upper[b, j])
         X[b, i, j] = y
         moved |= y != x
     return moved
