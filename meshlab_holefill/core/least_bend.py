@@ -2,7 +2,7 @@
 
 Where a hole's border is jagged (cut through triangles, or a noisy scan), the mesh faces on the
 loop edges tilt every way and a patch begun from the loop alone folds onto them; every filter
-then refuses its patch for crossing the mesh. :func:`.geometry.dihedral_triangulation.dihedral_triangulation`
+then refuses its patch for crossing the mesh. :func:`meshlab_holefill.geometry.dihedral_triangulation.dihedral_triangulation`
 (Liepa's weight) starts from the triangulation that bends least against those faces, and where
 some of its triangles still cross the surroundings it is made again without them.
 """
@@ -36,7 +36,7 @@ def least_bend_triangulations(ctx, rounds=ROUNDS):
     F : (k - 2, 3) int64
         Triangles of loop indices, oriented as the loop (patch orientation). The next one comes
         only while the last crossed the surroundings or itself, and some triangulation avoids
-        the triangles banned so far. None for loops longer than :data:`MAX_EDGES`.
+        the triangles banned so far. Nothing for loops longer than :data:`MAX_EDGES`.
     """
     if ctx.size > MAX_EDGES:
         return
