@@ -192,8 +192,10 @@ def _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer
         keeps_orientation = _keeps_orientation(V, a_, b_, c_, d_, normal_cos)
         lo, hi = np.minimum(c, d), np.maximum(c, d)
         new_key = lo * n + hi
-        cur = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        existing = cur[:, 0] * n + cur[:, 1]
+        # Undirected keys of the current edges; min/max of the two columns rather than a row-wise
+        # sort, which numpy runs as one small sort per row.
+        u, w = F.ravel(), F[:, [1, 2, 0]].ravel()
+        existing = np.minimum(u, w) * n + np.maximum(u, w)
         ok_s = passes & keeps_orientation & (c_ != d_) & ~isin_ints(new_key[s], existing)
         if len(fixed):
             old_key = np.minimum(a_, b_) * n + np.maximum(a_, b_)
@@ -223,7 +225,7 @@ def _failing_edges(V, F, a, b, c, d, f1, f2, criterion, scorer):
     Returns
     -------
     inside : (e,) bool  edges failing the test (candidates for a swap)
-    priority : (e,) int64
+    priority : (e,) int64  (for scored criteria, 0 on the edges that pass)
     """
     priority = np.arange(len(a))
     # The remaining tests run only on the edges that fail this one: most edges pass it.
@@ -231,9 +233,13 @@ def _failing_edges(V, F, a, b, c, d, f1, f2, criterion, scorer):
         scores = scorer(V, F[f1], F[f2], np.stack([a, d, c], axis=1), np.stack([b, c, d], axis=1))
         old_s, new_s = scores[:2]
         inside = new_s > old_s + 1e-9
-        order = np.argsort(-(scores[2] if len(scores) > 2 else new_s - old_s), kind="stable")
-        priority = np.empty(len(a), np.int64)
-        priority[order] = np.arange(len(a), 0, -1)
+        # Ranked among the failing edges only (few): only candidates' priorities are compared,
+        # and a stable sort of a subset keeps their order in the sort of all edges.
+        s = np.flatnonzero(inside)
+        gain = scores[2] if len(scores) > 2 else new_s - old_s
+        order = np.argsort(-gain[s], kind="stable")
+        priority = np.zeros(len(a), np.int64)
+        priority[s[order]] = np.arange(len(s), 0, -1)
     elif criterion == "angles":
         inside = _angle_at(V[c], V[a], V[b]) + _angle_at(V[d], V[a], V[b]) > np.pi * (1 + 1e-9)
     else:
