@@ -5,7 +5,7 @@ from hypothesis import given, settings, strategies as st
 
 from meshlab_holefill.geometry.flips import circumcenters, folds, min_angle_scores, relax_edges
 from meshlab_holefill.geometry.quality import corner_angles
-from meshlab_holefill.geometry.topology import interior_edges
+from meshlab_holefill.geometry.topology import interior_edges, vertex_face_runs
 
 
 @settings(max_examples=60, deadline=None)
@@ -328,3 +328,17 @@ def test_folds_judges_only_the_folds_a_step_made(dz, dx):
     Z[4] += [dx, 0.0, dz]
     assert folds(Z, F, fixed) and not folds(Z, F, fixed, before=Y)  # it was folded before the step
     assert folds(Z, F, fixed, before=X)
+
+
+def test_vertex_face_runs_list_the_faces_of_each_vertex_in_face_order():
+    # The incidence lists of the per-hole loops (a repeated corner and an unused vertex included).
+    rng = np.random.default_rng(2)
+    for n in (1, 5, 40):
+        F = rng.integers(0, n, (int(rng.integers(0, 60)), 3))
+        incident = [[] for _ in range(n + 2)]
+        for f, tri in enumerate(F.tolist()):
+            for v in tri:
+                incident[v].append(f)
+        faces, start = vertex_face_runs(F, n + 2)
+        assert start.dtype == faces.dtype == np.int64
+        assert [faces[start[v]:start[v + 1]].tolist() for v in range(n + 2)] == incident

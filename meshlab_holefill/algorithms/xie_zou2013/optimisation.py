@@ -13,7 +13,7 @@ import scipy.sparse as sp
 
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
-from ...geometry.topology import edge_pair_set, interior_edges
+from ...geometry.topology import edge_pair_set, interior_edges, vertex_face_runs
 from ._optimisation_kernels import edge_adjacency, faces_around_edges, independent_link_edges
 
 __all__ = ["split_obtuse_edges", "remove_valence_three", "compact_vertices", "sorted_edges", "adjacency",
@@ -379,10 +379,8 @@ def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5,
     n = len(V)
     if len(F) == 0 or n <= n_fixed:
         return V, 0
-    incident = [[] for _ in range(n)]
-    for f, tri in enumerate(F.tolist()):
-        for v in tri:
-            incident[v].append(f)
+    faces_at, start = vertex_face_runs(F, n)
+    incident = lambda v: faces_at[start[v]:start[v + 1]]  # noqa: E731
     moved = 0
     for _ in range(rounds):
         q = triangle_quality(V, F)
@@ -393,8 +391,8 @@ def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5,
             break
         N = vertex_normals(V, F, n)
         changed = 0
-        for v in verts[np.argsort([q[incident[v]].min() for v in verts])].tolist():
-            faces = np.asarray(incident[v], np.int64)
+        for v in verts[np.argsort([q[incident(v)].min() for v in verts])].tolist():
+            faces = incident(v)
             tri = F[faces]
             nv = N[v] / max(np.linalg.norm(N[v]), 1e-300)
             current = triangle_quality(V, tri).min()

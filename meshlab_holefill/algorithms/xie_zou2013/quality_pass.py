@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...geometry.quality import cross_rows, face_normals, triangle_quality, vertex_normals
-from ...geometry.topology import edge_pair_set
+from ...geometry.topology import edge_pair_set, vertex_face_runs
 from ._quality_pass_kernels import star_candidate_scores
 from .optimisation import compact_vertices
 
@@ -69,10 +69,9 @@ class _Patch:
         self.F = np.array(F, np.int64)
         self.k = k
         self.alive = np.ones(len(self.F), bool)
-        self.inc = [set() for _ in range(len(self.V))]
-        for f, tri in enumerate(self.F.tolist()):
-            for v in tri:
-                self.inc[v].add(f)
+        faces, start = vertex_face_runs(self.F, len(self.V))
+        faces, start = faces.tolist(), start.tolist()  # flat: ints, no row lists
+        self.inc = [set(faces[start[v]:start[v + 1]]) for v in range(len(self.V))]
         self.forbidden = edge_pair_set(forbidden_edges)
         self.border = None if border_normals is None else np.asarray(border_normals, np.float64)
 
