@@ -256,7 +256,9 @@ def candidate_pairs(bounds_q, bounds_a, logs, log4, tol, q, a, n_faces):
     the largest radii to ``RADIUS_BINS - 1``. Each pair of bins bounds the centroid distance by its
     largest radii plus tol, and :func:`box_pairs` keeps the pairs within it whose boxes (query
     boxes grown by tol) overlap, on a grid of cells about the size of a typical face box,
-    doubled while there are far more cells than faces (the cell size changes the time only).
+    doubled while there are more than 32 cells per face (the cell size changes the time only; a patch
+    is a surface, so most cells stay empty: a cap of 8 per face doubled the cells of the largest
+    benchmark patch to twice a typical face box, and its search took 3.7 ms instead of 2.9 ms).
     """
     lo_q, hi_q, cq, rq = bounds_q
     lo_a, hi_a, ca, ra = bounds_a
@@ -289,7 +291,7 @@ def candidate_pairs(bounds_q, bounds_a, logs, log4, tol, q, a, n_faces):
     for j in range(na):
         extent[j] = max(hi_a[j, 0] - lo_a[j, 0], hi_a[j, 1] - lo_a[j, 1], hi_a[j, 2] - lo_a[j, 2])
     cell = max(np.median(extent), span.max() / 4096, np.finfo(np.float64).tiny)
-    while np.prod(np.floor(span / cell) + 1) > 8 * na + 64:
+    while np.prod(np.floor(span / cell) + 1) > 32 * na + 64:
         cell *= 2
     dims = (np.floor(span / cell) + 1).astype(np.int64)
     iq, ja = box_pairs(lo_q - tol, hi_q + tol, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, dims, q, a,
