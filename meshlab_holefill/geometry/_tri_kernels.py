@@ -256,7 +256,9 @@ def candidate_pairs(bounds_q, bounds_a, logs, log4, tol, q, a, n_faces):
     the largest radii to ``RADIUS_BINS - 1``. Each pair of bins bounds the centroid distance by its
     largest radii plus tol, and :func:`box_pairs` keeps the pairs within it whose boxes (query
     boxes grown by tol) overlap, on a grid of cells about the size of a typical face box,
-    doubled while there are far more cells than faces (the cell size changes the time only).
+    doubled while there are more than 32 cells per face (the cell size changes the time only; a patch
+    is a surface, so most cells stay empty: a cap of 8 per face doubled the cells of the largest
+    benchmark patch to twice a typical face box, and its search took 3.7 ms instead of 2.9 ms).
     """
     lo_q, hi_q, cq, rq = bounds_q
     lo_a, hi_a, ca, ra = bounds_a
@@ -289,7 +291,7 @@ def candidate_pairs(bounds_q, bounds_a, logs, log4, tol, q, a, n_faces):
     for j in range(na):
         extent[j] = max(hi_a[j, 0] - lo_a[j, 0], hi_a[j, 1] - lo_a[j, 1], hi_a[j, 2] - lo_a[j, 2])
     cell = max(np.median(extent), span.max() / 4096, np.finfo(np.float64).tiny)
-    while np.prod(np.floor(span / cell) + 1) > 8 * na + 64:
+    while np.prod(np.floor(span / cell) + 1) > 32 * na + 64:
         cell *= 2
     dims = (np.floor(span / cell) + 1).astype(np.int64)
     iq, ja = box_pairs(lo_q - tol, hi_q + tol, lo_a, hi_a, cq, ca, bin_q, bin_a, ub2, origin, cell, dims, q, a,
@@ -466,7 +468,7 @@ def _face_normals(V, F, I, J, tol):
     return slot, N, deg
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _ensure_frame(frame, done, t, T0, T1, T2, nt):
     """Fill row t of `frame` with the clipping frame of T0T1T2 on its first use."""
     if not done[t]:
@@ -481,7 +483,7 @@ def _frame_row(frame, t, k):
     return (frame[t, 3 * k], frame[t, 3 * k + 1], frame[t, 3 * k + 2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _slab(h0, h1, tol):
     """The slab's two constraints of intersections._clip for a segment with heights h0, h1: (ok, t0, t1).
 
@@ -496,7 +498,7 @@ def _slab(h0, h1, tol):
     return ok, t0, t1
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _clip_edges(P0, P1, Tt, frame, ft, grow, ok, t0, t1):
     """The rest of intersections._clip after :func:`_slab`: per target edge its edge normal's and
     its bisector's constraint (frame row ft), in its order, stopping at the first one negative
@@ -511,11 +513,28 @@ def _clip_edges(P0, P1, Tt, frame, ft, grow, ok, t0, t1):
     return ok, t0, t1
 
 
-@njit(cache=True)
-def _edges_meet(S0, S1, S2, T0, T1, T2, d, frame, done, ft, nt, shs, degs, degt, one, S, tol):
+@njit(cache=True, inline='always')
+def _inside_corner(P0, P1, Tt, frame, ft, grow, c):
+    """False when segment P0P1 lies wholly behind the bisector constraint of target corner c, one of
+    the constraints :func:`_clip_edges` tests (same operands, same operations): it then rejects the
+    segment too, whatever the order. Faces sharing only the vertex at corner c lie around it, so
+    the edge opposite it nearly always fails this one first (narrow phase of the largest
+    benchmark patch: 4.3 -> 4.1 ms)."""
+    d = _frame_row(frame, ft, 3 + c)
+    a = Tt[c]
+    c0, c1 = _dot(_sub(P0, a), d) + grow, _dot(_sub(P1, a), d) + grow
+    return c0 >= 0 or c1 >= 0
+
+
+@njit(cache=True, inline='always')
+def _edges_meet(S0, S1, S2, T0, T1, T2, d, frame, done, ft, nt, shs, degs, degt, one, S, ct, tol):
     """intersections._edges_meet for one pair: some edge of triangle S0S1S2 meets T0T1T2
     (unit normal nt; its clipping frame is row ft of `frame`, filled on first use, see
-    :func:`_ensure_frame`; d: S's :func:`_heights` above T)."""
+    :func:`_ensure_frame`; d: S's :func:`_heights` above T; ct: T's corner at the shared vertex
+    when ``one``, whose bisector is tried first, see :func:`_inside_corner`).
+
+    Inlined with the helpers it calls into :func:`narrow_codes` (numba's inliner: the same
+    operations, without the calls and their tuple arguments: 4.1 -> 3.0 ms on that patch)."""
     if degt:
         return False
     Ts = (S0, S1, S2)
@@ -531,6 +550,8 @@ def _edges_meet(S0, S1, S2, T0, T1, T2, d, frame, done, ft, nt, shs, degs, degt,
             continue
         _ensure_frame(frame, done, ft, T0, T1, T2, nt)
         grow = 0.0 if (one and degs) else tol
+        if one and not _inside_corner(P0, P1, Tt, frame, ft, grow, ct):
+            continue
         ok, t0, t1 = _clip_edges(P0, P1, Tt, frame, ft, grow, ok, t0, t1)
         if not (ok and t0 <= t1):
             continue
@@ -605,8 +626,9 @@ def narrow_codes(V, F, canon, I, J, in_q, in_a, tol):
         else:
             one = nsh == 1
             s = 0 if sh1[0] else (1 if sh1[1] else (2 if sh1[2] else 0))  # argmax of sh1
+            s2 = 0 if sh2[0] else (1 if sh2[1] else (2 if sh2[2] else 0))
             S = A0 if s == 0 else (A1 if s == 1 else A2)
-            if (_edges_meet(A0, A1, A2, B0, B1, B2, dA, frame, done, sj, n2, sh1, deg1, deg2, one, S, tol)
-                    or _edges_meet(B0, B1, B2, A0, A1, A2, dB, frame, done, si, n1, sh2, deg2, deg1, one, S, tol)):
+            if (_edges_meet(A0, A1, A2, B0, B1, B2, dA, frame, done, sj, n2, sh1, deg1, deg2, one, S, s2, tol)
+                    or _edges_meet(B0, B1, B2, A0, A1, A2, dB, frame, done, si, n1, sh2, deg2, deg1, one, S, s, tol)):
                 code[p] = HIT
     return code, fy, fx

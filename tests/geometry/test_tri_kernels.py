@@ -249,3 +249,40 @@ def test_fan_pairs_sharing_one_vertex_equal_numpy(jitter):
     straddles = _far_edge_straddles(V, F, i, j, 1e-9)
     assert straddles.any() and not straddles.all()
     assert ref.any() == (jitter == 0.5)
+
+
+def _behind_shared_bisector(V, F, i, j):
+    """Per pair (i, j) sharing one vertex: face i's edge opposite it lies wholly behind face j's corner
+    bisector there (the constraint the narrow phase tries first for such pairs)."""
+    out = np.zeros(len(i), bool)
+    for p, (a, b) in enumerate(zip(i, j)):
+        s = next(v for v in F[a] if v in F[b])
+        far = [v for v in F[a] if v != s]
+        c = list(F[b]).index(s)
+        e1, e2 = V[F[b][(c + 1) % 3]] - V[s], V[F[b][(c + 2) % 3]] - V[s]
+        u = e1 / np.linalg.norm(e1) + e2 / np.linalg.norm(e2)
+        out[p] = all((V[v] - V[s]) @ u < 0 for v in far)
+    return out
+
+
+@pytest.mark.parametrize("lift", [0.0, 0.3])
+def test_shared_corner_bisector_first_equals_numpy(lift):
+    """Pairs of a jittered fan sharing only its centre, a second fan's faces reaching across the first:
+    the far edge crosses the other face's plane behind the shared corner (the bisector rejects it
+    first) or in front of it (the other constraints decide), the same verdicts as the numpy code."""
+    rng = np.random.default_rng(7)
+    angles = np.sort(rng.uniform(0, 2 * np.pi, 30))
+    rim = np.stack([np.cos(angles), np.sin(angles), 0.5 * rng.normal(size=30)], axis=1)
+    over = np.stack([np.cos(angles[::2] + 2.0), np.sin(angles[::2] + 2.0), lift + rng.normal(size=15)], axis=1)
+    V = np.concatenate([np.zeros((1, 3)), rim, over])
+    F = np.array([[0, 1 + t, 1 + (t + 1) % 30] for t in range(30)] + [[0, 31 + t, 32 + t] for t in range(14)])
+    i, j = (x.ravel() for x in np.meshgrid(np.arange(len(F)), np.arange(len(F))))
+    shared = (F[i][:, :, None] == F[j][:, None, :]).any(2).sum(1)
+    i, j = i[shared == 1], j[shared == 1]
+    in_all = np.ones(len(F), bool)
+    canon = np.arange(len(V))
+    ref = _reference_codes(V, F, canon, i, j, in_all, in_all, 1e-9, 1e-3)
+    assert np.array_equal(_kernel_hits(V, F, canon, i, j, in_all, in_all, 1e-9, 1e-3), ref)
+    straddles = _far_edge_straddles(V, F, i, j, 1e-9)
+    behind = _behind_shared_bisector(V, F, i, j)
+    assert (straddles & behind).any() and (straddles & ~behind).any() and ref.any()
