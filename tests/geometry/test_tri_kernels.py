@@ -239,16 +239,27 @@ def test_fan_pairs_sharing_one_vertex_equal_numpy(jitter):
     rim = np.stack([np.cos(angles), np.sin(angles), jitter * rng.normal(size=24)], axis=1)
     V = np.concatenate([np.zeros((1, 3)), rim, rim[::3] * 0.9 + [0.0, 0.0, 0.2]])
     F = np.array([[0, 1 + t, 1 + (t + 1) % 24] for t in range(24)] + [[0, 25 + t, 26 + t] for t in range(7)])
+    i, j = _pairs_sharing_one_vertex(F)
+    ref = _kernel_agrees_with_numpy(V, F, i, j)
+    straddles = _far_edge_straddles(V, F, i, j, 1e-9)
+    assert straddles.any() and not straddles.all()
+    assert ref.any() == (jitter == 0.5)
+
+
+def _pairs_sharing_one_vertex(F):
+    """(i, j): every ordered pair of faces of F that share exactly one vertex."""
     i, j = (x.ravel() for x in np.meshgrid(np.arange(len(F)), np.arange(len(F))))
     shared = (F[i][:, :, None] == F[j][:, None, :]).any(2).sum(1)
-    i, j = i[shared == 1], j[shared == 1]
+    return i[shared == 1], j[shared == 1]
+
+
+def _kernel_agrees_with_numpy(V, F, i, j):
+    """The compiled narrow phase's verdicts on pairs (i, j) equal the numpy reference's; those verdicts."""
     in_all = np.ones(len(F), bool)
     canon = np.arange(len(V))
     ref = _reference_codes(V, F, canon, i, j, in_all, in_all, 1e-9, 1e-3)
     assert np.array_equal(_kernel_hits(V, F, canon, i, j, in_all, in_all, 1e-9, 1e-3), ref)
-    straddles = _far_edge_straddles(V, F, i, j, 1e-9)
-    assert straddles.any() and not straddles.all()
-    assert ref.any() == (jitter == 0.5)
+    return ref
 
 
 def _behind_shared_bisector(V, F, i, j):
@@ -276,13 +287,8 @@ def test_shared_corner_bisector_first_equals_numpy(lift):
     over = np.stack([np.cos(angles[::2] + 2.0), np.sin(angles[::2] + 2.0), lift + rng.normal(size=15)], axis=1)
     V = np.concatenate([np.zeros((1, 3)), rim, over])
     F = np.array([[0, 1 + t, 1 + (t + 1) % 30] for t in range(30)] + [[0, 31 + t, 32 + t] for t in range(14)])
-    i, j = (x.ravel() for x in np.meshgrid(np.arange(len(F)), np.arange(len(F))))
-    shared = (F[i][:, :, None] == F[j][:, None, :]).any(2).sum(1)
-    i, j = i[shared == 1], j[shared == 1]
-    in_all = np.ones(len(F), bool)
-    canon = np.arange(len(V))
-    ref = _reference_codes(V, F, canon, i, j, in_all, in_all, 1e-9, 1e-3)
-    assert np.array_equal(_kernel_hits(V, F, canon, i, j, in_all, in_all, 1e-9, 1e-3), ref)
+    i, j = _pairs_sharing_one_vertex(F)
+    ref = _kernel_agrees_with_numpy(V, F, i, j)
     straddles = _far_edge_straddles(V, F, i, j, 1e-9)
     behind = _behind_shared_bisector(V, F, i, j)
     assert (straddles & behind).any() and (straddles & ~behind).any() and ref.any()
