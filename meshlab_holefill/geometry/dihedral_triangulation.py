@@ -39,6 +39,8 @@ def dihedral_triangulation(P, border_normals, forbidden_edges=(), banned=()):
 
     Raises
     ------
+    ValueError
+        When P or border_normals is not (k, 3).
     HoleFillError
         When the loop has fewer than 3 vertices or no triangulation avoids the forbidden edges
         and banned triangles.
@@ -61,6 +63,8 @@ def dihedral_triangulation(P, border_normals, forbidden_edges=(), banned=()):
     k = len(P)
     if k < 3:
         raise HoleFillError("a loop of fewer than 3 vertices cannot be triangulated")
+    if P.shape != (k, 3) or np.shape(border_normals) != (k, 3):
+        raise ValueError(f"P and border_normals must be ({k}, 3), got {P.shape} and {np.shape(border_normals)}")
     forbidden = np.zeros((k, k), bool)
     pairs = np.asarray(forbidden_edges, np.int64).reshape(-1, 2)
     forbidden[pairs[:, 0], pairs[:, 1]] = forbidden[pairs[:, 1], pairs[:, 0]] = True

@@ -6,8 +6,17 @@ import scipy.sparse as sp
 
 from ._flip_kernels import _interior_edges as _interior_edge_table
 
-__all__ = ["interior_edges", "interior_edges_numpy", "one_ring_matrix", "undirected_keys", "edge_pair_set",
+__all__ = ["boundary_edges_and_chords", "interior_edges", "interior_edges_numpy", "one_ring_matrix", "undirected_keys", "edge_pair_set",
            "face_adjacency", "vertex_face_runs"]
+
+
+def boundary_edges_and_chords(k, forbidden_edges):
+    """(k + p, 2) int64: a hole loop's edges (i, i + 1) and the boundary pairs already joined by the mesh.
+
+    The edges of a patch no swap may touch, in loop indices.
+    """
+    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
+    return np.concatenate([loop_edges, np.asarray(forbidden_edges, np.int64).reshape(-1, 2)])
 
 
 def interior_edges(F, n):

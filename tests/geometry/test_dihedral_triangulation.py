@@ -95,6 +95,8 @@ def test_no_triangulation_is_refused_by_name():
         dihedral_triangulation(P, B, forbidden_edges=[(0, 2), (1, 3)])
     with pytest.raises(HoleFillError, match="fewer than 3 vertices"):
         dihedral_triangulation(P[:2], B[:2])
+    with pytest.raises(ValueError, match=r"border_normals must be \(4, 3\), got \(4, 3\) and \(3, 3\)"):
+        dihedral_triangulation(P, B[:3])
 
 
 def test_the_examples_run():

@@ -61,6 +61,7 @@ import numpy as np
 from ...geometry.quality import edge_lengths
 from ...geometry.development import boundary_gap_angles
 from ...geometry.refine import refine_patch
+from ...geometry.topology import boundary_edges_and_chords
 from ...core import examples
 from ...core.holes import hole_context
 from ...core.least_bend import least_bend_triangulations
@@ -311,11 +312,10 @@ def _least_bend_patches(ctx, energy, tangential):
     ------
     (vertices (p, 3) float64, faces (q, 3) int64)  as a Patch holds them
     """
-    k = ctx.size
-    fixed = np.concatenate([np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1), ctx.forbidden_edges.reshape(-1, 2)])
+    fixed = boundary_edges_and_chords(ctx.size, ctx.forbidden_edges)
     for triangles in least_bend_triangulations(ctx):
         X, faces, _, _ = refine_patch(ctx.points, triangles, ctx.edge_scale, fixed_edges=fixed)
-        yield embed_patch(ctx, len(X) - k, faces, energy, tangential=tangential), faces
+        yield embed_patch(ctx, len(X) - ctx.size, faces, energy, tangential=tangential), faces
 
 
 def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,

@@ -55,6 +55,7 @@ from .fairing import fair_patch_in_context
 from ...geometry.flips import relax_edges
 from ...geometry.refine import refine_patch
 from ...geometry.segments import polygon_edges_touch
+from ...geometry.topology import boundary_edges_and_chords
 from .hole_guards import LoopSectors, patch_crossings, patch_guard, relax_in_sectors, swaps_crossing
 from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
@@ -432,8 +433,7 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
     t0 = time.perf_counter()
     F0 = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges) if initial is None else initial
     t1 = time.perf_counter()
-    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
-    fixed = np.concatenate([loop_edges, ctx.forbidden_edges.reshape(-1, 2)])
+    fixed = boundary_edges_and_chords(k, ctx.forbidden_edges)
     V, F, scale, info = _refine(ctx, F0, alpha, fixed, criterion=relaxation)
     t2 = time.perf_counter()
     interior = np.arange(len(V)) >= k

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["reflect_moved", "trial_vectors", "mutate_crossover", "select", "turning_terms", "trial_changed_terms",
-           "trial_changed_terms_into", "select_variation", "reflect_gather_terms", "select_reflect_terms",
+           "trial_changed_terms_into", "select_reflect_terms",
            "renew_variation", "masked_row_sums", "changed_masked_row_sums"]
 
 
@@ -259,62 +259,25 @@ def _variation(square_sum, total, count):
 
 
 @njit(cache=True)
-def select_variation(X, fX, U, square_sum, total, count, active, angles, trial_angles):
-    """Eq. 4 in place with f(U) from its turning-angle sums (:func:`_variation`; count (B,) angles per problem).
-
-    Where U[b, i] is taken, its turning angles trial_angles[b, i] replace angles[b, i] too.
-    """
-    B, N, n = X.shape
-    for b in range(B):
-        for i in range(N):
-            if active[b, i]:
-                f = _variation(square_sum[b, i], total[b, i], count[b])
-                if f <= fX[b, i]:
-                    fX[b, i] = f
-                    for j in range(n):
-                        X[b, i, j] = U[b, i, j]
-                    angles[b, i] = trial_angles[b, i]
-
-
-@njit(cache=True)
-def reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add):
-    """Eq. 5 on X and the turning terms of the active individuals it moved, gathered per problem.
-
-    Returns
-    -------
-    Xr : (B, N, n) reflected X
-    order : (B, K) int64  per problem the moved rows first, then the others (both ascending: a
-        stable argsort of ~moved), K = the largest number moved
-    counts : (B,) int64  rows moved
-    cross, dot : (B, K, n + 2) turning terms of Xr[b, order[b]]
-    """
-    Xr, moved = reflect_moved(X, lower, upper)
-    B, N, n = X.shape
-    counts = np.zeros(B, np.int64)
-    for b in range(B):
-        for i in range(N):
-            moved[b, i] = moved[b, i] and active[b, i]
-            if moved[b, i]:
-                counts[b] += 1
-    order, G = _gather_moved(Xr, moved, counts)
-    cross, dot = turning_terms(G, seg_x, seg_y_add)
-    return Xr, order, counts, cross, dot
-
-
-@njit(cache=True)
 def select_reflect_terms(X, fX, U, square_sum, total, count, active, angles, trial_angles, lower, upper, seg_x,
                          seg_y_add):
-    """:func:`select_variation` then :func:`reflect_gather_terms`, with X reflected in place.
+    """Eq. 4 in place with f(U) from its turning-angle sums, then Eq. 5 and the turning terms of what it moved.
 
+    Selection: where the active trial U[b, i] is no worse (f from :func:`_variation`, count (B,)
+    angles per problem), it replaces X[b, i], its f and its turning angles (trial_angles[b, i]).
     Every individual of X is inside the bounds after a generation (Eq. 5 maps into [l, u]), so
     only the trials just taken can have moved: the reflection (Eq. 5, as :func:`reflect_moved`)
     runs on their rows alone, and the rows that keep their parent stay as they are, which is
-    what reflecting them gives. The same X, fX, angles and the same (order, counts, cross, dot)
-    as the two kernels, without their pass over the whole population.
+    what reflecting them gives.
 
     Returns
     -------
-    order, counts, cross, dot : as :func:`reflect_gather_terms`
+    order : (B, K) int64
+        Per problem the reflected rows first, then the others (both ascending), K = the largest count.
+    counts : (B,) int64
+        Rows the reflection moved.
+    cross, dot : (B, K, n + 2)
+        Turning terms of X[b, order[b]] after the reflection.
     """
     B, N, n = X.shape
     moved = np.zeros((B, N), np.bool_)

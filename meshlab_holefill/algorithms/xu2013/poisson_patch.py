@@ -24,6 +24,7 @@ from ...geometry.laplacian import (cotangent_laplacian, cotangent_weights, tange
 from ...geometry.quality import triangle_quality, unique_edges
 from ...geometry.refine import refine_patch
 from ...geometry.segments import polygon_edges_touch
+from ...geometry.topology import boundary_edges_and_chords
 from ...errors import HoleFillError
 
 __all__ = ["normalized_cotangent_laplacian", "reference_normals", "planar_boundaries", "harmonic_lift",
@@ -379,12 +380,6 @@ def relax_patch(X, F, ctx):
     if len(F) < 2:
         return F, 0
     return relax_edges(X, F, _fixed_edges(ctx), allowed=_ear_guard(ctx.size))
-
-
-def boundary_edges_and_chords(k, forbidden_edges):
-    """(k + p, 2) int64: the loop's edges (i, i + 1) and the boundary pairs already joined by the mesh."""
-    loop_edges = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)
-    return np.concatenate([loop_edges, np.asarray(forbidden_edges, np.int64).reshape(-1, 2)])
 
 
 def _fixed_edges(ctx):

@@ -14,6 +14,47 @@ def _problem(rng, B=3, N=7, n=5):
     return X, lower, upper
 
 
+def select_variation(X, fX, U, square_sum, total, count, active, angles, trial_angles):
+    """Reference (plain Python over the kernels' helpers): Eq. 4 in place with f(U) from its turning-angle sums (:func:`_variation`; count (B,) angles per problem).
+
+    Where U[b, i] is taken, its turning angles trial_angles[b, i] replace angles[b, i] too.
+    """
+    B, N, n = X.shape
+    for b in range(B):
+        for i in range(N):
+            if active[b, i]:
+                f = K._variation(square_sum[b, i], total[b, i], count[b])
+                if f <= fX[b, i]:
+                    fX[b, i] = f
+                    for j in range(n):
+                        X[b, i, j] = U[b, i, j]
+                    angles[b, i] = trial_angles[b, i]
+
+
+def reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add):
+    """Reference: Eq. 5 on X and the turning terms of the active individuals it moved, gathered per problem.
+
+    Returns
+    -------
+    Xr : (B, N, n) reflected X
+    order : (B, K) int64  per problem the moved rows first, then the others (both ascending: a
+        stable argsort of ~moved), K = the largest number moved
+    counts : (B,) int64  rows moved
+    cross, dot : (B, K, n + 2) turning terms of Xr[b, order[b]]
+    """
+    Xr, moved = K.reflect_moved(X, lower, upper)
+    B, N, n = X.shape
+    counts = np.zeros(B, np.int64)
+    for b in range(B):
+        for i in range(N):
+            moved[b, i] = moved[b, i] and active[b, i]
+            if moved[b, i]:
+                counts[b] += 1
+    order, G = K._gather_moved(Xr, moved, counts)
+    cross, dot = K.turning_terms(G, seg_x, seg_y_add)
+    return Xr, order, counts, cross, dot
+
+
 def test_reflect_moved_equals_numpy():
     rng = np.random.default_rng(1)
     X, lower, upper = _problem(rng)
@@ -253,14 +294,14 @@ def _assert_fused_equals_generic(problem):
         assert generic[0].tobytes() == fused[0].tobytes() and generic[1].tobytes() == fused[1].tobytes()
 
 
-def test_reflect_gather_terms_orders_moved_rows_first():
+def test_the_reference_reflection_orders_moved_rows_first():
     rng = np.random.default_rng(12)
     X, lower, upper = _problem(rng, B=3, N=8, n=4)
     active = np.ones((3, 8), bool)
     active[2, 5:] = False
     seg_x = rng.normal(size=(3, 7))
     seg_y_add = rng.normal(size=(3, 7))
-    Xr, order, counts, cross, dot = K.reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add)
+    Xr, order, counts, cross, dot = reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add)
     ref = reflect_into_bounds(X, lower, upper)
     moved = np.any(ref != X, axis=2) & active
     assert Xr.tobytes() == ref.tobytes() and np.array_equal(counts, moved.sum(axis=1))
@@ -299,14 +340,14 @@ def test_select_reflect_terms_equal_select_then_reflect_gather():
     fX0[1, 2] = K._variation(square_sum[1, 2], total[1, 2], count[1])  # ties select the trial
     angles0, trial_angles = rng.normal(size=(3, 8, 6)), rng.normal(size=(3, 8, 6))
     X, fX, angles = X0.copy(), fX0.copy(), angles0.copy()
-    K.select_variation(X, fX, U, square_sum, total, count, active, angles, trial_angles)
-    Xr, *want = K.reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add)
+    select_variation(X, fX, U, square_sum, total, count, active, angles, trial_angles)
+    Xr, *want = reflect_gather_terms(X, lower, upper, active, seg_x, seg_y_add)
     X, fX, angles = X0.copy(), fX0.copy(), angles0.copy()
     got = K.select_reflect_terms(X, fX, U, square_sum, total, count, active, angles, trial_angles, lower, upper,
                                  seg_x, seg_y_add)
     assert 0 < got[1].sum() < active.sum()
     assert X.tobytes() == Xr.tobytes() and all(g.tobytes() == w.tobytes() for g, w in zip(got, want))
-    K.select_variation(X0, fX0, U, square_sum, total, count, active, angles0, trial_angles)
+    select_variation(X0, fX0, U, square_sum, total, count, active, angles0, trial_angles)
     assert fX.tobytes() == fX0.tobytes() and angles.tobytes() == angles0.tobytes()
 
 

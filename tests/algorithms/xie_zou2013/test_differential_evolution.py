@@ -1316,7 +1316,7 @@ def test_warm_up_loads_every_kernel_a_fill_calls():
 
     differential_evolution.warm_up()
     assert differential_evolution.WARM_UP is differential_evolution.warm_up
-    kernels = [_de_kernels.trial_changed_terms_into, _de_kernels.select_variation, _de_kernels.reflect_gather_terms,
+    kernels = [_de_kernels.trial_changed_terms_into, _de_kernels.select_reflect_terms,
                _de_kernels.renew_variation, _de_kernels.masked_row_sums, _de_kernels.turning_terms,
                _optimisation_kernels.edge_adjacency, _optimisation_kernels.faces_around_edges,
                _optimisation_kernels.independent_link_edges, _quality_pass_kernels.star_candidate_scores,
