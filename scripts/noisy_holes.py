@@ -60,8 +60,11 @@ def main(argv=None):
         mean = np.mean([r["dist_patch_to_gt_mean_permille"] for r in closed]) if closed else float("nan")
         q_min = min((r["quality_min"] for r in closed), default=float("nan"))
         crossing = sum(r.get("intersecting_new_faces") or 0 for r in closed)
+        seconds = [r.get("seconds") or 0.0 for r in rows]
+        slowest = rows[int(np.argmax(seconds))]
         print(f"{filler} sigma {sigma}: {len(closed)}/{len(rows)} closed, patch->GT mean {mean:.3f} per mille, "
-              f"quality min {q_min:.3f}, {crossing} new faces crossing the mesh")
+              f"quality min {q_min:.3f}, {crossing} new faces crossing the mesh, {sum(seconds):.2f} s, slowest hole "
+              f"{max(seconds):.2f} s ({slowest['case']} hole {slowest['hole']}, {slowest['boundary_edges']} edges)")
         for r in rows:
             if not r["closed"]:
                 print(f"    not closed: {r['case']} hole {r['hole']} ({r['boundary_edges']} edges): {r.get('reason')}")

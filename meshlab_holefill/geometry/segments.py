@@ -232,7 +232,39 @@ def is_simple_polygon(Q, eps, near=None):
     if len(Q) == 3:
         a, b, c = Q[:, :2]
         return abs(float((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))) > eps * eps
-    return min_segment_distance(Q, near) > eps
+    if len(Q) < 3 or Q.ndim != 2 or not np.isfinite(eps):
+        return min_segment_distance(Q, near) > eps
+    P = np.ascontiguousarray(Q)
+    return bool(_clearance_above(P, np.ascontiguousarray(np.roll(P, -1, axis=0)), float(eps),
+                                 np.inf if near is None else float(near)))
+
+
+@njit(cache=True)
+def _clearance_above(P, Q, eps, near):
+    """Every pair of non-adjacent segments [P_i, Q_i] farther apart than eps (the answer of
+    ``min_segment_distance(P, near) > eps``), stopping at the first pair that is not.
+
+    A pair is measured exactly (:func:`_segment_distance`, the same numbers the matrix holds)
+    unless its bounding-sphere bound already exceeds ``near`` (the matrix then holds the bound,
+    above eps) or exceeds 2 eps plus a relative margin (the exact distance, never below the
+    bound by more than rounding, is then above eps too).
+    """
+    m = P.shape[0]
+    c = 0.5 * (P + Q)
+    r = np.empty(m)
+    for i in range(m):
+        r[i] = 0.5 * math.sqrt(_square_sum(Q, i, P, i))
+    for i in range(m):
+        for j in range(i + 2, m):
+            if i == 0 and j == m - 1:
+                continue
+            bound = math.sqrt(_square_sum(c, i, c, j)) - r[i] - r[j]
+            if bound > near or bound > 2.0 * eps + 1e-9 * (r[i] + r[j]):
+                continue
+            # Both orders: the matrix holds both, and they may differ in the last bit.
+            if not (_segment_distance(P, Q, P, Q, i, j) > eps and _segment_distance(P, Q, P, Q, j, i) > eps):
+                return False
+    return True
 
 
 def polygon_edges_touch(P):

@@ -188,3 +188,17 @@ def test_segment_distance_matrix_equals_the_numpy_formulas_bit_for_bit():
         near = float(rng.choice([0.1, 1.0]))
         np.testing.assert_array_equal(segment_distance_matrix(P, near),
                                       _numpy_distance_rows(P, Q, P, Q, nonadjacent_mask(m), near))
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.integers(4, 40), st.floats(0.0, 0.3), st.floats(0.0, 0.6), st.booleans(), st.integers(0, 2**31 - 1))
+def test_is_simple_polygon_stops_early_with_the_answer_of_the_full_matrix(m, noise, eps, with_near, seed):
+    """The compiled early-exit test gives the answer of ``min_segment_distance(Q, near) > eps``
+    (the full distance matrix) on jittered circles, simple or not, with and without ``near``."""
+    from meshlab_holefill.geometry.segments import min_segment_distance
+
+    rng = np.random.default_rng(seed)
+    angle = np.sort(rng.uniform(0, 2 * np.pi, m))
+    Q = np.stack([np.cos(angle), np.sin(angle)], axis=1) + rng.normal(0, noise, (m, 2))
+    near = eps + 0.2 if with_near else None
+    assert is_simple_polygon(Q, eps, near) is bool(min_segment_distance(Q, near) > eps)

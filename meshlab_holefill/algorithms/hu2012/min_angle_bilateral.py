@@ -445,17 +445,21 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
         # Swaps can fold a patch through a strongly curved border or onto itself: redo the
         # refinement with every swap checked for intersections, and as a last resort without
         # swaps (centroid splits alone never create an intersection).
+        refined = False
         for mode, guard in (("guarded", patch_guard(ctx, check_intersections=True)),
                             ("splits only", lambda V, F, A, B, r: np.zeros(len(A), bool))):
             if not _crosses(ctx, V, F) or _crosses(ctx, ctx.points, F0):
                 break
             V, F, scale, info2 = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
                                               allowed=guard, criterion=relaxation)
+            refined = True
             info.update(info2, refinement=mode)
         interior = np.arange(len(V)) >= k
         # The filter moves vertices along their normals; on a large, nearly flat patch that
         # can fold it. Use as many iterations as keep it free of intersections.
         for n_iter in range(iterations, -1, -1):
+            if n_iter == iterations and not refined:
+                continue  # the same refinement and iterations: (Vb, Fb), which crosses
             Vb, Fb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, n_iter, **opt)
             if n_iter == 0 or not _crosses(ctx, Vb, Fb):
                 break
