@@ -206,6 +206,8 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
         if case.removed is not None:
             kind = "given holes"
             removed = np.flatnonzero(np.asarray(case.removed, bool))
+            if not len(removed):
+                raise ValueError(f"case '{case.name}': removed marks no face, so it has no hole to fill")
             _, label = connected_components(face_adjacency(F[removed]), directed=False)
             groups = [removed[label == c] for c in np.unique(label)]
             specs = [(case.given_class, "given", None) for _ in groups]

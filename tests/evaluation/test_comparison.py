@@ -26,6 +26,12 @@ def test_prepared_ground_truth_closes_the_mesh():
         assert not np.isin(he, hole.loop).all(axis=1).any()  # the ground truth closes its hole exactly
 
 
+def test_given_holes_that_remove_nothing_are_refused_by_name():
+    V, F = sphere(2)
+    with pytest.raises(ValueError, match="case 'empty': removed marks no face"):
+        prepare_case(MeshCase("empty", V, F, removed=np.zeros(len(F), bool)))
+
+
 def test_parse_fillers():
     fillers = parse_fillers("min_angle_bilateral:iterations=2:fairing=none,meshing_close_holes:maxholesize=all,"
                             "refinehole=true")
