@@ -1,8 +1,8 @@
 """Compiled kernels of the advancing front's per-step tests (numba).
 
-The checks of one step (called by :func:`._front_loop._valid`), the merge-target search of
+The checks of one step (called by :func:`._front_step._valid`), the merge-target search of
 Step 4, the release of refused nodes and the obstacle tests, over the arrays of the front's
-state (:mod:`._front_loop`). Each does the IEEE operations of the
+state (:mod:`._front_state`). Each does the IEEE operations of the
 Python predicates it replaces (:mod:`._front_predicates`, kept as their reference) in the same
 order, without fastmath, so the front takes the same decisions in the same order
 (tests/algorithms/xu2013/test_front_compiled.py and test_front_kernels.py compare them).
@@ -69,7 +69,7 @@ def min_point_triangle_distance(x, V, F, cand, radius):
 
 
 # ---------------------------------------------------------------------------------------------
-# The per-step tests of the front over the arrays of its state (see _front_loop.FrontArrays):
+# The per-step tests of the front over the arrays of its state (see _front_state.FrontArrays):
 # positions P (n, 3), per node its vertex, next node and front label, and the list of alive
 # nodes. Each kernel does the IEEE operations of the Python code it replaces in the same
 # order; squares are ``x ** two`` with the exponent 2.0 passed at run time, so that they go
@@ -403,7 +403,7 @@ def _coords(x, new_pos, P):
 @njit(cache=True)
 def step_geometry_valid(faces, nf, new_pos, behind, m, tiny, fold_min_cos, edge_ids, edge_nodes, ne, angle_margin, V,
                         longest_edge, P, node_vertex, node_next, node_plane, node_theta, alive, n_alive, cell, two):
-    """The geometric checks of one step (:func:`._front_loop._valid`, before the obstacles).
+    """The geometric checks of one step (:func:`._front_step._valid`, before the obstacles).
 
     Each new triangle of the first nf rows of ``faces`` (vertex ids, temporary ids for
     ``new_pos``) faces the way of m by more than ``tiny`` and does not fold onto the triangle

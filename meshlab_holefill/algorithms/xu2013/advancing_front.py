@@ -14,7 +14,7 @@ the same front is merged with it (Step 4): with one of v's two neighbours the st
 to the rule with one vertex less, with any other vertex the front is split in two there. The
 front is updated (Step 5) and the steps repeat until every front is closed (Step 6). Fronts
 are cyclic linked lists of nodes (a vertex may be on two fronts after a split); a heap keeps
-the angles (:mod:`._front_loop`).
+the angles (:mod:`._front_state`).
 
 What the paper leaves open, as chosen here:
 
@@ -48,9 +48,10 @@ past 1.3 times the boundary's vertex count plus 20 or a new vertex lies outside 
 (``LEAVE_RADIUS``; either way the front has left the hole: it runs over the surrounding surface
 or out of a hole wrapped around a tube), or past a bound on the triangle count: it always ends.
 
-The whole step loop runs compiled (:mod:`._front_loop`: the heap, the linked-list fronts and
-the edge sets in arrays and typed dicts, driving the per-step checks of :mod:`._front_kernels`);
-this module sets up its state, runs it and reports the outcome.
+The whole step loop runs compiled (:mod:`._front_loop`, one step in :mod:`._front_step`; the
+heap, the linked-list fronts and the edge tables in the arrays of :mod:`._front_state`, the
+per-step checks in :mod:`._front_kernels`); this module sets up its state, runs it and reports
+the outcome.
 """
 from __future__ import annotations
 
@@ -59,11 +60,12 @@ import math
 import numpy as np
 
 from ...errors import HoleFillError
-from ._front_loop import (CLOSED, FAN_CLOSURES, GREW, KEPT_BLOCKED, LEFT_BALL, MAX_FRONT, MERGES, N_FACES,
-                          N_VERT, OBSTACLE_TESTS, REJECTED, RELEASED_NEAR, RULE1, RULE2, RULE3, SPLITS, STEPS, STUCK,
-                          FrontObstacleArrays, FrontParams, initial_state, new_scratch, run_front)
+from ._front_loop import CLOSED, GREW, LEFT_BALL, STUCK, initial_state, run_front
 from ._front_obstacles import FrontObstacles
 from ._front_predicates import PLANE_MIN_COS, PLANE_MIN_SIN
+from ._front_state import (FAN_CLOSURES, KEPT_BLOCKED, MAX_FRONT, MERGES, N_FACES, N_VERT, OBSTACLE_TESTS, REJECTED,
+                           RELEASED_NEAR, RULE1, RULE2, RULE3, SPLITS, STEPS, FrontObstacleArrays, FrontParams,
+                           new_scratch)
 
 __all__ = ["advancing_front_triangulation"]
 

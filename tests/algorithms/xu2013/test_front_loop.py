@@ -2,8 +2,8 @@
 
 The reference (xu2013_front_oracle: the heap, linked lists and edge sets in Python around the
 same per-step kernels) and the compiled loop run on the same holes: equal new vertices (bit
-for bit), equal faces, equal stats, equal failure messages; the heap pops in the order of
-Python's heapq.
+for bit), equal faces, equal stats, equal failure messages. The state's heap
+(xu2013._front_state) pops in the order of Python's heapq; its pair tables behave as a dict.
 """
 import heapq
 
@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshlab_holefill.algorithms.xu2013 import _front_loop as L
+from meshlab_holefill.algorithms.xu2013 import _front_state as state
 from meshlab_holefill.algorithms.xu2013.advancing_front import advancing_front_triangulation
 from meshlab_holefill.algorithms.xu2013.poisson_patch import reference_normals
 from meshlab_holefill.core import examples, hole_context
@@ -86,41 +86,41 @@ def test_failures_are_the_reference_failures():
 def test_heap_pops_in_heapq_order():
     rng = np.random.default_rng(3)
     ht, hn, hv = np.empty(400), np.empty(400, np.int64), np.empty(400, np.int64)
-    C = np.zeros(L.N_COUNTERS, np.int64)
+    C = np.zeros(state.N_COUNTERS, np.int64)
     ref, popped, expected = [], [], []
     for step in range(300):
         if rng.random() < 0.6 or not ref:
             entry = (float(rng.integers(0, 5)) * 0.5, int(rng.integers(0, 6)), int(rng.integers(0, 3)))
             heapq.heappush(ref, entry)
-            L.heap_push(ht, hn, hv, C, *entry)
+            state.heap_push(ht, hn, hv, C, *entry)
         else:
             expected.append(heapq.heappop(ref)[1:])
-            popped.append(L.heap_pop(ht, hn, hv, C))
-    assert popped == expected and C[L.N_HEAP] == len(ref)
+            popped.append(state.heap_pop(ht, hn, hv, C))
+    assert popped == expected and C[state.N_HEAP] == len(ref)
 
 
 def test_pair_tables_behave_as_a_set_and_a_dict():
-    # The loop's hash tables of vertex pairs (insert, find, delete, rebuild) against Python's dict.
+    # The state's hash tables of vertex pairs (insert, find, delete, rebuild) against Python's dict.
     rng = np.random.default_rng(5)
-    C = np.zeros(L.N_COUNTERS, np.int64)
-    keys = L._empty_table(8)
+    C = np.zeros(state.N_COUNTERS, np.int64)
+    keys = state._empty_table(8)
     vals = np.zeros((keys.shape[0], 3))
     ref = {}
     for step in range(3000):
         a, b = (int(x) for x in rng.integers(0, 40, 2))
         op = rng.random()
-        slot = L._find(keys, a, b)
+        slot = state._find(keys, a, b)
         assert (slot >= 0) == ((a, b) in ref)
         if op < 0.5:
-            slot = L._insert(keys, a, b, C, L.F_USED)
+            slot = state._insert(keys, a, b, C, state.F_USED)
             vals[slot] = step
             ref[(a, b)] = step
         elif op < 0.8 and slot >= 0:
-            keys[slot] = L.DELETED
+            keys[slot] = state.DELETED
             del ref[(a, b)]
-        if 2 * (C[L.F_USED] + 16) >= keys.shape[0]:
-            keys, vals, C[L.F_USED] = L._rehashed(keys, vals, 4)
-    assert L._find(keys, -1, 3) == -1  # temporary (negative) ids are never stored
+        if 2 * (C[state.F_USED] + 16) >= keys.shape[0]:
+            keys, vals, C[state.F_USED] = state._rehashed(keys, vals, 4)
+    assert state._find(keys, -1, 3) == -1  # temporary (negative) ids are never stored
     for (a, b), value in ref.items():
-        assert vals[L._find(keys, a, b), 0] == value
+        assert vals[state._find(keys, a, b), 0] == value
     assert (keys >= 0).sum() == len(ref)
