@@ -1,4 +1,5 @@
-"""The numpy triangle-triangle query that geometry/_tri_kernels.py replaced, kept as the reference.
+"""The numpy triangle-triangle query that the compiled kernels replaced (geometry/_broad_phase_kernels.py,
+geometry/_narrow_phase_kernels.py), kept as the reference.
 
 intersections.intersecting_pairs before the compiled kernels, verbatim but for this docstring and the
 import of cross_rows (see git history of meshlab_holefill/geometry/intersections.py for the module's

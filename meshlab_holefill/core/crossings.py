@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..geometry._tri_kernels import boxes_meeting
+from ..geometry._broad_phase_kernels import boxes_meeting
 from ..geometry.intersections import faces_intersecting, intersecting_pairs
 from .holes import nonmanifold_edges
 from ..geometry.sets import isin_ints, positions_ints, unique_ints

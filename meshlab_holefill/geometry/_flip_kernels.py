@@ -5,7 +5,7 @@ duplicate and fixed edges, then an independent set of the allowed swaps) is some
 array operations; on the few hundred edges of a patch their overhead is most of the
 refinement's time. :func:`swap_candidates` and :func:`apply_swaps` do the same round element
 by element: the same IEEE operations in the same order (row cross products, norms and einsum
-dots as in :mod:`._tri_kernels`), so every integer answer is the numpy code's, with one
+dots as in :mod:`._vector_kernels`), so every integer answer is the numpy code's, with one
 exception handled by deferring: the numpy code's ``arctan2`` is numpy's SIMD routine, which
 may differ from libm's in the last bits. The angle sums it feeds are only compared with
 pi (1 + 1e-9); when a sum lies within ``ANGLE_MARGIN`` (thousands of times that difference)
@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._tri_kernels import _cross, _dot, _norm, _sub
+from ._vector_kernels import cross3, dot3, norm3, sub3
 
 # The kernels of the compiled rounds (pair_angle_parts serves flips.min_angle_scores, the scored rounds).
 __all__ = ["swap_candidates", "apply_swaps", "fixed_keys", "NO_EDGES", "NO_FAILING", "CANDIDATES", "UNSURE", "ANGLE_MARGIN"]
@@ -37,8 +37,8 @@ def _row(V, i):
 def _angle_parts(V, p, q, r):
     """(|u x w|, u . w) of the angle at p of the triangle (p, q, r), as flips._angle_at computes them."""
     P = _row(V, p)
-    u, w = _sub(_row(V, q), P), _sub(_row(V, r), P)
-    return _norm(_cross(u, w)), _dot(u, w)
+    u, w = sub3(_row(V, q), P), sub3(_row(V, r), P)
+    return norm3(cross3(u, w)), dot3(u, w)
 
 
 @njit(cache=True)
@@ -69,15 +69,15 @@ def _angle_sum_exceeds(V, p1, q1, r1, p2, q2, r2):
 def _circumsphere(V, p, q, r):
     """flips.circumcenters of the triangle (p, q, r) for one row: (centre, radius), inf for a degenerate one."""
     A = _row(V, p)
-    u, w = _sub(_row(V, q), A), _sub(_row(V, r), A)
-    uxw = _cross(u, w)
-    denom = 2.0 * _dot(uxw, uxw)
-    uu, ww = _dot(u, u), _dot(w, w)
-    num = _cross((uu * w[0] - ww * u[0], uu * w[1] - ww * u[1], uu * w[2] - ww * u[2]), uxw)
+    u, w = sub3(_row(V, q), A), sub3(_row(V, r), A)
+    uxw = cross3(u, w)
+    denom = 2.0 * dot3(uxw, uxw)
+    uu, ww = dot3(u, u), dot3(w, w)
+    num = cross3((uu * w[0] - ww * u[0], uu * w[1] - ww * u[1], uu * w[2] - ww * u[2]), uxw)
     if not denom > 0:
         return A, np.inf
     offset = (num[0] / denom, num[1] / denom, num[2] / denom)
-    return (A[0] + offset[0], A[1] + offset[1], A[2] + offset[2]), _norm(offset)
+    return (A[0] + offset[0], A[1] + offset[1], A[2] + offset[2]), norm3(offset)
 
 
 @njit(cache=True)
@@ -85,7 +85,7 @@ def _sphere_distance(V, p, q, r, x):
     """(|x - centre|, radius (1 - 1e-9)) for the circumsphere of (p, q, r): flips' tests compare the two
     (strictly inside: ``<``; the new-edge test's outside: ``>=``; both False for NaN, as in numpy)."""
     centre, radius = _circumsphere(V, p, q, r)
-    return _norm(_sub(_row(V, x), centre)), radius * (1 - 1e-9)
+    return norm3(sub3(_row(V, x), centre)), radius * (1 - 1e-9)
 
 
 @njit(cache=True)
@@ -111,12 +111,12 @@ def _swap_tests(V, a, b, c, d, sphere):
 def _keeps_orientation(V, a, b, c, d):
     """flips._keeps_orientation with normal_cos = 0 for one edge."""
     A, B, C, D = _row(V, a), _row(V, b), _row(V, c), _row(V, d)
-    o1 = _cross(_sub(B, A), _sub(C, A))
-    o2 = _cross(_sub(A, B), _sub(D, B))
+    o1 = cross3(sub3(B, A), sub3(C, A))
+    o2 = cross3(sub3(A, B), sub3(D, B))
     old = (o1[0] + o2[0], o1[1] + o2[1], o1[2] + o2[2])
-    n1 = _cross(_sub(D, A), _sub(C, A))
-    n2 = _cross(_sub(C, B), _sub(D, B))
-    return _dot(n1, old) > 0 and _dot(n2, old) > 0
+    n1 = cross3(sub3(D, A), sub3(C, A))
+    n2 = cross3(sub3(C, B), sub3(D, B))
+    return dot3(n1, old) > 0 and dot3(n2, old) > 0
 
 
 @njit(cache=True)
@@ -336,7 +336,7 @@ def pair_angle_parts(V, faces):
 
     Corner k of a face (i0, i1, i2) is the angle at F[k] between u = V[F[k + 1]] - V[F[k]] and
     w = V[F[k + 2]] - V[F[k]] (indices mod 3): the arguments of corner_angles' arctan2, bit for
-    bit (row cross product, norm and einsum dot of :mod:`._tri_kernels`). The arctan2 stays
+    bit (row cross product, norm and einsum dot of :mod:`._vector_kernels`). The arctan2 stays
     numpy's (see the module docstring), applied to the returned arrays.
 
     Returns

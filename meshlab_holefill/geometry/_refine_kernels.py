@@ -1,7 +1,7 @@
 """Compiled split test of the refinement (numba): :func:`.refine.split_condition` element by element.
 
 The same IEEE operations in the same order as the numpy code (means of three corners added
-left to right then divided by 3, row norms as in :mod:`._tri_kernels`), so centroids, scales
+left to right then divided by 3, row norms as in :mod:`._vector_kernels`), so centroids, scales
 and the distance tests are the same bits. The one exception is the largest-angle test: the
 numpy code's ``arctan2`` is numpy's SIMD routine, which may differ from libm's in the last
 bits, so a corner angle within ``ANGLE_MARGIN`` of 5 pi / 6 makes the kernel answer
@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._tri_kernels import _cross, _dot, _norm, _sub
+from ._vector_kernels import cross3, dot3, norm3, sub3
 
 __all__ = ["split_test", "split_faces", "ANGLE_MARGIN"]
 
@@ -25,9 +25,9 @@ ANGLE_MARGIN = 1e-12
 @njit(cache=True)
 def _corner_angle(V, p, q, r):
     P = (V[p, 0], V[p, 1], V[p, 2])
-    u = _sub((V[q, 0], V[q, 1], V[q, 2]), P)
-    w = _sub((V[r, 0], V[r, 1], V[r, 2]), P)
-    return math.atan2(_norm(_cross(u, w)), _dot(u, w))
+    u = sub3((V[q, 0], V[q, 1], V[q, 2]), P)
+    w = sub3((V[r, 0], V[r, 1], V[r, 2]), P)
+    return math.atan2(norm3(cross3(u, w)), dot3(u, w))
 
 
 @njit(cache=True)
@@ -45,7 +45,7 @@ def split_test(V, F, scale, alpha):
         sc[f] = ((scale[i] + scale[j]) + scale[k]) / 3
         split = True
         for v in (i, j, k):
-            d = alpha * _norm((V[v, 0] - C[f, 0], V[v, 1] - C[f, 1], V[v, 2] - C[f, 2]))
+            d = alpha * norm3((V[v, 0] - C[f, 0], V[v, 1] - C[f, 1], V[v, 2] - C[f, 2]))
             split = split and d > sc[f] and d > scale[v]
         for p, q, r in ((i, j, k), (j, k, i), (k, i, j)):
             angle = _corner_angle(V, p, q, r)

@@ -46,7 +46,8 @@ degenerate face with a face it shares an edge with.
 """
 import numpy as np
 
-from . import _tri_kernels as K
+from . import _broad_phase_kernels as broad
+from . import _narrow_phase_kernels as narrow
 from .sets import isin_ints, unique_ints
 
 FOLD_ANGLE = 1e-3  # radians of opening below which edge-adjacent faces overlap
@@ -90,24 +91,24 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
         return empty
 
     # boxes, centroids and radii of all faces in one compiled pass (no (n, 3, 3) arrays)
-    bq, ba = K.face_bounds(V, F, q), K.face_bounds(V, F, a)
+    bq, ba = broad.face_bounds(V, F, q), broad.face_bounds(V, F, a)
     tol = _default_tol(bq, ba) if tol is None else float(tol)
     # Faces of `against` outside the query faces' common box (grown by tol) meet none of them;
     # dropping them first spares the candidate search and the welding that work (a few new
     # triangles tested against a whole ring of faces).
-    inside = K.boxes_meeting(bq[0], bq[1], ba[0], ba[1], tol)
+    inside = broad.boxes_meeting(bq[0], bq[1], ba[0], ba[1], tol)
     if len(inside) == 0:
         return empty
     if len(inside) < len(a):
         a, ba = a[inside], tuple(x[inside] for x in ba)
     i, j, in_q, in_a = _candidates(bq, ba, tol, q, a, len(F))
     if weld:
-        canon = K.weld_labels(V, F, np.concatenate([q, a]))
+        canon = broad.weld_labels(V, F, np.concatenate([q, a]))
     else:
         canon = np.arange(len(V), dtype=np.int64)
-    code, fy, fx = K.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
-    hit = code == K.HIT
-    fold = np.flatnonzero(code == K.FOLD)
+    code, fy, fx = narrow.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
+    hit = code == narrow.HIT
+    fold = np.flatnonzero(code == narrow.FOLD)
     if len(fold):
         hit[fold] = np.arctan2(fy[fold], fx[fold]) < fold_angle  # numpy's arctan2, as before
     # i and j each come from a set of distinct faces, so the keys are distinct: their order is the pairs'
@@ -136,7 +137,7 @@ def _default_tol(bounds_q, bounds_a):
 
     The box of the used vertices is the box of their faces' boxes.
     """
-    lo, hi, far = K.common_box(bounds_q[0], bounds_q[1], bounds_a[0], bounds_a[1])
+    lo, hi, far = broad.common_box(bounds_q[0], bounds_q[1], bounds_a[0], bounds_a[1])
     return float(1e-9 * np.linalg.norm(hi - lo) + 1e-13 * far)
 
 
@@ -145,15 +146,16 @@ def _candidates(bounds_q, bounds_a, tol, q, a, n_faces):
 
     A pair is kept when the boxes overlap (query boxes grown by tol) and the centroids lie
     within the sum of the faces' bounding-sphere radii plus tol (self-pairs and mirrored pairs
-    are left out, see `_tri_kernels.box_pairs`). `bounds_q`, `bounds_a` are
-    `_tri_kernels.face_bounds` of the face sets `q`, `a` (lo, hi, centroid, radius). A single
-    radius would be set by the largest face, so faces are binned by radius (factors of 4) and
-    each pair of bins is bounded by its largest radii (the bound the former dual-tree search on
-    centroids used; the grid of `_tri_kernels.candidate_pairs` applies it pair by pair). The
-    bins take numpy's logarithm here, whose last bits may differ from the compiled one's.
+    are left out, see `_broad_phase_kernels.box_pairs`). `bounds_q`, `bounds_a` are
+    `_broad_phase_kernels.face_bounds` of the face sets `q`, `a` (lo, hi, centroid, radius).
+    A single radius would be set by the largest face, so faces are binned by radius (factors
+    of 4) and each pair of bins is bounded by its largest radii (the bound the former dual-tree
+    search on centroids used; the grid of `_broad_phase_kernels.candidate_pairs` applies it
+    pair by pair). The bins take numpy's logarithm here, whose last bits may differ from the
+    compiled one's.
     """
-    logs = np.log(K.radius_ratios(bounds_q[3], bounds_a[3]))
-    return K.candidate_pairs(bounds_q, bounds_a, logs, _LOG4, tol, q, a, n_faces)
+    logs = np.log(broad.radius_ratios(bounds_q[3], bounds_a[3]))
+    return broad.candidate_pairs(bounds_q, bounds_a, logs, _LOG4, tol, q, a, n_faces)
 
 
 def _sorted_unique(x):

@@ -304,7 +304,7 @@ def test_two_crossing_spheres_meet_along_one_curve():
 
 
 def test_weld_labels_join_exactly_the_equal_used_vertices_and_boxes_and_radius_ratios_equal_numpy():
-    from meshlab_holefill.geometry import _tri_kernels as K
+    from meshlab_holefill.geometry import _broad_phase_kernels as broad
     from meshlab_holefill.geometry.intersections import _sorted_unique
 
     rng = np.random.default_rng(0)
@@ -315,7 +315,7 @@ def test_weld_labels_join_exactly_the_equal_used_vertices_and_boxes_and_radius_r
         F = rng.integers(0, 30, (20, 3))
         faces = rng.integers(0, 20, int(rng.integers(1, 15)))
         used = np.unique(F[faces])
-        label = K.weld_labels(V, F, faces)
+        label = broad.weld_labels(V, F, faces)
         # == welds -0.0 to 0.0 and a NaN to nothing (a vertex is itself by index)
         same = np.all(V[used, None] == V[None, used], axis=2) | np.eye(len(used), dtype=bool)
         np.testing.assert_array_equal(label[used, None] == label[None, used], same)
@@ -323,14 +323,14 @@ def test_weld_labels_join_exactly_the_equal_used_vertices_and_boxes_and_radius_r
         lo_q, lo_a = rng.normal(size=(int(rng.integers(1, 9)), 3)), rng.normal(size=(int(rng.integers(1, 9)), 3))
         lo_q[rng.random(lo_q.shape) < 0.02] = np.nan
         hi_q, hi_a = lo_q + 1.0, lo_a + 1.0
-        lo, hi, far = K.common_box(lo_q, hi_q, lo_a, hi_a)
+        lo, hi, far = broad.common_box(lo_q, hi_q, lo_a, hi_a)
         np.testing.assert_array_equal(lo, np.minimum(lo_q.min(0), lo_a.min(0)))
         np.testing.assert_array_equal(hi, np.maximum(hi_q.max(0), hi_a.max(0)))
         if not np.isnan(lo_q).any():
             assert far == max(np.abs(lo).max(), np.abs(hi).max())
         rq, ra = rng.random(len(lo_q)) ** 9, rng.random(len(lo_a)) * (t % 3)  # some all zero
         top = max(rq.max(), ra.max(), np.finfo(float).tiny)
-        np.testing.assert_array_equal(K.radius_ratios(rq, ra), np.maximum(np.concatenate([rq, ra]), 1e-300) / top)
+        np.testing.assert_array_equal(broad.radius_ratios(rq, ra), np.maximum(np.concatenate([rq, ra]), 1e-300) / top)
         x = rng.integers(0, 30, int(rng.integers(0, 20)))
         x = np.unique(x) if t % 2 else x
         np.testing.assert_array_equal(_sorted_unique(x), np.unique(x))

@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import intersections_numpy as R
-from meshlab_holefill.geometry import _tri_kernels as K
+from meshlab_holefill.geometry import _broad_phase_kernels as broad
+from meshlab_holefill.geometry import _narrow_phase_kernels as narrow
 from meshlab_holefill.geometry import intersections as I
 
 
@@ -89,9 +90,9 @@ def _reference_codes(V, F, canon, i, j, in_q, in_a, tol, fold):
 
 
 def _kernel_hits(V, F, canon, i, j, in_q, in_a, tol, fold):
-    code, fy, fx = K.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
-    hit = code == K.HIT
-    f = code == K.FOLD
+    code, fy, fx = narrow.narrow_codes(V, F, canon, i, j, in_q, in_a, tol)
+    hit = code == narrow.HIT
+    f = code == narrow.FOLD
     hit[f] = np.arctan2(fy[f], fx[f]) < fold
     return hit
 
@@ -141,8 +142,8 @@ def test_broad_phase_equals_kdtree_search(seed, n, m, spread, flat):
 
 
 def _bounds(T):
-    """K.face_bounds of the triangles T (n, 3, 3), as a soup of their own vertices."""
-    return K.face_bounds(T.reshape(-1, 3), np.arange(3 * len(T)).reshape(-1, 3), np.arange(len(T)))
+    """broad.face_bounds of the triangles T (n, 3, 3), as a soup of their own vertices."""
+    return broad.face_bounds(T.reshape(-1, 3), np.arange(3 * len(T)).reshape(-1, 3), np.arange(len(T)))
 
 
 @settings(max_examples=100, deadline=None)
@@ -157,7 +158,7 @@ def test_face_bounds_equal_numpy(seed, offset):
     T = V[F[faces]]
     c = T.mean(1)
     ref = (T.min(1), T.max(1), c, np.linalg.norm(T - c[:, None], axis=2).max(1))
-    for got, want in zip(K.face_bounds(V, F, faces), ref):
+    for got, want in zip(broad.face_bounds(V, F, faces), ref):
         assert got.shape == want.shape and np.array_equal(got, want)
 
 
@@ -178,23 +179,6 @@ def test_real_patch_queries_equal_numpy():
     assert len(got) > 0
 
 
-def test_row_dot_and_norm_sum_as_numpy_does():
-    """_dot adds in np.einsum's order and _norm in np.linalg.norm's, zeros' signs included."""
-    rng = np.random.default_rng(3)
-    X = rng.normal(size=(3000, 3)) * np.exp(3 * rng.normal(size=(3000, 1)))
-    Y = rng.normal(size=(3000, 3))
-    X[:300] *= rng.integers(0, 2, (300, 3))  # zeros ...
-    Y[:300] *= rng.choice([-1.0, 1.0], (300, 3)) * rng.integers(0, 2, (300, 3))  # ... and negative zeros
-    dots = np.array([K._dot(tuple(x), tuple(y)) for x, y in zip(X, Y)])
-    assert dots.tobytes() == np.einsum("ij,ij->i", X, Y).tobytes()
-    T = np.stack([X[:1000], X[1000:2000], X[2000:]], axis=1)
-    n = Y[:1000]
-    d3 = np.array([[K._dot(tuple(T[k, i]), tuple(n[k])) for i in range(3)] for k in range(1000)])
-    assert d3.tobytes() == np.einsum("kij,kj->ki", T, n).tobytes()
-    norms = np.array([K._norm(tuple(x)) for x in X])
-    assert norms.tobytes() == np.linalg.norm(X, axis=1).tobytes()
-
-
 def test_boxes_meeting_the_query_box_equal_numpy():
     """The faces kept for the candidate search: boxes meeting the query faces' common box grown by tol."""
     rng = np.random.default_rng(4)
@@ -205,9 +189,9 @@ def test_boxes_meeting_the_query_box_equal_numpy():
             lo_a[rng.integers(0, 200, 10), rng.integers(0, 3, 10)] = np.nan
         lo, hi = lo_q.min(0) - 1e-3, hi_q.max(0) + 1e-3
         want = np.flatnonzero(np.all(hi_a >= lo, axis=1) & np.all(lo_a <= hi, axis=1))
-        assert np.array_equal(K.boxes_meeting(lo_q, hi_q, lo_a, hi_a, 1e-3), want)
+        assert np.array_equal(broad.boxes_meeting(lo_q, hi_q, lo_a, hi_a, 1e-3), want)
     lo_q[0, 1] = np.nan  # a query face that is not a number meets nothing
-    assert len(K.boxes_meeting(lo_q, hi_q, lo_a, hi_a, 1e-3)) == 0
+    assert len(broad.boxes_meeting(lo_q, hi_q, lo_a, hi_a, 1e-3)) == 0
 
 
 def test_radii_that_are_not_numbers_are_refused():

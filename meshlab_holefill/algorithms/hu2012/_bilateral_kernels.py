@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from ...geometry._quality_kernels import face_cross, face_quality
-from ...geometry._tri_kernels import _dot, _norm, _npmax
+from ...geometry._vector_kernels import dot3, norm3, npmax
 
 __all__ = ["refuse_slivers", "ring_log_weights", "ring_step"]  # undo_moves, vertex_normals_kernel: helpers compiled into them
 
@@ -51,7 +51,7 @@ def refuse_slivers(V_old, V_new, F, moved, min_quality):
                 continue
             c = face_cross(V, F, f)
             bad = face_quality(V, i, j, k) < floor[f] * (1 - 1e-12) or \
-                _dot((n_old[f, 0], n_old[f, 1], n_old[f, 2]), c) <= 0
+                dot3((n_old[f, 0], n_old[f, 1], n_old[f, 2]), c) <= 0
             if bad:
                 anything = True
                 for v in (i, j, k):
@@ -79,7 +79,7 @@ def vertex_normals_kernel(V, F, n):
             N[v, 1] += C[f, 1]
             N[v, 2] += C[f, 2]
     for v in range(n):
-        length = _norm((N[v, 0], N[v, 1], N[v, 2]))
+        length = norm3((N[v, 0], N[v, 1], N[v, 2]))
         if length > 0:
             N[v, 0] /= length
             N[v, 1] /= length
@@ -103,8 +103,8 @@ def ring_log_weights(V, F, rows, cols, sc, ss):
     for p in range(s):
         r, q = rows[p], cols[p]
         d = (V[r, 0] - V[q, 0], V[r, 1] - V[q, 1], V[r, 2] - V[q, 2])
-        t2 = _dot(d, d)
-        h[p] = _dot((N[r, 0], N[r, 1], N[r, 2]), d)
+        t2 = dot3(d, d)
+        h[p] = dot3((N[r, 0], N[r, 1], N[r, 2]), d)
         c, g = sc[r], ss[r]
         z[p] = -t2 / (2 * (c * c)) - (h[p] * h[p]) / (2 * (g * g))
     start = 0
@@ -112,7 +112,7 @@ def ring_log_weights(V, F, rows, cols, sc, ss):
         stop = start + 1
         top = z[start]
         while stop < s and rows[stop] == rows[start]:
-            top = _npmax(top, z[stop])
+            top = npmax(top, z[stop])
             stop += 1
         for p in range(start, stop):
             z[p] = z[p] - top

@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...geometry._tri_kernels import _dot
+from ...geometry._vector_kernels import dot3
 
 # The filter runs swaps_in_sectors (its warm-up loads it); sector_contains serves LoopSectors.contains.
 __all__ = ["swaps_in_sectors", "ANGLE_MARGIN"]
@@ -32,7 +32,7 @@ def sector_contains(points, u, w, limit, index, targets, margin):
     for r in range(s):
         i = index[r]
         d = (targets[r, 0] - points[i, 0], targets[r, 1] - points[i, 1], targets[r, 2] - points[i, 2])
-        phi = math.atan2(_dot(d, (w[i, 0], w[i, 1], w[i, 2])), _dot(d, (u[i, 0], u[i, 1], u[i, 2]))) % two_pi
+        phi = math.atan2(dot3(d, (w[i, 0], w[i, 1], w[i, 2])), dot3(d, (u[i, 0], u[i, 1], u[i, 2]))) % two_pi
         upper = limit[i] - margin
         if not (abs(phi - margin) > ANGLE_MARGIN and abs(phi - upper) > ANGLE_MARGIN):  # NaN too
             return inside, False
@@ -70,7 +70,7 @@ def new_edge_in_sectors(points, u, w, limit, V, c, d, margin):
         if i >= k:
             continue
         dv = (V[j, 0] - points[i, 0], V[j, 1] - points[i, 1], V[j, 2] - points[i, 2])
-        phi = math.atan2(_dot(dv, (w[i, 0], w[i, 1], w[i, 2])), _dot(dv, (u[i, 0], u[i, 1], u[i, 2]))) % (2 * np.pi)
+        phi = math.atan2(dot3(dv, (w[i, 0], w[i, 1], w[i, 2])), dot3(dv, (u[i, 0], u[i, 1], u[i, 2]))) % (2 * np.pi)
         upper = limit[i] - margin
         if not (abs(phi - margin) > ANGLE_MARGIN and abs(phi - upper) > ANGLE_MARGIN):  # NaN too
             return -1

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from ...geometry._quality_kernels import face_cross, face_quality
-from ...geometry._tri_kernels import _dot
+from ...geometry._vector_kernels import dot3
 from ._bilateral_kernels import undo_moves
 
 __all__ = ["refuse_worse"]
@@ -30,7 +30,7 @@ def _minimum(a, b):
 @njit(cache=True)
 def _quality_or_flipped(V, F, f, n_old):
     c = face_cross(V, F, f)
-    if _dot((n_old[f, 0], n_old[f, 1], n_old[f, 2]), c) <= 0:
+    if dot3((n_old[f, 0], n_old[f, 1], n_old[f, 2]), c) <= 0:
         return -1.0
     return face_quality(V, F[f, 0], F[f, 1], F[f, 2])
 

@@ -3,7 +3,7 @@
 :func:`pair_agreements` does, element by element, the IEEE operations of the numpy
 ``folds._pair_agreement`` in the same order (no fastmath): the unit normals of
 ``geometry.quality.face_normals`` (row cross product, norm, division; zero rows for
-degenerate faces), the einsum dots of :mod:`meshlab_holefill.geometry._tri_kernels` and
+degenerate faces), the einsum dots of :mod:`meshlab_holefill.geometry._vector_kernels` and
 numpy's ``minimum`` (NaN propagates). tests/algorithms/xie_zou2013/test_fold_kernels.py checks
 it against the numpy code.
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...geometry._tri_kernels import _cross, _dot, _norm, _npmin, _sub
+from ...geometry._vector_kernels import cross3, dot3, norm3, npmin, sub3
 
 __all__ = ["pair_agreements", "fold_swap_scores"]
 
@@ -23,8 +23,8 @@ def _unit_normal(V, f):
     p0 = (V[f[0], 0], V[f[0], 1], V[f[0], 2])
     p1 = (V[f[1], 0], V[f[1], 1], V[f[1], 2])
     p2 = (V[f[2], 0], V[f[2], 1], V[f[2], 2])
-    n = _cross(_sub(p1, p0), _sub(p2, p0))
-    ln = _norm(n)
+    n = cross3(sub3(p1, p0), sub3(p2, p0))
+    ln = norm3(n)
     if ln > 0:
         return (n[0] / ln, n[1] / ln, n[2] / ln)
     return (0.0, 0.0, 0.0)
@@ -39,7 +39,7 @@ def _border_agreement(f, n, border_normals):
         u, v = f[c], f[(c + 1) % 3]
         if u < k and v == (u + 1) % k:
             b = (border_normals[u, 0], border_normals[u, 1], border_normals[u, 2])
-            out = _npmin(out, _dot(n, b))
+            out = npmin(out, dot3(n, b))
     return out
 
 
@@ -91,6 +91,6 @@ def fold_swap_scores(V, old1, old2, new1, new2, border_normals):
 def _agreement(V, fa, fb, border_normals):
     """(agreement, proper) of the face pair (fa, fb), as :func:`pair_agreements` computes them."""
     na, nb = _unit_normal(V, fa), _unit_normal(V, fb)
-    across = _npmin(_border_agreement(fa, na, border_normals), _border_agreement(fb, nb, border_normals))
+    across = npmin(_border_agreement(fa, na, border_normals), _border_agreement(fb, nb, border_normals))
     proper = (na[0] != 0 or na[1] != 0 or na[2] != 0) and (nb[0] != 0 or nb[1] != 0 or nb[2] != 0)
-    return _npmin(_dot(na, nb), across), proper
+    return npmin(dot3(na, nb), across), proper

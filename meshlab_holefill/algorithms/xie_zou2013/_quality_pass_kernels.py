@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from ._de_kernels import _pairwise_sum
-from ...geometry._tri_kernels import _npmin
+from ...geometry._vector_kernels import npmin as _npmin
 
 __all__ = ["star_candidate_scores"]
 
