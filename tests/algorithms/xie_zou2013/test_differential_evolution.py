@@ -1310,7 +1310,8 @@ def test_base_point_pairs_are_found_once_per_pairing(cube_edge_hole):
 def test_warm_up_loads_every_kernel_a_fill_calls():
     # The kernels of the DE generation, the Sec. 4.7 steps, the swaps and the quality pass: a
     # worker that warmed up loads none of them within a hole's time.
-    from meshlab_holefill.algorithms.xie_zou2013 import _de_kernels, _optimisation_kernels, _quality_pass_kernels
+    from meshlab_holefill.algorithms.xie_zou2013 import _de_kernels, _incidence_kernels, _optimisation_kernels
+    from meshlab_holefill.algorithms.xie_zou2013 import _quality_pass_ops
     from meshlab_holefill.algorithms.xie_zou2013 import _smoothing_kernels, differential_evolution
     from meshlab_holefill.geometry import _flip_kernels, _quality_kernels
 
@@ -1319,7 +1320,8 @@ def test_warm_up_loads_every_kernel_a_fill_calls():
     kernels = [_de_kernels.trial_changed_terms_into, _de_kernels.select_reflect_terms,
                _de_kernels.renew_variation, _de_kernels.masked_row_sums, _de_kernels.turning_terms,
                _optimisation_kernels.edge_adjacency, _optimisation_kernels.faces_around_edges,
-               _optimisation_kernels.independent_link_edges, _quality_pass_kernels.star_candidate_scores,
+               _optimisation_kernels.independent_link_edges, _incidence_kernels.new_incidence,
+               _incidence_kernels.copied_sets, _quality_pass_ops.improve_round, _quality_pass_ops.improve_face,
                _smoothing_kernels.umbrella_passes, _flip_kernels.pair_angle_parts,
                _quality_kernels.triangle_quality_kernel]
     assert all(kernel.signatures for kernel in kernels), [k.__name__ for k in kernels if not k.signatures]

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from meshlab_holefill.algorithms.xie_zou2013 import quality_pass as QP
+from meshlab_holefill.algorithms.xie_zou2013 import _quality_pass_numpy as QP
 from meshlab_holefill.algorithms.xie_zou2013._quality_pass_kernels import star_candidate_scores
 
 
