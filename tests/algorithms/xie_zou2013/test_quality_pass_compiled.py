@@ -16,6 +16,28 @@ from meshlab_holefill.geometry.quality import face_normals
 from conftest import random_planar_patch
 
 
+def _numpy_matmul_rounds_as_gemv_row():
+    """Whether numpy's (s, 3) @ (3,) product here rounds as the kernels' copy of it (``gemv_row``).
+
+    The copy follows OpenBLAS's dgemv kernel of the machines the package is developed on (one
+    fused multiply-add order); BLAS kernels for other processors may round the last bit
+    differently, and the compiled pass then differs from the numpy reference in that bit.
+    """
+    rng = np.random.default_rng(7)
+    for rows in (1, 2, 3, 5, 8):
+        A = rng.standard_normal((rows, 3))
+        b = rng.standard_normal(3)
+        got = np.array([KQ.gemv_row(A[i], b, rows) for i in range(rows)])
+        if got.tobytes() != (A @ b).tobytes():
+            return False
+    return True
+
+
+SAME_GEMV = _numpy_matmul_rounds_as_gemv_row()
+bitwise = pytest.mark.skipif(not SAME_GEMV, reason="numpy's matrix-vector product on this machine rounds in "
+                             "another order than the kernels' copy: bit-for-bit comparisons do not apply")
+
+
 def context(k, border=None, floor=0.4):
     none = np.zeros(0, np.int64)
     return kernel_context(k, floor, QP.GAIN, QP.TURN_COS, QP.BORDER_COS, border, none, none, QP._COS, QP._SIN)
@@ -82,6 +104,7 @@ def assert_same(got, want):
     assert np.array_equal(F1, F2) and np.array_equal(keep1, keep2)
 
 
+@bitwise
 def test_compiled_pass_is_the_numpy_pass_on_varied_patches(monkeypatch):
     restores = []
 
@@ -103,6 +126,7 @@ def test_compiled_pass_is_the_numpy_pass_on_varied_patches(monkeypatch):
     assert len(restores) > 20
 
 
+@bitwise
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(1000, 10**6))
 def test_compiled_pass_is_the_numpy_pass_hypothesis(seed):
@@ -122,6 +146,7 @@ def test_fold_test_refusing_a_move_undoes_it():
 # ----------------------------------------------------------------- building blocks
 
 def test_gemv_row_is_numpy_matmul():
+    """Within rounding everywhere; to the bit where numpy's BLAS rounds as the copy (see SAME_GEMV)."""
     rng = np.random.default_rng(0)
     for rows in (1, 2, 3, 5, 8, 13, 40):
         for _ in range(50):
@@ -129,7 +154,10 @@ def test_gemv_row_is_numpy_matmul():
             b = rng.standard_normal(3)
             want = A @ b
             got = np.array([KQ.gemv_row(A[i], b, rows) for i in range(rows)])
-            assert got.tobytes() == want.tobytes()
+            scale = np.abs(A) @ np.abs(b)
+            assert np.all(np.abs(got - want) <= 4 * np.finfo(float).eps * scale)
+            if SAME_GEMV:
+                assert got.tobytes() == want.tobytes()
 
 
 @pytest.mark.parametrize("n", [1, 2, 7, 8, 9, 16, 17, 127, 128, 129, 300, 1025, 5000])
@@ -229,6 +257,7 @@ def test_bent_candidates_are_dropped_in_numpy_argsort_order():
     assert ties > 1000
 
 
+@bitwise
 def test_inputs_beyond_the_kernels_keys_run_the_numpy_pass():
     V, F, k, kw, _ = case(3)
     kw["blocked"] = {(0, 1, 1 << 22)}  # a triple index the keys do not hold
