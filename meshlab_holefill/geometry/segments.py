@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["segment_distances", "nonadjacent_mask", "segment_distance_rows", "segment_distance_matrix",
-           "min_segment_distance", "is_simple_polygon", "polygon_edges_touch", "polygon_edges_touch_numpy"]
+           "min_segment_distance", "is_simple_polygon", "keeps_clearance", "polygon_edges_touch", "polygon_edges_touch_numpy"]
 
 
 def segment_distances(A0, A1, B0, B1):
@@ -235,34 +235,36 @@ def is_simple_polygon(Q, eps, near=None):
     if len(Q) < 3 or Q.ndim != 2 or not np.isfinite(eps):
         return min_segment_distance(Q, near) > eps
     P = np.ascontiguousarray(Q)
-    return bool(_clearance_above(P, np.ascontiguousarray(np.roll(P, -1, axis=0)), float(eps),
-                                 np.inf if near is None else float(near)))
+    R = np.ascontiguousarray(np.roll(P, -1, axis=0))
+    if near is None:
+        # Exact wherever it can matter: a pair whose bound exceeds twice eps (plus a margin for the
+        # bound's rounding on touching segments) is farther apart than eps.
+        near = 2.0 * eps + 1e-9 * float(np.abs(R - P).max())
+    return bool(keeps_clearance(P, R, nonadjacent_mask(len(P)), float(near), float(eps)))
 
 
 @njit(cache=True)
-def _clearance_above(P, Q, eps, near):
-    """Every pair of non-adjacent segments [P_i, Q_i] farther apart than eps (the answer of
-    ``min_segment_distance(P, near) > eps``), stopping at the first pair that is not.
+def keeps_clearance(Q, R, allowed, near, eps):
+    """Whether every allowed pair of segments [Q_i, R_i], [Q_j, R_j] is more than ``eps`` apart.
 
-    A pair is measured exactly (:func:`_segment_distance`, the same numbers the matrix holds)
-    unless its bounding-sphere bound already exceeds ``near`` (the matrix then holds the bound,
-    above eps) or exceeds 2 eps plus a relative margin (the exact distance, never below the
-    bound by more than rounding, is then above eps too).
+    ``segment_distance_rows(Q, R, Q, R, allowed, near).min() > eps`` (``near`` > ``eps``): the
+    clearance d_MD > epsilon of Sec. 3.1 on the projected loop, the annealing's stage test,
+    stopping at the first pair within ``eps``. A pair whose bound exceeds ``near`` is farther than
+    ``eps``; the others get the same exact distance as there (both orders of a pair, as the full
+    matrix has them). A NaN distance fails, as the minimum's comparison does.
     """
-    m = P.shape[0]
-    c = 0.5 * (P + Q)
+    m = Q.shape[0]
+    c = 0.5 * (Q + R)
     r = np.empty(m)
     for i in range(m):
-        r[i] = 0.5 * math.sqrt(_square_sum(Q, i, P, i))
+        r[i] = 0.5 * math.sqrt(_square_sum(R, i, Q, i))
     for i in range(m):
-        for j in range(i + 2, m):
-            if i == 0 and j == m - 1:
+        for j in range(m):
+            if not allowed[i, j]:
                 continue
             bound = math.sqrt(_square_sum(c, i, c, j)) - r[i] - r[j]
-            if bound > near or bound > 2.0 * eps + 1e-9 * (r[i] + r[j]):
-                continue
-            # Both orders: the matrix holds both, and they may differ in the last bit.
-            if not (_segment_distance(P, Q, P, Q, i, j) > eps and _segment_distance(P, Q, P, Q, j, i) > eps):
+            d = _segment_distance(Q, R, Q, R, i, j) if bound <= near else bound
+            if not d > eps:
                 return False
     return True
 

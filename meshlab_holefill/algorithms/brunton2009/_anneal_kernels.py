@@ -20,9 +20,9 @@ import math
 import numpy as np
 from numba import njit
 
-from ...geometry.segments import _distance_rows, _segment_distance, _square_sum
+from ...geometry.segments import _distance_rows
 
-__all__ = ["propose_moves", "apply_moves", "keeps_clearance"]
+__all__ = ["propose_moves", "apply_moves"]
 
 
 @njit(cache=True)
@@ -154,29 +154,3 @@ def apply_moves(P, N, T, D, J, q, normals, angles, acc, mask, near, eps):
     for r in range(moved.shape[0]):  # columns after rows, as numpy: distances are symmetric only to rounding
         D[:, moved[r]] = rows[r]
     return acc, D.min()
-
-
-@njit(cache=True)
-def keeps_clearance(Q, R, allowed, near, eps):
-    """Whether every allowed pair of segments [Q_i, R_i], [Q_j, R_j] is more than ``eps`` apart.
-
-    ``segment_distance_rows(Q, R, Q, R, allowed, near).min() > eps`` (``near`` > ``eps``): the
-    clearance d_MD > epsilon of Sec. 3.1 on the projected loop, the annealing's stage test,
-    stopping at the first pair within ``eps``. A pair whose bound exceeds ``near`` is farther than
-    ``eps``; the others get the same exact distance as there (both orders of a pair, as the full
-    matrix has them). A NaN distance fails, as the minimum's comparison does.
-    """
-    m = Q.shape[0]
-    c = 0.5 * (Q + R)
-    r = np.empty(m)
-    for i in range(m):
-        r[i] = 0.5 * math.sqrt(_square_sum(R, i, Q, i))
-    for i in range(m):
-        for j in range(m):
-            if not allowed[i, j]:
-                continue
-            bound = math.sqrt(_square_sum(c, i, c, j)) - r[i] - r[j]
-            d = _segment_distance(Q, R, Q, R, i, j) if bound <= near else bound
-            if not d > eps:
-                return False
-    return True

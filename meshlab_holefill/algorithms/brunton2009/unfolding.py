@@ -73,9 +73,10 @@ import numpy as np
 from ...geometry.development import close_lengths
 from ...geometry.pca import fit_plane, project_to_plane
 from ...geometry.quality import cross_rows
-from ...geometry.segments import is_simple_polygon, min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
+from ...geometry.segments import (is_simple_polygon, keeps_clearance, min_segment_distance, nonadjacent_mask,
+                                  segment_distance_matrix, segment_distance_rows)
 from ...errors import HoleFillError
-from ._anneal_kernels import apply_moves, keeps_clearance, propose_moves
+from ._anneal_kernels import apply_moves, propose_moves
 
 __all__ = ["triple_normals", "planarity_terms", "planarity_energy", "colour_classes", "anneal_loop",
            "project_to_best_plane", "linear_motion_is_simple", "with_loop_lengths", "unfold_loop"]

@@ -175,7 +175,7 @@ def test_stage_test_equals_projection_and_simplicity_test():
 
 
 def test_keeps_clearance_fails_on_nan():
-    from meshlab_holefill.algorithms.brunton2009._anneal_kernels import keeps_clearance
+    from meshlab_holefill.geometry.segments import keeps_clearance
     from meshlab_holefill.geometry.segments import nonadjacent_mask
 
     Q = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [np.nan, 1.0]])
