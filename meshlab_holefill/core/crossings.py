@@ -14,7 +14,7 @@ from ..geometry.intersections import faces_intersecting, intersecting_pairs
 from .holes import nonmanifold_edges
 from ..geometry.sets import isin_ints, positions_ints, unique_ints
 
-__all__ = ["clashing_patches", "context_crossings", "crossing_patches", "face_boxes_near", "load_face_boxes_kernel", "patch_box",
+__all__ = ["clashing_patches", "context_crossings", "crossing_patches", "face_boxes_near", "load_crossing_kernels", "patch_box",
            "patch_intersections", "withdraw"]
 
 
@@ -49,16 +49,24 @@ def face_boxes_near(V, F, boxes):
     return near, lo, hi
 
 
-def load_face_boxes_kernel(F):
-    """Load the compiled box query (:func:`face_boxes_near`) for faces of F's integer type, in this process.
+def load_crossing_kernels(F):
+    """Load the compiled kernels of the mesh crossing check for faces of F's integer type, in this process.
 
-    Patches are checked against the mesh by the worker processes that filled them; loaded
-    before the workers fork, the kernel is not loaded again by each worker within its first
-    hole's time (about 0.05 s each). A non-contiguous F is left to the workers.
+    The box query (:func:`face_boxes_near`) and the triangle tests of
+    :func:`patch_intersections`, run on a patch of two triangles, one crossing a mesh face.
+    Called before holes are filled, so that neither the first hole's time nor each forked worker
+    pays for loading them (about 0.05 s each). A non-contiguous F is left to the checks.
     """
     F = np.asarray(F)
-    if F.ndim == 2 and F.flags.c_contiguous:
-        face_boxes_near(np.zeros((3, 3)), np.arange(3, dtype=F.dtype).reshape(1, 3), np.zeros((1, 2, 3)))
+    if F.ndim != 2 or not F.flags.c_contiguous:
+        return
+    mesh_V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.2, 0.2, -0.5], [0.2, 0.2, 0.5],
+                       [0.6, 0.6, 0.5]])
+    mesh_F = np.array([[0, 1, 2]], dtype=F.dtype)
+    loop = np.array([3, 4, 5])
+    points = np.concatenate([mesh_V[loop], [[0.6, 0.6, -0.5]]])
+    candidates = face_boxes_near(mesh_V, mesh_F, np.stack([points.min(axis=0), points.max(axis=0)])[None])
+    patch_intersections(points, np.array([[0, 1, 2], [0, 2, 3]]), mesh_V, mesh_F, candidates, loop)
 
 
 @njit(cache=True)

@@ -18,7 +18,7 @@ import numpy as np
 from dataclasses import dataclass
 
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
-from .crossings import (clashing_patches, context_crossings, crossing_patches, face_boxes_near, load_face_boxes_kernel,
+from .crossings import (clashing_patches, context_crossings, crossing_patches, face_boxes_near, load_crossing_kernels,
                         patch_box, patch_intersections)
 from .face_grid import face_grid
 from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
@@ -298,10 +298,10 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, se
     # With workers each checks its own patches against the mesh, instead of waiting for every fill here.
     check_in_job = params["selfintersection"] and workers > 1
     grid = None
+    if params["selfintersection"] and order:
+        load_crossing_kernels(F)  # for faces of F's type; forked workers inherit them
     if check_in_job and len(order) >= GRID_SCANS * workers:
         grid = face_grid(V, F)  # the workers inherit it, and its kernels
-    elif check_in_job:
-        load_face_boxes_kernel(F)  # the workers inherit the loaded kernel
 
     def fill_hole(i):
         """(context key, patch or failure reason, seconds, mesh crossings or None) of hole ``i``."""

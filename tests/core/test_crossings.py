@@ -46,7 +46,7 @@ def test_faces_near_boxes_are_those_whose_own_box_meets_one_of_them(seed, int32)
     np.testing.assert_array_equal(face_hi, box_hi[near])
 
 
-def test_the_box_query_is_loaded_for_the_mesh_face_type_before_workers_fork(monkeypatch):
+def test_the_crossing_kernels_are_loaded_for_the_mesh_face_type_before_any_hole_is_filled(monkeypatch):
     from meshlab_holefill import fill_holes
     from meshlab_holefill.core import pipeline
 
@@ -54,13 +54,13 @@ def test_the_box_query_is_loaded_for_the_mesh_face_type_before_workers_fork(monk
 
     V, F, _ = sphere_with_holes()
     loaded = []
-    real = pipeline.load_face_boxes_kernel
-    monkeypatch.setattr(pipeline, "load_face_boxes_kernel", lambda faces: loaded.append(faces.dtype) or real(faces))
+    real = pipeline.load_crossing_kernels
+    monkeypatch.setattr(pipeline, "load_crossing_kernels", lambda faces: loaded.append(faces.dtype) or real(faces))
     ms = meshset_from_arrays(V, F)  # pymeshlab hands the pipeline int32 faces
     ms.meshing_close_holes_min_angle_bilateral(workers=2)
-    fill_holes(V, F, "min_angle_bilateral", workers=2)  # the array door: int64 faces
+    fill_holes(V, F, "min_angle_bilateral", workers=1)  # the array door: int64 faces, this process
     assert loaded == [np.dtype(np.int32), np.dtype(np.int64)]
-    fill_holes(V, F, "min_angle_bilateral", workers=1)  # filled in this process: nothing to load for workers
+    fill_holes(V, F, "min_angle_bilateral", selfintersection=False)  # no crossing check: nothing to load
     assert len(loaded) == 2
     from meshlab_holefill.core.crossings import _faces_meeting_boxes
 

@@ -174,6 +174,7 @@ def warm_up():
         return
     from ...core import examples
     from ...core.holes import hole_context
+    from ...geometry.segments import is_simple_polygon
 
     V, F, loop = examples.bowl_with_hole()
     fill(hole_context(V, F, loop, rings=RINGS), seed=1)
@@ -182,6 +183,7 @@ def warm_up():
     square = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.9, 0.12, 0.0]])
     raise_min_quality(square, np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]), 4,
                       fold_test=lambda V, F: int(V[4, 0] != 0.9))
+    is_simple_polygon(square[:4, :2], 1e-9)  # the development layout's simplicity test
     _WARM.append(True)
 
 

@@ -147,7 +147,9 @@ def _run(P, n_ref, forbidden_edges, merge_factor, max_faces, obstacles, merge_ea
                          TWO_TRIANGLES_MAX, FALLBACK_ONE_TRIANGLE_MAX, ANGLE_MARGIN, FOLD_MIN_COS, HOVER_FACTOR, TWO,
                          *leave_ball(P))
     ob, border_faces = _obstacle_arrays(obstacles, cell, k)
-    normals = np.ascontiguousarray(np.broadcast_to(n_ref, (k, 3)), np.float64)
+    # a writable copy always: the compiled loop is typed by its arguments' flags too, so that a
+    # read-only input would load (or compile) a second version of it
+    normals = np.array(np.broadcast_to(n_ref, (k, 3)), np.float64, order="C")
     forbidden = np.ascontiguousarray(np.asarray(forbidden_edges, np.int64).reshape(-1, 2))
     st = initial_state(P, normals, S, forbidden, border_faces, ob.V, params)
     outcome, size, st = run_front(st, params, ob, new_scratch())

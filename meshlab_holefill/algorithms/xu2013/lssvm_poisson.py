@@ -33,12 +33,16 @@ import time
 
 import numpy as np
 
+from ...core import examples
 from ...core.blas_threads import single_blas_thread
 from ...core.border_bend import border_bend
+from ...core.holes import hole_context
 from ...core.parameters import ParamSpec
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...geometry.flips import relax_edges
+from ...geometry.refine import refine_patch
+from ...geometry.segments import is_simple_polygon, polygon_edges_touch
 from .advancing_front import warm_up as warm_up_front
 from .border_split import split_long_boundary_edges
 from .laplacian_regression import (NormalFrameRegressor, fit_laplacian_regressors, training_rows, training_set,
@@ -134,13 +138,27 @@ def warm_up():
     """Load the compiled kernels a fill calls: the 3D front's, the edge relaxation's rounds and the Laplacian's rows.
 
     Loading them from the disk cache takes a few tenths of a second per process; called
-    before holes are filled in forked workers, it lets them inherit the loaded kernels.
+    before holes are filled in forked workers, it lets them inherit the loaded kernels. A small
+    hole is filled too, so that every kernel a fill calls is loaded with the argument types a
+    real hole gives it.
     """
+    if _WARM:
+        return
     warm_up_front()
     rhombus = np.array([[-1.0, 0.0, 0.0], [0.0, -0.3, 0.0], [1.0, 0.0, 0.0], [0.0, 0.3, 0.0]])
     faces = np.array([[0, 1, 2], [0, 2, 3]])
     relax_edges(rhombus, faces)  # the long diagonal is swapped
     normalized_cotangent_laplacian(rhombus, faces)
+    V, F, loop = examples.bowl_with_hole()
+    fill(hole_context(V, F, loop, rings=RINGS))
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    polygon_edges_touch(square)  # the developed loop's tests, which the bowl's hole does not reach
+    is_simple_polygon(square, 1e-9)
+    refine_patch(rhombus, faces, np.full(4, 0.5))  # the initial patches' refinement (split faces)
+    _WARM.append(True)
+
+
+_WARM = []  # set once the compiled kernels are loaded in this process
 
 
 WARM_UP = warm_up
