@@ -62,9 +62,9 @@ def test_a_hole_with_a_jagged_noisy_border_is_closed_from_the_least_bend_triangu
     assert_filled_cleanly(V, F, V2, F2, faces_kept=algorithm != "lssvm_poisson")  # LS-SVM splits border faces
 
 
-def test_hpde_closes_a_long_jagged_loop_by_its_last_resort_on_the_least_bend_triangulation():
-    """The benchmark's cow_noisy 307-edge hole: every HPDE layout folds, and the loop is too long for the
-    plain-Python Liepa triangulation of the last resort (more than 60 edges)."""
+@functools.lru_cache(maxsize=None)
+def noisy_cow(seed):
+    """(V, F): cow.obj Loop-subdivided twice, noise of 0.3 mean edge lengths along its normals, four holes cut."""
     import pymeshlab
 
     from conftest import mesh_arrays, sample
@@ -74,9 +74,26 @@ def test_hpde_closes_a_long_jagged_loop_by_its_last_resort_on_the_least_bend_tri
     ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
     V, F = mesh_arrays(ms)
     V = normal_noise(V, F, 0.3, seed=0)
-    _, holes = cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=0, strict=False)
-    F = np.delete(F, np.concatenate([h.face_indices for h in holes]), axis=0)
+    _, holes = cut_holes(V, F, sizes=("small", "medium", "large", "irregular"), seed=seed, strict=False)
+    return V, np.delete(F, np.concatenate([h.face_indices for h in holes]), axis=0)
+
+
+def test_hpde_closes_a_long_jagged_loop_by_its_last_resort_on_the_least_bend_triangulation():
+    """The benchmark's cow_noisy 307-edge hole: every HPDE layout folds, and the loop is too long for the
+    plain-Python Liepa triangulation of the last resort (more than 60 edges)."""
+    V, F = noisy_cow(0)
     V2, F2, result = fill_holes(V, F, "differential_evolution", workers=1, maxholesize=1000)
     assert result["closed_holes"] == 4
     assert [h["layout"] for h in result["holes"] if h["boundary_edges"] > 300] == ["loop only"]
+    assert_filled_cleanly(V, F, V2, F2)
+
+
+def test_the_min_angle_filter_closes_a_jagged_loop_from_the_least_bend_triangulation_with_the_faired_set():
+    """A 267-edge irregular hole of the noisy cow: the paper's steps from every initial triangulation (its
+    own, the faired set's, the least-bend ones) cross the mesh; the faired set grown from the least-bend
+    triangulation does not."""
+    V, F = noisy_cow(4)
+    V2, F2, result = fill_holes(V, F, "min_angle_bilateral", workers=1, maxholesize=1000)
+    assert result["closed_holes"] == 4
+    assert [h["fallback"] for h in result["holes"] if h["boundary_edges"] > 250] == ["least bend, faired"]
     assert_filled_cleanly(V, F, V2, F2)

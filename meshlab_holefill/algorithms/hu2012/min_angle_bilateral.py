@@ -113,7 +113,8 @@ PARAMS = [
               "mesh after the guarded refinement and fewer filter iterations, the patch of the faired option "
               "set (fairing=thinplate, iterations=0, smoothing=10) is taken instead if that one crosses nothing; "
               "where the initial triangulation itself crosses, the same steps are tried from a triangulation about "
-              "the hole's own plane; otherwise the hole is reported failed as before."),
+              "the hole's own plane; last, for jagged borders, the same steps (then the faired set) from the "
+              "loop's least-bend triangulations; otherwise the hole is reported failed as before."),
     ParamSpec("filter_guard", "float", 0.3,
               "Guard on the bilateral step: a move that would leave a new triangle with quality 2r/R below "
               "min(filter_guard, its quality before), or flip it, is undone; 0 turns the guard off.",
@@ -390,7 +391,7 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
         :func:`hole_plane_triangulation` (paper's steps, then faired) when one of them crosses nothing;
         last, by the paper's steps grown from the loop's least-bend triangulations
         (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`), for jagged borders
-        whose faces tilt every way (noisy scans).
+        whose faces tilt every way (noisy scans), then by the faired option set grown from them.
 
     Returns
     -------
@@ -482,8 +483,7 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
         plane = functools.cache(lambda: hole_plane_triangulation(ctx.points, ctx.forbidden_edges))
         tries += [("hole plane", plane, options)] + ([] if faired else [("hole plane, faired", plane, FAIRED_OPTIONS)])
     # Last, a jagged border: the faces beside the hole tilt every way and the ears fold onto them.
-    least_bend = (("least bend", lambda T=T: T, options) for T in least_bend_triangulations(ctx))
-    for name, initial, chosen in itertools.chain(tries, least_bend):
+    for name, initial, chosen in itertools.chain(tries, _least_bend_tries(ctx, options, faired)):
         try:
             patch = _patch_from(ctx, initial(), **same, **chosen)
         except HoleFillError:  # the hole fails for the paper's patch, not for a fallback's
@@ -492,6 +492,20 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
             patch.info["fallback"] = name
             return patch
     return Patch(vertices=V[k:], faces=F, info=info)
+
+
+def _least_bend_tries(ctx, options, faired):
+    """The least-bend fallback's attempts (name, initial triangulation, options): each triangulation of
+    :func:`.least_bend.least_bend_triangulations` with the options asked for, then each with the faired
+    option set (where the filter's own patch bends onto the jagged border's teeth, the faired one bends away).
+    """
+    seen = []
+    for T in least_bend_triangulations(ctx):
+        seen.append(T)
+        yield "least bend", (lambda T=T: T), options
+    if not faired:
+        for T in seen:
+            yield "least bend, faired", (lambda T=T: T), FAIRED_OPTIONS
 
 
 def hole_plane_triangulation(P, forbidden_edges=()):
