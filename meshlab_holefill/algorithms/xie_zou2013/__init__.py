@@ -18,8 +18,8 @@ Where each step of Algorithm 2 lives (step 1, smoothing noisy input, is not used
   :func:`curvature_smooth`); decimation of short edges and min-angle swaps: :mod:`.optimisation`
   (:func:`decimate_short_edges`, :func:`swap_edges_min_angle`); the final guarded quality pass
   beyond the paper: :mod:`.quality_pass` (:func:`raise_min_quality`).
-* The steps in order, the layouts tried and the loop-only last resort: the private
-  ``_algorithm2`` module. The filter (``fill``, ``PARAMS``, ``RINGS``, the readings of the
+* The steps in order and the layouts tried: the private ``_algorithm2`` module; step 7 on one
+  layout: ``_smooth_and_optimise``; the loop-only last resort: ``_loop_only_patch``. The filter (``fill``, ``PARAMS``, ``RINGS``, the readings of the
   paper): :mod:`.differential_evolution`. The paper's sphere experiment is in
   :mod:`meshlab_holefill.evaluation.papers.hpde_sphere`.
 """

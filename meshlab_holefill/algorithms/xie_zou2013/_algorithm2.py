@@ -8,54 +8,39 @@ Xie and Zou 2013. :func:`patch_hole` runs, for one hole:
   planes and the DE prediction of the points, once per prediction (segmented or not);
 * step 6 (Sec. 4.6, :func:`.triangulation.triangulate_layout`): the constrained triangulation
   of one layout, fold-overs detected (:mod:`.folds`);
-* step 7 (Sec. 4.7, :func:`smooth_and_optimise`): smoothing (:mod:`.smoothing`), decimation and
-  min-angle swaps (:mod:`.optimisation`), then beyond the paper the ``relax`` rounds and the
-  guarded quality pass (:mod:`.quality_pass`);
+* step 7 (Sec. 4.7, :func:`._smooth_and_optimise.smooth_and_optimise`): smoothing
+  (:mod:`.smoothing`), decimation and min-angle swaps (:mod:`.optimisation`), then beyond the
+  paper the ``relax`` rounds and the guarded quality pass (:mod:`.quality_pass`);
 
 trying the layouts in :func:`attempt_order` until one is clean, and the loop-only
-triangulation (:func:`loop_only_patch`) as the last resort. The readings behind each choice
+triangulation (:func:`._loop_only_patch.loop_only_patch`) as the last resort. The readings behind each choice
 are in the module docstring of :mod:`.differential_evolution`.
 """
 from __future__ import annotations
 
 import functools
-import itertools
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from ...core.border_bend import border_bend
-from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...errors import HoleFillError
-from ...geometry.laplacian import tangential_umbrella_smoothing
-from ...geometry.quality import triangle_quality
 from . import folds
-from . import optimisation as optimisation_steps
 from . import prediction as prediction_steps
-from . import quality_pass
 from . import sections
 from . import smoothing as smoothing_steps
 from . import triangulation
+from ._loop_only_patch import loop_only_patch
+from ._smooth_and_optimise import smooth_and_optimise
 
 __all__ = ["PredictionOptions", "SmoothingOptions", "OptimisationOptions", "patch_hole", "boundary_step",
-           "attempt_order", "smooth_and_optimise", "loop_only_patch"]
+           "attempt_order"]
 
 OUTLIER_ROUNDS = 4  # rounds of leaving out prediction points on faces that stay folded
-LAST_RESORT_ANGLE = np.radians(175.0)  # largest crease the loop-only last resort accepts
-LAST_RESORT_FLOORS = (0.4, 0.6)  # quality pass floors of the loop-only last resort (splits give it inner vertices)
 MIN_COVERAGE = 0.5  # a pairing keeping fewer base points than this share yields to the other choice
 GOOD_KEPT_SHARE = 0.5  # a layout keeping fewer prediction points is used only if no other keeps more
-RELAX_ROUNDS = 3  # rounds of sliver collapse + obtuse-edge splits + tangential relaxation + swaps (relax)
-SLIVER_ANGLE = np.radians(140.0)  # a free vertex this flat against a loop edge is collapsed onto it
-# A fold among triangles of loop vertices only, all within a stretch of at most this many loop
-# edges, is the loop's own shape (a zigzag notch of a border cut through triangles), kept as
-# the ears are. bunny.obj without its lowest tenth by height (a nearly planar 231-edge loop)
-# failed every attempt on such folds spanning 4 and 6 edges; with 8 it closes, and no hole of
-# the benchmark or of 32 cuts by height (bunny, bone, airplane, cow) changes.
-NOTCH_SPAN = 8
-QUALITY_TARGET = 0.5  # relax: free vertices of triangles with 2r/R below this are moved (improve_worst_vertices)
 
 
 @dataclass(frozen=True)
@@ -114,18 +99,6 @@ class _Hole:
     def development(self):
         """The 'development' layout's polygon, or None (:func:`.triangulation.loop_development`), found once."""
         return triangulation.loop_development(self.ctx, self.edge_len)
-
-
-@dataclass
-class _PatchCounts:
-    """The patch of step 7 (loop vertices first, ``ids`` the prediction point of each V[k:]) and its counts."""
-
-    V: np.ndarray
-    F: np.ndarray
-    ids: np.ndarray
-    swaps: int = 0
-    collapses: int = 0
-    repairs: int = 0  # fold repairs after the swaps (those before the smoothing are counted apart)
 
 
 @dataclass
@@ -347,246 +320,3 @@ def _layout_patch(hole, layout, result, name):
             return None, f"{name}: fold-over after smoothing and mesh optimisation"
         excluded[bad_ids] = True
     return None, f"{name}: fold-over after smoothing and mesh optimisation ({OUTLIER_ROUNDS} rounds)"
-
-
-def smooth_and_optimise(V, F, ids, ctx, edge_len, mesh_normals, smoothing, optimisation, record=None):
-    """Step 7 (Sec. 4.7) with the fold repairs: smoothing, decimation, min-angle swaps.
-
-    Beyond the paper: chords duplicating mesh edges are split first, folds are repaired after
-    the smoothing and the swaps, then the ``relax`` rounds and the quality pass run.
-
-    Parameters
-    ----------
-    V : (k + q, 3) float64  loop vertices first, then the triangulated prediction points
-    F : (t, 3) int64
-    ids : (q,) int64  prediction point of each V[k:]
-    ctx : HoleContext
-    edge_len : float  EdgeLen
-    mesh_normals : (k, 3) float64  normals of the border faces (:func:`.folds.border_normals`)
-    smoothing : SmoothingOptions
-    optimisation : OptimisationOptions
-    record : dict, optional
-        Receives ``smoothed_points``: the smoothed prediction points SP_i of Sec. 4.7, before
-        decimation (the points the errors of Eq. 17 are measured on).
-
-    Returns
-    -------
-    V, F : the patch (loop vertices first)
-    stats : dict  ``kept``, ``collapses``, ``swaps``, ``fold_repairs``, ``folds_left`` and more
-    bad_ids : (r,) int64  prediction points on faces still folded (empty when the patch is clean)
-    """
-    k = ctx.size
-    stats = {"kept": int(len(V) - k)}
-    V, F, ids, repairs = _smooth(V, F, ids, ctx, mesh_normals, smoothing, stats, record)
-    V, F, collapses, keep = optimisation_steps.decimate_short_edges(V, F, k, optimisation.decimation_rate * edge_len,
-                                                                    ctx.forbidden_edges)
-    ids = ids[keep[k:] - k]
-    F, swaps = optimisation_steps.swap_edges_min_angle(V, F, ctx.forbidden_edges)
-    V, F, more = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-    patch = _PatchCounts(V, F, ids, swaps, collapses, more)
-    _relax(patch, ctx, edge_len, mesh_normals, optimisation.relax, stats)
-    _quality_pass(patch, ctx, mesh_normals, optimisation.quality_floor, stats)
-    V, F, ids = patch.V, patch.F, patch.ids
-    stats.update(collapses=int(patch.collapses), swaps=int(patch.swaps), fold_repairs=int(repairs + patch.repairs))
-    bad = folds.local_folds(V, F, mesh_normals)
-    # A fold of an ear (three consecutive loop vertices), or among triangles of loop vertices
-    # closing a notch of at most NOTCH_SPAN loop edges, is the boundary's own shape (a 3-edge
-    # hole in a crumpled scan has no other patch; a border cut through triangles zigzags); it
-    # is kept and counted, the filter's intersection check still applies. Any other fold must go.
-    loop_only = folds.boundary_ears(F, k, NOTCH_SPAN)
-    stats["boundary_folds"] = int((bad & loop_only).sum())
-    stats["folds_left"] = int((bad & ~loop_only).sum())
-    verts = np.unique(F[bad & ~loop_only].ravel())
-    bad_ids = ids[verts[verts >= k] - k]
-    return V, F, stats, bad_ids[bad_ids >= 0]
-
-
-def _smooth(V, F, ids, ctx, mesh_normals, smoothing, stats, record):
-    """The NumSmooth passes of Sec. 4.7, after splitting chords that duplicate mesh edges and repairing folds.
-
-    Returns ``V, F, ids, repairs`` (ids -1 for the split vertices, which are no prediction points).
-    """
-    k = ctx.size
-    n_before = len(V)
-    V, F, splits = triangulation.split_forbidden_edges(V, F, ctx.forbidden_edges)
-    ids = np.concatenate([ids, np.full(len(V) - n_before, -1, np.int64)])  # -1: not a prediction point
-    stats["forbidden_splits"] = int(splits)
-    V, F, repairs = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-    if smoothing.operator == "taubin":
-        V = smoothing_steps.taubin_smooth(V, F, np.arange(len(V)) < k, passes=smoothing.passes,
-                                          lam=smoothing.taubin_lambda, pass_band=smoothing.taubin_pass_band)
-    else:
-        V = smoothing_steps.curvature_smooth(V, F, k, ctx.vertices, ctx.faces, passes=smoothing.passes,
-                                             anchor=smoothing.anchor,
-                                             weights="scale" if smoothing.operator == "curvature_scaled"
-                                             else "uniform")
-    if record is not None:
-        record["smoothed_points"] = V[k:][ids >= 0].copy()
-    return V, F, ids, repairs
-
-
-def _relax(patch, ctx, edge_len, mesh_normals, relax, stats):
-    """Beyond the paper (``relax``): sliver collapses, obtuse-edge splits, tangential relaxation, apex moves.
-
-    Updates ``patch`` (a :class:`_PatchCounts`) in place; undone (all but the fold repairs'
-    count) when it folds what the repairs cannot unfold.
-    """
-    k = ctx.size
-    V, F, ids, swaps, collapses = patch.V, patch.F, patch.ids, patch.swaps, patch.collapses
-    splits = 0
-    snapshot = (V, F, ids, swaps, collapses)
-    for _ in range(RELAX_ROUNDS if relax > 0 else 0):
-        # Not the vertices split off an obtuse edge: they start flat and the relaxation moves them.
-        eligible = np.concatenate([np.zeros(k, bool), ids != -2])
-        V, F, c, keep = optimisation_steps.decimate_short_edges(V, F, k, 1e-9 * edge_len, ctx.forbidden_edges,
-                                                                max_rounds=5, sliver_angle=SLIVER_ANGLE,
-                                                                sliver_eligible=eligible)
-        ids = ids[keep[k:] - k]
-        collapses += c
-        n_before = len(V)
-        V, F, s = optimisation_steps.split_obtuse_edges(V, F, k)
-        ids = np.concatenate([ids, np.full(len(V) - n_before, -2, np.int64)])  # -2: obtuse split
-        splits += s
-        V, F, r3, keep = optimisation_steps.remove_valence_three(V, F, k, ctx.forbidden_edges)
-        ids = ids[keep[k:] - k]
-        collapses += r3
-        V = tangential_umbrella_smoothing(V, F, np.arange(len(V)) < k, relax)
-        F, more_swaps = optimisation_steps.swap_edges_min_angle(V, F, ctx.forbidden_edges)
-        swaps += more_swaps
-        if s == 0 and c == 0:
-            break
-    stats["obtuse_splits"] = int(splits)
-    if relax > 0:
-        # The swaps cannot lift a triangle whose long edge is on the loop: move its apex.
-        moved = 0
-        for _ in range(2):
-            V, m_ = optimisation_steps.improve_worst_vertices(V, F, k, target=QUALITY_TARGET)
-            F, more_swaps = optimisation_steps.swap_edges_min_angle(V, F, ctx.forbidden_edges)
-            moved += m_
-            swaps += more_swaps
-            if m_ == 0 and more_swaps == 0:
-                break
-        stats["quality_moves"] = int(moved)
-    if relax > 0 and folds.local_folds(V, F, mesh_normals).any():
-        V, F, again = folds.repair_folds(V, F, k, ctx.forbidden_edges, mesh_normals)
-        patch.repairs += again
-        if (folds.local_folds(V, F, mesh_normals) & ~folds.boundary_ears(F, k, NOTCH_SPAN)).any():
-            V, F, ids, swaps, collapses = snapshot  # the relaxation folded what it could not repair: undo it
-            stats["relax_undone"] = True
-    patch.V, patch.F, patch.ids, patch.swaps, patch.collapses = V, F, ids, swaps, collapses
-
-
-def _quality_pass(patch, ctx, mesh_normals, quality_floor, stats):
-    """Beyond the paper (``quality_floor``): the guarded pass of :mod:`.quality_pass` on an unfolded patch.
-
-    Guarded swaps / moves / collapses of the triangles below the floor; undone if it makes the
-    patch cross the surrounding rings. Updates ``patch`` (a :class:`_PatchCounts`) in place.
-    """
-    k = ctx.size
-    V, F, ids = patch.V, patch.F, patch.ids
-
-    def fold_count(V_, F_):
-        return int((folds.local_folds(V_, F_, mesh_normals) & ~folds.boundary_ears(F_, k, NOTCH_SPAN)).sum())
-
-    if quality_floor > 0 and fold_count(V, F) == 0:
-        Vq, Fq, keep, qstats = quality_pass.raise_min_quality(V, F, k, ctx.forbidden_edges, mesh_normals,
-                                                              floor=quality_floor, fold_test=fold_count)
-        if any(qstats.values()):
-            crossing = folds.intersects_surroundings(ctx, Vq, Fq)
-            if not crossing or folds.intersects_surroundings(ctx, V, F):
-                patch.V, patch.F = Vq, Fq
-                patch.ids = np.where(keep[k:] >= 0, ids[np.maximum(keep[k:] - k, 0)], -1)
-                patch.swaps += qstats["swaps"]
-                patch.collapses += qstats["collapses"]
-                stats["quality_moves"] = stats.get("quality_moves", 0) + qstats["moves"]
-                stats["quality_splits"] = qstats["splits"]
-                stats["crossing"] = bool(crossing)
-            else:
-                stats["quality_pass_undone"] = True
-
-
-def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
-    """Last resort (beyond the paper): the loop alone, triangulated by Liepa's weights or flat in the PCA plane.
-
-    Loops longer than ``folds.LOOP_TRIANGULATION_SIZE`` take the compiled least-bend triangulations
-    (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`, the same weights) after the plane.
-
-    Teeth of a crumpled scan border force sharp creases there, so up to LAST_RESORT_ANGLE is
-    accepted (a triangle flipped onto its neighbour is at 180 degrees). The first candidate
-    that duplicates no mesh edge, has no sharper fold and does not cross the rings is relaxed
-    (``relax``: its splits give it interior vertices) and raised by the quality pass with
-    splits (``quality_floor``), each kept only if clean.
-
-    Returns
-    -------
-    Patch or None
-        With ``info`` (updated with the quality pass's counts); None when no candidate is clean.
-    """
-    k = ctx.size
-    P = ctx.points
-    candidates = [folds.loop_triangulation(P, mesh_normals, ctx.forbidden_edges,
-                                           max_size=folds.LOOP_TRIANGULATION_SIZE,
-                                           blocked=folds.crossing_triangles(ctx, folds.LOOP_TRIANGULATION_SIZE))[0]]
-    try:
-        pmap = triangulation.plane_map_for(base, normals, seg, False)
-        candidates.append(triangulation.triangulate_projection(P, np.zeros((0, 3)), pmap, 0.0)[1])
-    except HoleFillError:
-        pass
-    fe = np.sort(np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2), axis=1)
-    # Loops too long for folds.loop_triangulation: the compiled least-bend triangulations, lazily.
-    for F in itertools.chain(candidates, least_bend_triangulations(ctx) if k > folds.LOOP_TRIANGULATION_SIZE else ()):
-        if F is None or len(F) == 0:
-            continue
-        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-        if len(fe) and np.isin(fe[:, 0] * k + fe[:, 1], E[:, 0] * k + E[:, 1]).any():
-            continue
-        if folds.local_folds(P, F, mesh_normals, max_angle=LAST_RESORT_ANGLE).any():
-            continue
-        if folds.intersects_surroundings(ctx, P, F):
-            continue
-        V = P
-        if optimisation.relax > 0:
-            V, F = _relax_loop_only(ctx, P, F, mesh_normals, optimisation.relax)
-        if optimisation.quality_floor > 0:
-            V, F = _raise_loop_only_quality(ctx, V, F, mesh_normals, info)
-        return Patch(vertices=V[k:], faces=F, info=info)
-    return None
-
-
-def _relax_loop_only(ctx, P, F, mesh_normals, relax):
-    """Obtuse-edge splits and tangential relaxation of a loop-only patch; ``(P, F)`` back if not clean."""
-    k = ctx.size
-    Vr, Fr = P, F
-    for _ in range(RELAX_ROUNDS):
-        Vr, Fr, s_ = optimisation_steps.split_obtuse_edges(Vr, Fr, k)
-        Vr = tangential_umbrella_smoothing(Vr, Fr, np.arange(len(Vr)) < k, relax)
-        if s_ == 0:
-            break
-    if not folds.local_folds(Vr, Fr, mesh_normals, max_angle=LAST_RESORT_ANGLE).any() and \
-            not folds.intersects_surroundings(ctx, Vr, Fr):
-        return Vr, Fr
-    return P, F
-
-
-def _raise_loop_only_quality(ctx, V, F, mesh_normals, info):
-    """The guarded quality pass with splits (a loop-only patch has no free vertex to move).
-
-    Swaps may not create loop triangles that cross the rings. Each floor of
-    LAST_RESORT_FLOORS is kept only if it raises the minimum quality without crossing.
-    """
-    k = ctx.size
-
-    def fold_count(V_, F_):
-        return int(folds.local_folds(V_, F_, mesh_normals, max_angle=LAST_RESORT_ANGLE).sum())
-
-    blocked = folds.crossing_triangles(ctx)
-    for floor in LAST_RESORT_FLOORS:
-        Vq, Fq, _, qstats = quality_pass.raise_min_quality(
-            V, F, k, ctx.forbidden_edges, mesh_normals, floor=floor, fold_test=fold_count, blocked=blocked,
-            split=True)
-        if any(qstats.values()) and not folds.intersects_surroundings(ctx, Vq, Fq) and \
-                triangle_quality(Vq, Fq).min() >= min(floor, triangle_quality(V, F).min()):
-            V, F = Vq, Fq
-            for key, value in qstats.items():
-                info[f"quality_{key}"] = info.get(f"quality_{key}", 0) + value
-    return V, F

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 import meshlab_holefill  # noqa: F401  (registers the filters)
 from meshlab_holefill.algorithms.xie_zou2013 import differential_evolution as hpde
 from meshlab_holefill.evaluation.papers import hpde_sphere as hpde_experiment
-from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, triangulation as hpde_mesh, optimisation as hpde_optimisation, prediction as hpde_prediction, sections as hpde_sections, smoothing as hpde_smoothing, _algorithm2 as hpde_algorithm2
+from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, triangulation as hpde_mesh, optimisation as hpde_optimisation, prediction as hpde_prediction, sections as hpde_sections, smoothing as hpde_smoothing, _algorithm2 as hpde_algorithm2, _loop_only_patch as hpde_loop_only
 from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
 from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
 from meshlab_holefill.core.holes import boundary_loops, hole_context
@@ -1037,7 +1037,7 @@ def test_loop_only_last_resort_is_lifted_by_the_quality_pass():
     X = patch_points(ctx, patch)
     assert not hpde_folds.intersects_surroundings(ctx, X, patch.faces)
     assert not hpde_folds.local_folds(X, patch.faces, hpde_folds.border_normals(ctx),
-                                      max_angle=hpde_algorithm2.LAST_RESORT_ANGLE).any()
+                                      max_angle=hpde_loop_only.LAST_RESORT_ANGLE).any()
     q = triangle_quality(X, patch.faces)
     assert q.min() >= 0.3 and len(patch.vertices) > 0
 

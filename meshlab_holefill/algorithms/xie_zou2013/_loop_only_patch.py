@@ -1,0 +1,114 @@
+"""HPDE's last resort, beyond the paper: a patch of the loop alone, when every layout of Algorithm 2 fails.
+
+:func:`loop_only_patch` triangulates the loop by Liepa's weights (or flat in the PCA plane, or by
+the compiled least-bend triangulations for long loops), then relaxes it and raises its quality
+with splits, each kept only if clean. :mod:`._algorithm2` calls it after the last layout.
+"""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from ...core.least_bend import least_bend_triangulations
+from ...core.patch import Patch
+from ...errors import HoleFillError
+from ...geometry.laplacian import tangential_umbrella_smoothing
+from ...geometry.quality import triangle_quality
+from . import folds
+from . import optimisation as optimisation_steps
+from . import quality_pass
+from . import triangulation
+from ._smooth_and_optimise import RELAX_ROUNDS
+
+__all__ = ["loop_only_patch", "LAST_RESORT_ANGLE"]
+
+LAST_RESORT_ANGLE = np.radians(175.0)  # largest crease the loop-only last resort accepts
+LAST_RESORT_FLOORS = (0.4, 0.6)  # quality pass floors of the loop-only last resort (splits give it inner vertices)
+
+
+def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
+    """Last resort (beyond the paper): the loop alone, triangulated by Liepa's weights or flat in the PCA plane.
+
+    Loops longer than ``folds.LOOP_TRIANGULATION_SIZE`` take the compiled least-bend triangulations
+    (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`, the same weights) after the plane.
+
+    Teeth of a crumpled scan border force sharp creases there, so up to LAST_RESORT_ANGLE is
+    accepted (a triangle flipped onto its neighbour is at 180 degrees). The first candidate
+    that duplicates no mesh edge, has no sharper fold and does not cross the rings is relaxed
+    (``relax``: its splits give it interior vertices) and raised by the quality pass with
+    splits (``quality_floor``), each kept only if clean.
+
+    Returns
+    -------
+    Patch or None
+        With ``info`` (updated with the quality pass's counts); None when no candidate is clean.
+    """
+    k = ctx.size
+    P = ctx.points
+    candidates = [folds.loop_triangulation(P, mesh_normals, ctx.forbidden_edges,
+                                           max_size=folds.LOOP_TRIANGULATION_SIZE,
+                                           blocked=folds.crossing_triangles(ctx, folds.LOOP_TRIANGULATION_SIZE))[0]]
+    try:
+        pmap = triangulation.plane_map_for(base, normals, seg, False)
+        candidates.append(triangulation.triangulate_projection(P, np.zeros((0, 3)), pmap, 0.0)[1])
+    except HoleFillError:
+        pass
+    fe = np.sort(np.asarray(ctx.forbidden_edges, np.int64).reshape(-1, 2), axis=1)
+    # Loops too long for folds.loop_triangulation: the compiled least-bend triangulations, lazily.
+    for F in itertools.chain(candidates, least_bend_triangulations(ctx) if k > folds.LOOP_TRIANGULATION_SIZE else ()):
+        if F is None or len(F) == 0:
+            continue
+        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        if len(fe) and np.isin(fe[:, 0] * k + fe[:, 1], E[:, 0] * k + E[:, 1]).any():
+            continue
+        if folds.local_folds(P, F, mesh_normals, max_angle=LAST_RESORT_ANGLE).any():
+            continue
+        if folds.intersects_surroundings(ctx, P, F):
+            continue
+        V = P
+        if optimisation.relax > 0:
+            V, F = _relax_loop_only(ctx, P, F, mesh_normals, optimisation.relax)
+        if optimisation.quality_floor > 0:
+            V, F = _raise_loop_only_quality(ctx, V, F, mesh_normals, info)
+        return Patch(vertices=V[k:], faces=F, info=info)
+    return None
+
+
+def _relax_loop_only(ctx, P, F, mesh_normals, relax):
+    """Obtuse-edge splits and tangential relaxation of a loop-only patch; ``(P, F)`` back if not clean."""
+    k = ctx.size
+    Vr, Fr = P, F
+    for _ in range(RELAX_ROUNDS):
+        Vr, Fr, s_ = optimisation_steps.split_obtuse_edges(Vr, Fr, k)
+        Vr = tangential_umbrella_smoothing(Vr, Fr, np.arange(len(Vr)) < k, relax)
+        if s_ == 0:
+            break
+    if not folds.local_folds(Vr, Fr, mesh_normals, max_angle=LAST_RESORT_ANGLE).any() and \
+            not folds.intersects_surroundings(ctx, Vr, Fr):
+        return Vr, Fr
+    return P, F
+
+
+def _raise_loop_only_quality(ctx, V, F, mesh_normals, info):
+    """The guarded quality pass with splits (a loop-only patch has no free vertex to move).
+
+    Swaps may not create loop triangles that cross the rings. Each floor of
+    LAST_RESORT_FLOORS is kept only if it raises the minimum quality without crossing.
+    """
+    k = ctx.size
+
+    def fold_count(V_, F_):
+        return int(folds.local_folds(V_, F_, mesh_normals, max_angle=LAST_RESORT_ANGLE).sum())
+
+    blocked = folds.crossing_triangles(ctx)
+    for floor in LAST_RESORT_FLOORS:
+        Vq, Fq, _, qstats = quality_pass.raise_min_quality(
+            V, F, k, ctx.forbidden_edges, mesh_normals, floor=floor, fold_test=fold_count, blocked=blocked,
+            split=True)
+        if any(qstats.values()) and not folds.intersects_surroundings(ctx, Vq, Fq) and \
+                triangle_quality(Vq, Fq).min() >= min(floor, triangle_quality(V, F).min()):
+            V, F = Vq, Fq
+            for key, value in qstats.items():
+                info[f"quality_{key}"] = info.get(f"quality_{key}", 0) + value
+    return V, F
