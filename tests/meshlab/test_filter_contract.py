@@ -331,6 +331,20 @@ def test_the_unit_does_not_change_the_patch(name, scale):
         assert res["new_faces"] == ref["new_faces"] and res["new_vertices"] == ref["new_vertices"]
 
 
+@pytest.mark.parametrize("name", filter_list())
+@pytest.mark.parametrize("exponent", [-20, 20])
+def test_a_power_of_two_unit_scales_the_patch_exactly(name, exponent):
+    """Scaling by a power of two is exact in floating point: with no absolute tolerance anywhere, every
+    step computes the scaled numbers, so the patch is the scaled patch bit for bit (random draws included)."""
+    V, F, _ = sphere_with_holes(subdiv=3, centers=[(0, 0, 1), (1, 0, 0)], radius=0.3)
+    scale = 2.0 ** exponent
+    ms_ref, ms_scaled = meshset_from_arrays(V, F), meshset_from_arrays(V * scale, F)
+    assert getattr(ms_ref, name)()["closed_holes"] == getattr(ms_scaled, name)()["closed_holes"] == 2
+    ref, scaled = ms_ref.current_mesh(), ms_scaled.current_mesh()
+    np.testing.assert_array_equal(scaled.face_matrix(), ref.face_matrix())
+    np.testing.assert_array_equal(scaled.vertex_matrix(), ref.vertex_matrix() * scale)
+
+
 def test_transform_and_vertex_selection_survive_a_border_refinement(bunny_scan):
     """LS-SVM's split border edges (Sec. 3.1) rebuild the arrays before the fill: the layer state must follow."""
     ms = bunny_scan
