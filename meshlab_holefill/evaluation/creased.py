@@ -13,6 +13,10 @@ Built with MeshLab's generators, booleans and isotropic remeshing (through
   boolean, so faces of different components cross; holes are cut next to the crossing curves (the
   removed surface itself crosses nothing), where a patch that leaves the surface hits the other part.
 
+:func:`cad_tessellation_case` gives three such parts tessellated as a CAD export is (large
+triangles on the flat faces, small ones along creases: :func:`meshlab_holefill.meshlab.mesh_files.cad_tessellation`), their
+holes' borders mixing short and long edges.
+
 A hole is the connected face region inside a ball around its centre, the radius grown until the
 boundary has about the target number of edges (0.8 to 1.5 times), its loop simple. Each case is a
 :class:`.comparison.MeshCase` with the holes as ``removed`` faces and ``given_class`` "crease" or
@@ -27,11 +31,12 @@ from ..core.holes import boundary_loops
 from ..geometry.intersections import faces_intersecting
 from ..geometry.quality import edge_lengths
 from ..geometry.topology import face_adjacency
-from ..meshlab.mesh_files import boolean_mesh, generated_mesh, remeshed
+from ..meshlab.mesh_files import boolean_mesh, cad_tessellation, generated_mesh, remeshed
 from .comparison import MeshCase
 from .cut_holes import _region_boundary
 
-__all__ = ["CREASED_CASES", "ball_hole", "creased_case", "crossing_centres", "rotation"]
+__all__ = ["CAD_TESSELLATED_PARTS", "CREASED_CASES", "ball_hole", "cad_tessellation_case", "creased_case",
+           "crossing_centres", "rotation"]
 
 
 def rotation(axis, degrees):
@@ -216,3 +221,34 @@ def creased_case(name, edge=0.025):
 
 
 CREASED_CASES = ("creased_box", "bevelled_box", "cylinder_rims", "union", "interpenetrating")
+
+
+# name: (the shape, faces kept by the decimation, [(hole centre, target boundary edges), ...])
+CAD_TESSELLATED_PARTS = {
+    "union": (lambda: boolean_mesh("union", _box(), _cylinder(0.3, 1.3)), 4000,
+              [((0.3, 0.5, 0.0), 20), ((-0.5, 0.5, 0.5), 30), ((0.0, -0.65, 0.3), 24), ((0.5, -0.5, 0.0), 40)]),
+    "drilled_box": (lambda: boolean_mesh("difference", _box(), _moved(_cylinder(0.25, 1.4), rotation("x", 90.0))),
+                    5000, [((0.25, 0.0, 0.5), 24), ((0.0, 0.25, 0.0), 24), ((0.5, 0.5, 0.0), 40),
+                           ((-0.5, -0.3, -0.5), 60)]),
+    "cylinder": (lambda: _cylinder(0.5, 1.5), 3000, [((0.5, 0.75, 0.0), 30), ((0.0, -0.75, 0.5), 20),
+                                                      ((0.0, 0.0, 0.5), 30)]),
+}
+
+
+def cad_tessellation_case(name, edge=0.02):
+    """One of :data:`CAD_TESSELLATED_PARTS`: the shape remeshed at ``edge``, decimated as a CAD export, holes cut.
+
+    Parameters
+    ----------
+    name : str  "union", "drilled_box" or "cylinder"
+    edge : float  edge length of the remeshing before the decimation (the shapes are about 1 unit across)
+
+    Returns
+    -------
+    comparison.MeshCase  with ``removed`` holes (those that cannot be cut left out), ``given_class`` "crease"
+    """
+    if name not in CAD_TESSELLATED_PARTS:
+        raise ValueError(f"unknown CAD part '{name}' (known: {', '.join(CAD_TESSELLATED_PARTS)})")
+    shape, faces, holes = CAD_TESSELLATED_PARTS[name]
+    V, F = cad_tessellation(*remeshed(*shape(), edge), faces)
+    return _case(name, V, F, holes)

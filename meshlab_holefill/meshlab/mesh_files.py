@@ -12,8 +12,8 @@ import os
 import numpy as np
 import pymeshlab
 
-__all__ = ["boolean_mesh", "canonical_face_order", "generated_mesh", "is_mesh", "load_mesh", "mesh_arrays",
-           "meshset_from_arrays", "point_to_surface_distances", "remeshed"]
+__all__ = ["boolean_mesh", "cad_tessellation", "canonical_face_order", "generated_mesh", "is_mesh", "load_mesh",
+           "mesh_arrays", "meshset_from_arrays", "point_to_surface_distances", "remeshed"]
 
 
 def load_mesh(path):
@@ -151,6 +151,30 @@ def remeshed(V, F, edge_length, feature_angle=30.0, iterations=10):
     ms.meshing_isotropic_explicit_remeshing(iterations=int(iterations), targetlen=pymeshlab.PureValue(edge_length),
                                             featuredeg=float(feature_angle),
                                             maxsurfdist=pymeshlab.PureValue(0.05 * edge_length))
+    return mesh_arrays(ms)
+
+
+def cad_tessellation(V, F, faces):
+    """The mesh tessellated as a CAD export is: MeshLab's quadric edge collapse with planar simplification.
+
+    Flat faces end up covered by few large triangles and the creases and curved walls by small
+    ones, as in an STL written by a CAD program (the triangles' shapes kept above quality 0.05).
+
+    Parameters
+    ----------
+    V : (n, 3) float, F : (m, 3) int
+    faces : int  faces kept (fewer than m)
+
+    Returns
+    -------
+    V : (n', 3) float64
+    F : (faces, 3) int64
+    """
+    if not 0 < int(faces) < len(F):
+        raise ValueError(f"faces must be between 1 and the mesh's {len(F) - 1}, got {faces}")
+    ms = meshset_from_arrays(V, F)
+    ms.meshing_decimation_quadric_edge_collapse(targetfacenum=int(faces), planarquadric=True, preservenormal=True,
+                                                qualitythr=0.05)
     return mesh_arrays(ms)
 
 

@@ -10,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from meshlab_holefill.evaluation.comparison import Filler, evaluate_run, prepare_case
-from meshlab_holefill.evaluation.creased import CREASED_CASES, ball_hole, creased_case, rotation
+from meshlab_holefill.evaluation.creased import (CAD_TESSELLATED_PARTS, CREASED_CASES, ball_hole, cad_tessellation_case,
+                                                 creased_case, rotation)
 from meshlab_holefill.evaluation.metrics import compact_mesh, crease_metrics, edge_dihedrals, mesh_checks
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.meshlab.mesh_files import boolean_mesh, generated_mesh, remeshed
@@ -171,3 +172,42 @@ def test_a_boolean_comes_out_the_same_in_every_run():
     # Rotating a face keeps its orientation: the same directed edges.
     shuffled = np.roll(F[np.random.default_rng(0).permutation(len(F))], 1, axis=1)
     assert np.array_equal(canonical_face_order(shuffled), F)
+
+
+@functools.lru_cache(maxsize=None)
+def cad_part(name):
+    return cad_tessellation_case(name)
+
+
+@pytest.mark.parametrize("name", ["union", "drilled_box"])
+def test_a_cad_tessellation_has_uneven_triangles_and_holes_at_creases(name):
+    case = cad_part(name)
+    V, F = case.V, case.F
+    lengths = np.linalg.norm(V[F] - V[np.roll(F, -1, axis=1)], axis=2)  # (m, 3) edge lengths per face
+    # the isotropic remeshing it starts from: 90th percentile of longest / shortest edge 1.4, edge lengths'
+    # 95th / 5th percentile 1.5
+    assert np.percentile(lengths.max(axis=1) / lengths.min(axis=1), 90) > 1.8
+    assert np.percentile(lengths, 95) / np.percentile(lengths, 5) > 1.9
+    prepared = prepare_case(case)
+    assert len(prepared.holes) == len(CAD_TESSELLATED_PARTS[name][2]) and not prepared.notes
+    creased = [bool(crease_metrics(*compact_mesh(*h.ground_truth), *compact_mesh(*h.ground_truth))) for h in prepared.holes]
+    assert sum(creased) >= 3  # the drilled box's hole inside its bore has none
+
+
+@pytest.mark.parametrize("algorithm", ["min_angle_bilateral", "curve_unfolding", "lssvm_poisson",
+                                       "differential_evolution"])
+def test_every_filter_closes_the_holes_of_a_cad_tessellation_cleanly(algorithm):
+    from meshlab_holefill import fill_holes
+
+    from conftest import assert_filled_cleanly
+
+    case = cad_part("drilled_box")
+    F0 = case.F[~case.removed]
+    V2, F2, result = fill_holes(case.V, F0, algorithm, workers=1, maxholesize=200)
+    assert result["closed_holes"] == len(CAD_TESSELLATED_PARTS["drilled_box"][2])
+    assert_filled_cleanly(case.V, F0, V2, F2, faces_kept=algorithm != "lssvm_poisson")
+
+
+def test_a_cad_part_by_an_unknown_name_is_refused():
+    with pytest.raises(ValueError, match="unknown CAD part 'gear'"):
+        cad_tessellation_case("gear")
