@@ -10,7 +10,9 @@ the command line (``cli``); nothing below it imports it. Modules:
 - :mod:`.creased`: CAD-like meshes with holes a crease runs through, and interpenetrating parts;
 - :mod:`.noisy`: scan-like noise along the normals, for cases with jagged hole borders;
 - :mod:`.anchors`: third-party fillers (CGAL's Liepa fill, MeshFix), optional, run like ours;
-- :mod:`.comparison`: cases, fillers, running each filler on each case, the hole rows;
+- :mod:`.mesh_cases`: the cases (meshes and their holes with ground truth, prepared once);
+- :mod:`.fillers`: the contestants (our filters, the anchors, MeshLab's Close Holes) and their parsing;
+- :mod:`.comparison`: running each filler on each case, the hole rows (offers the two above's names too);
 - :mod:`.isolation`: the worker processes with timeouts;
 - :mod:`.metrics`: distances, quality, normals, creases, the corner quality bound;
 - :mod:`.reference_targets`: reference figures and where each filter stands against them;
@@ -18,4 +20,4 @@ the command line (``cli``); nothing below it imports it. Modules:
 - :mod:`.papers`: the papers' own experiments (Xie and Zou's sphere).
 """
 
-__all__ = ["analytic", "anchors", "compare", "comparison", "creased", "cut_holes", "isolation", "metrics", "noisy", "papers", "reference_targets", "report"]
+__all__ = ["analytic", "anchors", "compare", "comparison", "creased", "cut_holes", "fillers", "isolation", "mesh_cases", "metrics", "noisy", "papers", "reference_targets", "report"]

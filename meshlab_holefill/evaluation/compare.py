@@ -23,7 +23,7 @@ def compare(meshes, report=None, pictures=True, max_pictures=None, command=None,
 
     Parameters
     ----------
-    meshes : sequence of str (mesh files), pymeshlab.Mesh, (V, F) tuples or comparison.MeshCase
+    meshes : sequence of str (mesh files), pymeshlab.Mesh, (V, F) tuples or mesh_cases.MeshCase
         A (V, F) tuple is ((n, 3) float, (m, 3) int).
     report : str, optional
         Directory for report.md, report.html, results.json, results.csv and pictures.

@@ -19,7 +19,7 @@ holes' borders mixing short and long edges.
 
 A hole is the connected face region inside a ball around its centre, the radius grown until the
 boundary has about the target number of edges (0.8 to 1.5 times), its loop simple. Each case is a
-:class:`.comparison.MeshCase` with the holes as ``removed`` faces and ``given_class`` "crease" or
+:class:`.mesh_cases.MeshCase` with the holes as ``removed`` faces and ``given_class`` "crease" or
 "crossing" (the size class the report shows).
 """
 from __future__ import annotations
@@ -32,7 +32,7 @@ from ..geometry.intersections import faces_intersecting
 from ..geometry.quality import edge_lengths
 from ..geometry.topology import face_adjacency
 from ..meshlab.mesh_files import boolean_mesh, cad_tessellation, generated_mesh, remeshed
-from .comparison import MeshCase
+from .mesh_cases import MeshCase
 from .cut_holes import _region_boundary
 
 __all__ = ["CAD_TESSELLATED_PARTS", "CREASED_CASES", "ball_hole", "cad_tessellation_case", "creased_case",
@@ -179,7 +179,7 @@ def creased_case(name, edge=0.025):
 
     Returns
     -------
-    comparison.MeshCase  with ``removed`` holes and ``given_class``
+    mesh_cases.MeshCase  with ``removed`` holes and ``given_class``
     """
     if name not in CREASED_CASES:
         raise ValueError(f"unknown creased case '{name}' (known: {', '.join(CREASED_CASES)})")
@@ -245,7 +245,7 @@ def cad_tessellation_case(name, edge=0.02):
 
     Returns
     -------
-    comparison.MeshCase  with ``removed`` holes (those that cannot be cut left out), ``given_class`` "crease"
+    mesh_cases.MeshCase  with ``removed`` holes (those that cannot be cut left out), ``given_class`` "crease"
     """
     if name not in CAD_TESSELLATED_PARTS:
         raise ValueError(f"unknown CAD part '{name}' (known: {', '.join(CAD_TESSELLATED_PARTS)})")
