@@ -15,10 +15,9 @@ from __future__ import annotations
 import argparse
 import collections
 
-import numpy as np
-
 from meshlab_holefill.evaluation.comparison import prepare_case, run_comparison
 from meshlab_holefill.evaluation.creased import CAD_TESSELLATED_PARTS, cad_tessellation_case
+from meshlab_holefill.evaluation.report.labels import aggregate
 
 
 def main(argv=None):
@@ -35,9 +34,9 @@ def main(argv=None):
         groups[row["filler"]].append(row)
     for filler, rows in groups.items():
         closed = [r for r in rows if r["closed"]]
-        mean = np.mean([r["dist_patch_to_gt_mean_permille"] for r in closed]) if closed else float("nan")
-        q_min = min((r["quality_min"] for r in closed), default=float("nan"))
-        crossing = sum(r.get("intersecting_new_faces") or 0 for r in closed)
+        mean, q_min = (float("nan") if value is None else value for value in
+                       (aggregate(rows, "dist_patch_to_gt_mean_permille", "mean"), aggregate(rows, "quality_min", "min")))
+        crossing = aggregate(rows, "intersecting_new_faces", "sum") or 0
         seconds = sum(r.get("seconds") or 0.0 for r in rows)
         print(f"{filler}: {len(closed)}/{len(rows)} closed, patch->GT mean {mean:.3f} per mille, quality min "
               f"{q_min:.3f}, {crossing} new faces crossing the mesh, {seconds:.2f} s")

@@ -22,6 +22,7 @@ from large_holes import MESHES, subdivided
 from meshlab_holefill.evaluation.comparison import MeshCase, prepare_case, run_comparison
 from meshlab_holefill.evaluation.cut_holes import cut_holes
 from meshlab_holefill.evaluation.noisy import normal_noise
+from meshlab_holefill.evaluation.report.labels import aggregate
 
 SIZES = ("small", "medium", "large", "irregular")
 
@@ -57,9 +58,9 @@ def main(argv=None):
         groups[(row["filler"], row["case"].split("_n")[1].split("_s")[0])].append(row)
     for (filler, sigma), rows in sorted(groups.items()):
         closed = [r for r in rows if r["closed"]]
-        mean = np.mean([r["dist_patch_to_gt_mean_permille"] for r in closed]) if closed else float("nan")
-        q_min = min((r["quality_min"] for r in closed), default=float("nan"))
-        crossing = sum(r.get("intersecting_new_faces") or 0 for r in closed)
+        mean, q_min = (float("nan") if value is None else value for value in
+                       (aggregate(rows, "dist_patch_to_gt_mean_permille", "mean"), aggregate(rows, "quality_min", "min")))
+        crossing = aggregate(rows, "intersecting_new_faces", "sum") or 0
         seconds = [r.get("seconds") or 0.0 for r in rows]
         slowest = rows[int(np.argmax(seconds))]
         print(f"{filler} sigma {sigma}: {len(closed)}/{len(rows)} closed, patch->GT mean {mean:.3f} per mille, "

@@ -30,3 +30,14 @@ def test_point_to_surface_distances_of_a_unit_square():
     X = np.array([[0.5, 0.5, 2.0], [2.0, 0.5, 0.0], [-3.0, -4.0, 0.0]])
     assert point_to_surface_distances(X, V, F) == pytest.approx([2.0, 1.0, 5.0], abs=1e-6)
     assert point_to_surface_distances(np.empty((0, 3)), V, F).shape == (0,)
+
+
+def test_a_cad_tessellation_keeps_the_faces_asked_for_and_refuses_a_count_out_of_range():
+    from meshlab_holefill.meshlab.mesh_files import cad_tessellation, generated_mesh, remeshed
+
+    V, F = remeshed(*generated_mesh("create_cube", size=1.0), 0.1)
+    V2, F2 = cad_tessellation(V, F, 200)
+    assert len(F2) == 200 and np.all(np.abs(V2) <= 0.501)  # still the unit cube (to the remeshing's accuracy)
+    for faces in (0, len(F)):
+        with pytest.raises(ValueError, match="faces must be between 1 and"):
+            cad_tessellation(V, F, faces)
