@@ -9,7 +9,7 @@ import meshlab_holefill
 from meshlab_holefill import FilterParameterError, MeshTopologyError, apply_filter, filter_list
 from meshlab_holefill.geometry.quality import triangle_quality
 from meshlab_holefill.core.holes import boundary_loops
-from meshlab_holefill.meshlab.meshset_io import index_ranges, set_selection
+from meshlab_holefill.meshlab.selection import index_ranges, set_selection
 from meshlab_holefill.core.holes import nonmanifold_edges as nonmanifold_edges_of
 
 from conftest import (assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample,

@@ -1,9 +1,10 @@
-"""meshset_io.write_layer_ply: a filled layer loaded from its PLY file is the layer pymeshlab.Mesh + add_mesh builds."""
+"""layer_ply.write_layer_ply: a filled layer loaded from its PLY file is the layer pymeshlab.Mesh + add_mesh builds."""
 import numpy as np
 import pymeshlab
 import pytest
 
-from meshlab_holefill.meshlab.meshset_io import _new_mesh, load_layer_file, write_layer_ply
+from meshlab_holefill.meshlab.layer_ply import write_layer_ply
+from meshlab_holefill.meshlab.meshset_io import _new_mesh, load_layer_file
 
 GETTERS = ("vertex_matrix", "face_matrix", "vertex_color_matrix", "face_color_matrix", "vertex_scalar_array",
            "face_scalar_array", "vertex_tex_coord_matrix", "wedge_tex_coord_matrix", "vertex_normal_matrix",
@@ -75,20 +76,21 @@ def test_the_loaded_layer_equals_the_built_one_bit_for_bit(tmp_path, kind):
 
 
 def test_a_layer_file_is_written_in_blocks(tmp_path, monkeypatch):
-    from meshlab_holefill.meshlab import meshset_io
+    from meshlab_holefill.meshlab import layer_ply
 
     V, F = _grid(20)
     vertex, face, wedge = _attributes("all", V, F, np.random.default_rng(2))
     whole, blocks = str(tmp_path / "whole.ply"), str(tmp_path / "blocks.ply")
     write_layer_ply(whole, V, F, vertex, face, wedge)
-    monkeypatch.setattr(meshset_io, "PLY_BLOCK_ROWS", 7)  # blocks ending inside both elements
+    monkeypatch.setattr(layer_ply, "PLY_BLOCK_ROWS", 7)  # blocks ending inside both elements
     write_layer_ply(blocks, V, F, vertex, face, wedge)
     with open(whole, "rb") as a, open(blocks, "rb") as b:
         assert a.read() == b.read()
 
 
 def test_a_face_naming_a_vertex_twice_keeps_the_layer_built_from_arrays():
-    from meshlab_holefill.meshlab.meshset_io import has_repeated_corners, replace_current_mesh, current_mesh_arrays
+    from meshlab_holefill.meshlab.layer_ply import has_repeated_corners
+    from meshlab_holefill.meshlab.meshset_io import replace_current_mesh, current_mesh_arrays
 
     V, F = _grid(repeated_corner=True)
     assert has_repeated_corners(F) and not has_repeated_corners(_grid()[1])

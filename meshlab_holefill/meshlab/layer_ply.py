@@ -1,0 +1,120 @@
+"""A filled layer as a binary PLY file that pymeshlab loads into the layer its arrays would build.
+
+Loading such a file builds the mesh once, in its layer, where ``pymeshlab.Mesh`` copies it in its
+constructor and ``add_mesh`` copies it again; :func:`.meshset_io.replace_current_mesh` says when
+each way is taken.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["PLY_BLOCK_ROWS", "write_layer_ply", "has_repeated_corners", "unit_range"]
+
+
+def unit_range(colors):
+    """Colours clipped to [0, 1] as pymeshlab requires; the array itself (no copy) when they already are."""
+    colors = np.asarray(colors, np.float64)
+    if colors.size == 0 or (colors.min() >= 0.0 and colors.max() <= 1.0):
+        return colors
+    return np.clip(colors, 0.0, 1.0)
+
+
+PLY_BLOCK_ROWS = 1 << 18  # rows of a PLY element written at once: the file's copy of the mesh never exists whole
+
+
+def _vertex_fields(vertex_attrs):
+    """(PLY header lines, numpy fields) of the vertex element.
+
+    Colour and quality are always written (white and 0 when the layer has none): a mesh built
+    by ``pymeshlab.Mesh`` always has them, with those values, and the loaded layer must be the same.
+    """
+    lines, fields = [], []
+    for axis in "xyz":
+        lines.append(f"property double {axis}")
+        fields.append((axis, "<f8"))
+    for channel in ("red", "green", "blue", "alpha"):
+        lines.append(f"property uchar {channel}")
+        fields.append((channel, "u1"))
+    lines.append("property double quality")
+    fields.append(("quality", "<f8"))
+    if "texcoord" in vertex_attrs:
+        lines += ["property float texture_u", "property float texture_v"]
+        fields += [("texture_u", "<f4"), ("texture_v", "<f4")]
+    return lines, fields
+
+
+def _face_fields(face_attrs, wedge):
+    """(PLY header lines, numpy fields) of the face element (colour, quality, wedge texture coordinates when present)."""
+    lines, fields = ["property list uchar int vertex_indices"], [("corners", "u1"), ("vertex_indices", "<i4", 3)]
+    if "color" in face_attrs:
+        for channel in ("red", "green", "blue", "alpha"):
+            lines.append(f"property uchar {channel}")
+            fields.append((channel, "u1"))
+    if "quality" in face_attrs:
+        lines.append("property double quality")
+        fields.append(("quality", "<f8"))
+    if wedge is not None:
+        lines += ["property list uchar float texcoord", "property int texnumber"]
+        fields += [("texcoords", "u1"), ("texcoord", "<f4", 6), ("texnumber", "<i4")]
+    return lines, fields
+
+
+def _color_bytes(colors):
+    """Colours in [0, 1] as the bytes pymeshlab.Mesh stores: clipped, times 255, truncated."""
+    return (unit_range(colors) * 255.0).astype(np.uint8)
+
+
+def _vertex_block(fields, V, vertex_attrs, rows):
+    block = np.empty(rows.stop - rows.start, dtype=fields)
+    for k, axis in enumerate("xyz"):
+        block[axis] = V[rows, k]
+    colors = _color_bytes(vertex_attrs["color"][rows]) if "color" in vertex_attrs else np.full((len(block), 4), 255)
+    for k, channel in enumerate(("red", "green", "blue", "alpha")):
+        block[channel] = colors[:, k]
+    block["quality"] = vertex_attrs["quality"][rows].ravel() if "quality" in vertex_attrs else 0.0
+    if "texcoord" in vertex_attrs:
+        block["texture_u"], block["texture_v"] = vertex_attrs["texcoord"][rows].T
+    return block
+
+
+def _face_block(fields, F, face_attrs, wedge, rows):
+    block = np.empty(rows.stop - rows.start, dtype=fields)
+    block["corners"] = 3
+    block["vertex_indices"] = F[rows]
+    if "color" in face_attrs:
+        colors = _color_bytes(face_attrs["color"][rows])
+        for k, channel in enumerate(("red", "green", "blue", "alpha")):
+            block[channel] = colors[:, k]
+    if "quality" in face_attrs:
+        block["quality"] = face_attrs["quality"][rows].ravel()
+    if wedge is not None:
+        block["texcoords"] = 6
+        block["texcoord"] = wedge[3 * rows.start:3 * rows.stop].reshape(-1, 6)
+        block["texnumber"] = 0  # the one texture index pymeshlab.Mesh gives wedge coordinates
+    return block
+
+
+def write_layer_ply(path, V, F, vertex_attrs, face_attrs, wedge):
+    """Write a mesh and its attributes as a binary PLY that ``load_new_mesh`` reads into the layer
+    ``pymeshlab.Mesh(...)`` + ``add_mesh`` would build from the same arrays (see :func:`.meshset_io._new_mesh`).
+
+    Doubles stay doubles (positions, quality); colours are the bytes pymeshlab.Mesh makes of
+    them; texture coordinates are single precision as pymeshlab stores them. Written in blocks
+    of PLY_BLOCK_ROWS rows.
+    """
+    vertex_lines, vertex_fields = _vertex_fields(vertex_attrs)
+    face_lines, face_fields = _face_fields(face_attrs, wedge)
+    header = (["ply", "format binary_little_endian 1.0", f"element vertex {len(V)}"] + vertex_lines
+              + [f"element face {len(F)}"] + face_lines + ["end_header"])
+    with open(path, "wb") as fh:
+        fh.write(("\n".join(header) + "\n").encode("ascii"))
+        for start in range(0, len(V), PLY_BLOCK_ROWS):
+            _vertex_block(vertex_fields, V, vertex_attrs, slice(start, min(start + PLY_BLOCK_ROWS, len(V)))).tofile(fh)
+        for start in range(0, len(F), PLY_BLOCK_ROWS):
+            _face_block(face_fields, F, face_attrs, wedge, slice(start, min(start + PLY_BLOCK_ROWS, len(F)))).tofile(fh)
+
+
+def has_repeated_corners(F):
+    """Does a face of F name one vertex twice?"""
+    F = np.asarray(F)
+    return bool(len(F)) and bool(np.any((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])))
