@@ -4,7 +4,8 @@ Where each step lives:
 
 * Sec. 3.1, unfolding the boundary loop into a simple planar polygon (E_PE, simulated
   annealing under the clearance d_MD, projection to the best plane, restarts):
-  :mod:`.unfolding` (:func:`anneal_loop`, :func:`unfold_loop`).
+  :mod:`.annealing` (E_PE, :func:`anneal_loop`), :mod:`.acceptance` (the projection reached by
+  linear motion), :mod:`.unfolding` (runs and restarts, :func:`unfold_loop`).
 * Sec. 3.2, constrained Delaunay triangulation of the unfolded polygon without Steiner points,
   and Sec. 3.3's planar refinement: :mod:`.unfolded_triangulation`
   (:func:`constrained_delaunay`, :func:`refine_planar`, :func:`triangulate_and_embed`).
@@ -25,7 +26,8 @@ from .quality_swaps import improve_by_swaps
 from .embedding import embed_patch, embedding_energy, minimise_embedding_energy
 from .slivers import repair_slivers
 from .unfolded_triangulation import constrained_delaunay, refine_planar, resample_patch, triangulate_and_embed
-from .unfolding import anneal_loop, unfold_loop
+from .annealing import anneal_loop
+from .unfolding import unfold_loop
 
 __all__ = ["fill", "PARAMS", "RINGS", "anneal_loop", "unfold_loop", "constrained_delaunay", "refine_planar",
            "triangulate_and_embed", "embedding_energy", "minimise_embedding_energy", "embed_patch",

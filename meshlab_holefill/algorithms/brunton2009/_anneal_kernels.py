@@ -1,15 +1,15 @@
 """Compiled moves of the curve-unfolding annealing (Brunton et al. 2009, Sec. 3.1).
 
-For one colour class of :func:`.unfolding.anneal_loop`, :func:`propose_moves` makes the moves'
-directions and lengths (:func:`.unfolding._propose_moves`) and the geometry of their change of
-E_PE (:func:`.unfolding._energy_change`), and :func:`apply_moves` the clearance d_MD > eps
-(:func:`.unfolding._keep_clearance`) and the updates of the loop state; the random numbers,
+For one colour class of :func:`.annealing.anneal_loop`, :func:`propose_moves` makes the moves'
+directions and lengths (:func:`.annealing._propose_moves`) and the geometry of their change of
+E_PE (:func:`.annealing._energy_change`), and :func:`apply_moves` the clearance d_MD > eps
+(:func:`.annealing._keep_clearance`) and the updates of the loop state; the random numbers,
 arctan2, exp and the Metropolis rule stay numpy calls in between (numpy's vectorised arctan2
 and exp differ from the C library's in the last bit). Every other quantity is computed by the
 operations of the numpy code in the same order (cross products as ``cross_rows``, row sums and
 norms added left to right as numpy adds three columns, no FMA contraction, the distance rows
 written before the columns), so the annealed loop is the same to the last bit; the numpy steps
-stay in :mod:`.unfolding` as the reference the tests compare with. The numpy code spent most of
+stay in :mod:`.annealing` as the reference the tests compare with. The numpy code spent most of
 its time in the overhead of small array operations (a class holds m / 4 vertices, a run up to
 5000 moves): 3.4 times less process time for the annealing on the benchmark's 45 cut holes.
 """
@@ -51,8 +51,8 @@ def _direction(g, u1, prev, cone, tan_cone):
 
 @njit(cache=True)
 def propose_moves(P, N, D, J, G, U, last_dir, improving, d_md, eps, local_bound, tan_cone):
-    """The moves of the vertices J of one colour class, as :func:`.unfolding._propose_moves` and the
-    geometric part of :func:`.unfolding._energy_change`.
+    """The moves of the vertices J of one colour class, as :func:`.annealing._propose_moves` and the
+    geometric part of :func:`.annealing._energy_change`.
 
     ``last_dir`` is updated. The four angles each move changes are returned as the two arguments of
     their arctan2 (|n_1 x n_2| and n_1 . n_2): numpy's arctan2 (vectorised, not libm's) is
@@ -91,7 +91,7 @@ def propose_moves(P, N, D, J, G, U, last_dir, improving, d_md, eps, local_bound,
 
 @njit(cache=True)
 def _keep_clearance(P, J, q, acc, mask, near, eps):
-    """``unfolding._keep_clearance``: the moves kept, the loop with them, the moved segments and their rows."""
+    """``annealing._keep_clearance``: the moves kept, the loop with them, the moved segments and their rows."""
     m, b = P.shape[0], J.shape[0]
     trial = P.copy()
     moved = np.zeros(0, np.int64)
@@ -130,7 +130,7 @@ def _keep_clearance(P, J, q, acc, mask, near, eps):
 def apply_moves(P, N, T, D, J, q, normals, angles, acc, mask, near, eps):
     """The moves ``acc`` (Metropolis) of one class that keep d_MD > eps, applied to the state in place.
 
-    As :func:`.unfolding._keep_clearance` and the updates of :func:`.unfolding.anneal_loop`: P, the
+    As :func:`.annealing._keep_clearance` and the updates of :func:`.annealing.anneal_loop`: P, the
     triple normals N, the d_PE terms T and the segment distances D.
 
     Returns
