@@ -1,0 +1,126 @@
+"""Speed against CGAL's Liepa fill: in the suite's run, one core each, and holes on all cores."""
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pymeshlab
+
+from meshlab_holefill.evaluation.comparison import prepare_case
+from meshlab_holefill.evaluation.report.labels import short_label
+from meshlab_holefill.meshlab import load_filter_kernels
+from .cases import SAMPLES
+
+
+def speed_table(result, anchor="cgal_liepa"):
+    """Per-hole fill seconds of every filler against CGAL's Liepa fill, on the holes with ground truth.
+
+    Each filler is timed on the holes that it and the anchor both closed (the filters' own per-hole
+    time, measured in the same run and worker harness); the ratio is its total over the anchor's.
+    """
+    rows = [r for r in result.holes if r.get("ground_truth")]
+    anchor_rows = {(r["case"], r["hole"]): r for r in rows if r["filler"] == anchor and r.get("closed")
+                   and r.get("seconds") is not None}
+    if not anchor_rows:
+        return None
+    out = []
+    for label in dict.fromkeys(r["filler"] for r in rows):
+        mine = [r for r in rows if r["filler"] == label and r.get("closed") and r.get("seconds") is not None
+                and (r["case"], r["hole"]) in anchor_rows]
+        if not mine:
+            continue
+        seconds = sum(r["seconds"] for r in mine)
+        base = sum(anchor_rows[(r["case"], r["hole"])]["seconds"] for r in mine)
+        slowest = max(mine, key=lambda r: r["seconds"])
+        out.append([f"`{short_label(label)}`", str(len(mine)), f"{seconds:.2f}", f"{base:.2f}",
+                    f"{seconds / base:.1f}" if base > 0 else "–",
+                    f"{slowest['seconds']:.2f} ({slowest['case']}, {slowest['boundary_edges']} edges)"])
+    return (["filler", "holes", "seconds", f"`{anchor}` seconds", "× CGAL", "slowest hole"], out)
+
+
+# --------------------------------------------------------------------------- one core each
+
+def one_core_speed(cases, holes, seed, repeats=3, anchor="cgal_liepa"):
+    """Per-hole seconds of each filter (defaults, ``workers=1``) and of the anchor on the same holes, one core each.
+
+    The anchor fills one hole at a time in one thread. With one worker per core two holes are
+    filled at once and share the machine, which makes each one's seconds longer (on the suite's
+    holes the min-angle filter's sum grows about 1.5x), so here the filters too fill one hole at
+    a time, in this process, on the cases with ground truth (cut and given holes). The fillers
+    alternate ``repeats`` times (the order rotated each time); per filler, the median of its
+    totals over the holes that it and the anchor both closed, and the ratio of the medians.
+
+    Returns
+    -------
+    (header, rows) for :func:`markdown_table`, or None when the anchor is not installed or no
+    case has holes with ground truth
+    """
+    from meshlab_holefill.array_api import algorithm_names, fill_holes
+    from meshlab_holefill.evaluation.anchors import missing_package, run_anchor
+
+    if missing_package(anchor):
+        return None
+    prepared = [pc for pc in (prepare_case(c, holes=holes, seed=seed) for c in cases)
+                if pc.holes and all(h.ground_truth is not None for h in pc.holes)]
+    if not prepared:  # only natural holes among the cases: nothing to compare on
+        return None
+    names = algorithm_names()
+    warm_V, warm_F = prepared[0].V0, prepared[0].F0
+    for name in names:  # kernels loaded before the first timing
+        fill_holes(warm_V, warm_F, name, workers=1)
+
+    def per_hole(name, pc):
+        """{hole index: seconds} of the holes ``name`` closed in case ``pc``."""
+        everything = max(h.boundary_edges for h in pc.holes) + 1
+        if name == anchor:
+            result = run_anchor(anchor, pc.V0, pc.F0, {"maxholesize": everything})[2]
+        else:
+            result = fill_holes(pc.V0, pc.F0, name, workers=1, maxholesize=everything)[2]
+        return {i: h["seconds"] for i, h in enumerate(result["holes"]) if h.get("status") == "closed"}
+
+    fillers = names + [anchor]
+    times = {name: [] for name in fillers}  # per repeat: {(case, hole): seconds}
+    for r in range(repeats):
+        for name in fillers[r % len(fillers):] + fillers[:r % len(fillers)]:
+            times[name].append({(k, i): t for k, pc in enumerate(prepared) for i, t in per_hole(name, pc).items()})
+    both = {name: set.intersection(*(set(run) for run in times[name] + times[anchor])) for name in names}  # closed in every run
+    rows = []
+    for name in names:
+        mine = float(np.median([sum(run[h] for h in both[name]) for run in times[name]]))
+        base = float(np.median([sum(run[h] for h in both[name]) for run in times[anchor]]))
+        rows.append([f"`{name}`", str(len(both[name])), f"{mine:.2f}", f"{base:.2f}", f"{mine / base:.2f}"])
+    header = ["filter", "holes", f"seconds (median of {repeats})", f"`{anchor}` seconds (median of {repeats})",
+              "× CGAL"]
+    return header, rows
+
+
+# ------------------------------------------------------------------------ holes on all cores
+
+def workers_speedup(filters=("meshing_close_holes_min_angle_bilateral", "meshing_close_holes_curve_unfolding",
+                             "meshing_close_holes_lssvm_poisson", "meshing_close_holes_differential_evolution"),
+                    mesh=os.path.join(SAMPLES, "rangemaps", "face000.ply"), counts=(1, 2), repeats=3):
+    """Whole-run seconds of each filter on a scan with ``workers`` = 1 and 2, and whether the meshes are equal.
+
+    Each filter's kernels are loaded first (their one-time cost is in ``--compile-cost``); the
+    worker counts then alternate ``repeats`` times and the medians are reported.
+    """
+    rows = []
+    for name in filters:
+        load_filter_kernels(name)
+        seconds, meshes = {c: [] for c in counts}, []
+        for _ in range(repeats):
+            for workers in counts:
+                ms = pymeshlab.MeshSet()
+                ms.load_new_mesh(mesh)
+                t = time.perf_counter()
+                res = getattr(ms, name)(workers=workers)
+                seconds[workers].append(time.perf_counter() - t)
+                m = ms.current_mesh()
+                meshes.append((m.vertex_matrix(), m.face_matrix(), res["closed_holes"]))
+        same = all(np.array_equal(a, b) for other in meshes[1:] for a, b in zip(meshes[0][:2], other[:2]))
+        medians = [float(np.median(seconds[c])) for c in counts]
+        rows.append([f"`{short_label(name)}`", str(meshes[0][2])] + [f"{x:.2f}" for x in medians]
+                    + [f"{medians[0] / medians[-1]:.2f}", "yes" if same else "**no**"])
+    header = ["filter", "holes closed"] + [f"workers={c} (s, median of {repeats})" for c in counts] + ["speed-up", "same mesh"]
+    return header, rows
