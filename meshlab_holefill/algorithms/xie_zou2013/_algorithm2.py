@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.border_bend import border_bend
-from ...core.patch import Patch
+from ...core.patch import Patch, validate_patch
 from ...errors import HoleFillError
 from . import folds
 from . import prediction as prediction_steps
@@ -314,6 +314,10 @@ def _layout_patch(hole, layout, result, name):
                                          else crossing):
             return None, f"{name}: patch crosses the surrounding mesh"
         if stats["folds_left"] == 0:
+            try:
+                validate_patch(Patch(vertices=V[ctx.size:], faces=F), ctx.points, ctx.forbidden_edges)
+            except HoleFillError as exc:  # not a disc closing the loop once: the next attempt may be
+                return None, f"{name}: {exc}"
             return _CleanLayout(V, F, stats, tri_stats.get("edge_cleared", 0), int(excluded.sum()), attempt_record,
                                 t4 - t3, t5 - t4), None
         if len(bad_ids) == 0:

@@ -196,8 +196,9 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
     Attempts (first clean one wins): the paper's choice (segmented prediction with two
     unfolded planes, or unsegmented with the PCA plane), the other plane layout and the disc
     layout with the same prediction, then the three layouts with the other prediction. An
-    attempt is clean when no fold-over is left after smoothing, optimisation and repairs and
-    the patch does not cross the surrounding rings; one that kept under half of the prediction
+    attempt is clean when no fold-over is left after smoothing, optimisation and repairs, its
+    patch is a disc closing the loop once (:func:`meshlab_holefill.core.patch.validate_patch`)
+    and it does not cross the surrounding rings; one that kept under half of the prediction
     points is used only if no other keeps more. The loop-only triangulation is the last
     resort. The steps run in :func:`._algorithm2.patch_hole`; the keywords are grouped there
     into :class:`PredictionOptions` (steps 2-5), :class:`SmoothingOptions` and

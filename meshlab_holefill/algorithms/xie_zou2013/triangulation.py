@@ -362,7 +362,9 @@ def split_forbidden_edges(V, F, forbidden_edges):
 
     The constrained triangulation knows only the loop, so it may join two loop vertices that
     the surrounding mesh already joins (which would make a non-manifold edge); the midpoint
-    becomes a new free vertex and the two triangles on the edge become four.
+    becomes a new free vertex and the two triangles on the edge become four. Where two such
+    edges share a triangle (a fan of chords over a jagged border), the second split finds its
+    triangles in the faces as the first split left them.
 
     Returns
     -------
@@ -379,19 +381,39 @@ def split_forbidden_edges(V, F, forbidden_edges):
     keys = undirected_keys(fb, n)
     E, f1, c1, f2, c2 = interior_edges(F, n)
     hit = np.flatnonzero(np.isin(undirected_keys(E, n), keys)).tolist()
+    changed = set()
     new_faces = []
     for i in hit:
         a, b = E[i]
-        c = F[f1[i], (c1[i] + 2) % 3]
-        d = F[f2[i], (c2[i] + 2) % 3]
+        faces = (f1[i], c1[i], f2[i], c2[i])
+        if faces[0] in changed or faces[2] in changed:
+            F = np.concatenate([F, np.asarray(new_faces, np.int64).reshape(-1, 3)])
+            new_faces = []
+            faces = _edge_faces(F, a, b)
+        g1, h1, g2, h2 = faces
+        c = F[g1, (h1 + 2) % 3]
+        d = F[g2, (h2 + 2) % 3]
         w = len(V)
         V = np.vstack([V, 0.5 * (V[a] + V[b])])
-        F[f1[i]] = (a, w, c)
-        F[f2[i]] = (b, w, d)
+        F[g1] = (a, w, c)
+        F[g2] = (b, w, d)
+        changed.update((g1, g2))
         new_faces += [(w, b, c), (w, a, d)]
     if new_faces:
         F = np.concatenate([F, np.asarray(new_faces, np.int64)])
     return V, F, len(hit)
+
+
+def _edge_faces(F, a, b):
+    """(f1, c1, f2, c2) of the edge a -> b as :func:`..geometry.topology.interior_edges` gives them.
+
+    The face holding the half-edge a -> b with the corner of ``a`` in it, and the face
+    holding b -> a with the corner of ``b``.
+    """
+    after = np.roll(F, -1, axis=1)  # (m, 3): the corner that follows each corner
+    f1, c1 = np.argwhere((F == a) & (after == b))[0]
+    f2, c2 = np.argwhere((F == b) & (after == a))[0]
+    return int(f1), int(c1), int(f2), int(c2)
 
 
 def fitting_plane(points, normals):

@@ -13,9 +13,9 @@ from meshlab_holefill.algorithms.xie_zou2013 import differential_evolution as hp
 from meshlab_holefill.evaluation.papers import hpde_sphere as hpde_experiment
 from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, triangulation as hpde_mesh, optimisation as hpde_optimisation, prediction as hpde_prediction, sections as hpde_sections, smoothing as hpde_smoothing, _algorithm2 as hpde_algorithm2, _loop_only_patch as hpde_loop_only
 from meshlab_holefill.algorithms.xie_zou2013.de_rand_1_bin import de_rand_1_bin, reflect_into_bounds
-from meshlab_holefill.geometry.quality import corner_angles, triangle_quality
+from meshlab_holefill.geometry.quality import corner_angles, face_areas, triangle_quality
 from meshlab_holefill.core.holes import boundary_loops, hole_context
-from meshlab_holefill.core.patch import validate_patch
+from meshlab_holefill.core.patch import Patch, validate_patch
 
 from conftest import assert_filled_cleanly
 
@@ -685,6 +685,20 @@ def test_forbidden_edges_are_split():
     assert n == 1 and len(F2) == 4
     E = np.sort(np.concatenate([F2[:, [0, 1]], F2[:, [1, 2]], F2[:, [2, 0]]]), axis=1)
     assert not np.any((E[:, 0] == 0) & (E[:, 1] == 2))
+
+
+@pytest.mark.parametrize("forbidden", [[[0, 2], [2, 4]], [[2, 4], [0, 2]], [[0, 2], [2, 4], [4, 0]]])
+def test_forbidden_edges_sharing_a_triangle_are_split_into_a_disc(forbidden):
+    # A hexagon fanned from the triangle (0, 2, 4): its chords may all join loop vertices the mesh
+    # joins already. Each split must find its triangles as the earlier splits left them.
+    angles = np.arange(6) * np.pi / 3
+    V = np.stack([np.cos(angles), np.sin(angles), 0.1 * np.cos(3 * angles)], axis=1)
+    F = np.array([[0, 1, 2], [2, 3, 4], [4, 5, 0], [0, 2, 4]])
+    V2, F2, n = hpde_mesh.split_forbidden_edges(V, F, forbidden)
+    assert n == len(forbidden) and len(F2) == len(F) + 2 * n and len(V2) == len(V) + n
+    validate_patch(Patch(vertices=V2[6:], faces=F2), V[:6], forbidden)
+    assert np.all(face_areas(V2, F2) > 0)
+    assert np.isclose(face_areas(V2, F2).sum(), face_areas(V, F).sum())  # split, not moved
 
 
 # ----------------------------------------------------------------- whole filter
