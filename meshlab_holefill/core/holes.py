@@ -21,6 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
+from ..errors import HoleFillError
 from ..geometry.quality import face_normals, vertex_normals
 from ..geometry.sets import positions_ints, setdiff_ints, unique_ints
 from ._boundary_loops import (BoundaryLoop, boundary_halfedges, boundary_loops, edge_face_counts, edge_summary,
@@ -222,6 +223,7 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0, obstacles=None):
         incidence = vertex_face_incidence(F, len(V))
     loop_v = np.asarray(loop.vertices, np.int64)
     k = len(loop_v)
+    _refuse_zero_length_border_edges(np.asarray(V[loop_v], np.float64), loop_v)
     depth_parts = [np.zeros(k, np.int64)]
     vertex_parts = [loop_v]
     frontier = loop_v
@@ -265,6 +267,25 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0, obstacles=None):
         mean_edge_length=float(lengths.mean()) if len(lengths) else 0.0,
         forbidden_edges=chord, pinched=bool(loop.pinched), index=index,
         extra={"global_faces": local_faces_g}, obstacle_vertices=obstacle_vertices, obstacle_faces=obstacle_faces)
+
+
+#: Loop edges at most this fraction of the loop's box diagonal long are refused: every triangle on
+#: such an edge has zero area by :func:`.patch.validate_patch`'s measure (at most 1e-12 diagonal^2)
+#: for any apex within 100 diagonals of it, so no patch could close the hole.
+ZERO_EDGE = 2e-14
+
+
+def _refuse_zero_length_border_edges(P, loop_v):
+    """Raise HoleFillError, naming them, where two consecutive loop vertices coincide (P: (k, 3) loop points)."""
+    lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    diag = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))) if len(P) else 0.0
+    short = np.flatnonzero(lengths <= ZERO_EDGE * diag)
+    if len(short):
+        i = int(short[0])
+        raise HoleFillError(
+            f"the hole's border has an edge of length {lengths[i]:.3g} between vertices {loop_v[i]} and "
+            f"{loop_v[(i + 1) % len(loop_v)]} (duplicate vertices), so every triangle on it would have zero area: "
+            "merge close vertices first (MeshLab's Merge Close Vertices, meshing_merge_close_vertices)")
 
 
 def _obstacle_faces(V, F, global_index, ring_faces, obstacles):

@@ -252,3 +252,38 @@ def test_incident_faces_are_the_union_of_the_incidence_rows(seed):
         expected = np.unique(incidence[vertices].indices)
         got = incident_faces(incidence, vertices)
         assert got.dtype == expected.dtype and got.tolist() == expected.tolist()
+
+
+def _with_duplicate_border_vertex(V, F, loop):
+    """The mesh with loop vertex v split in two coincident vertices v, v' joined by a zero-area face,
+    so that the loop runs ... -> v -> v' -> w: a duplicate vertex as remeshed booleans leave them."""
+    v, w = int(loop.vertices[0]), int(loop.vertices[1])
+    g = next(f for f in range(len(F)) if v in F[f] and w in F[f])
+    x = int(next(c for c in F[g] if c not in (v, w)))
+    V2 = np.vstack([V, V[v]])
+    dup = len(V)
+    F2 = F.copy()
+    F2[g] = np.where(F2[g] == v, dup, F2[g])
+    # Opposite to the face's own (now v' -> x or x -> v') edge, so the degenerate face is oriented with the mesh.
+    row = list(F2[g])
+    i = row.index(dup)
+    new = [v, x, dup] if row[(i + 1) % 3] == x else [v, dup, x]
+    return V2, np.vstack([F2, new])
+
+
+@pytest.mark.parametrize("algorithm", ["min_angle_bilateral", "curve_unfolding", "lssvm_poisson", "differential_evolution"])
+def test_a_border_edge_between_coincident_vertices_is_refused_by_name_and_the_mesh_kept(algorithm):
+    from meshlab_holefill import fill_holes
+    from meshlab_holefill.core import examples
+
+    V, F, loop = examples.bowl_with_hole()
+    V2, F2 = _with_duplicate_border_vertex(V, F, loop)
+    hole = min(boundary_loops(F2), key=len)
+    assert len(hole) == len(loop) + 1  # the zero-length edge joined the loop
+    V3, F3, result = fill_holes(V2, F2, algorithm, workers=1)
+    entry = next(h for h in result["holes"] if h["boundary_edges"] == len(hole))
+    assert entry["status"] == "failed"
+    assert "duplicate vertices" in entry["reason"] and "merge close vertices" in entry["reason"]
+    assert np.array_equal(V3, V2) and np.array_equal(F3, F2)
+    with pytest.raises(Exception, match="duplicate vertices"):
+        hole_context(V2, F2, hole)
