@@ -20,7 +20,9 @@ holes' borders mixing short and long edges.
 A hole is the connected face region inside a ball around its centre, the radius grown until the
 boundary has about the target number of edges (0.8 to 1.5 times), its loop simple. Each case is a
 :class:`.mesh_cases.MeshCase` with the holes as ``removed`` faces and ``given_class`` "crease" or
-"crossing" (the size class the report shows).
+"crossing" (the size class the report shows). ``seed=0`` gives the holes placed by hand; another seed
+places them at random points of the creases (:func:`random_crease_holes`), or next to random points of
+the crossing curves, so that the same shapes give holes no filter was tuned on.
 """
 from __future__ import annotations
 
@@ -32,11 +34,15 @@ from ..geometry.intersections import faces_intersecting
 from ..geometry.quality import edge_lengths
 from ..geometry.topology import face_adjacency
 from ..meshlab.mesh_files import boolean_mesh, cad_tessellation, generated_mesh, remeshed
-from .mesh_cases import MeshCase
 from .cut_holes import _region_boundary
+from .dihedrals import CREASE_ANGLE, edge_dihedrals
+from .mesh_cases import MeshCase
 
 __all__ = ["CAD_TESSELLATED_PARTS", "CREASED_CASES", "ball_hole", "cad_tessellation_case", "creased_case",
-           "crossing_centres", "rotation"]
+           "crossing_centres", "random_crease_holes", "rotation"]
+
+#: Random points tried per hole of :func:`random_crease_holes` before that hole is left out.
+CENTRE_TRIES = 12
 
 
 def rotation(axis, degrees):
@@ -121,6 +127,46 @@ def _case(name, V, F, holes, given_class="crease"):
     return MeshCase(name, V, F, removed=removed, given_class=given_class)
 
 
+def random_crease_holes(V, F, targets, rng, angle=CREASE_ANGLE):
+    """Holes at random points of the creases, one per target, the last one anywhere on the surface.
+
+    A crease is an interior edge whose dihedral angle exceeds ``angle`` degrees
+    (:func:`.dihedrals.edge_dihedrals`); each hole is centred at a uniform random point of a
+    random crease edge, the last at the centroid of a random face (on a CAD export that is
+    mostly a large flat triangle). A centre whose ball gives no hole (:func:`ball_hole`) is
+    drawn again, up to :data:`CENTRE_TRIES` times.
+
+    Parameters
+    ----------
+    V : (n, 3) float64, F : (m, 3) int
+    targets : sequence of int  boundary edges wanted, one hole each
+    rng : numpy.random.Generator
+    angle : float  degrees
+
+    Returns
+    -------
+    (m,) bool  the removed faces
+    """
+    V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
+    edges, dihedral = edge_dihedrals(V, F)
+    creases = edges[np.abs(dihedral) > angle]
+    removed = np.zeros(len(F), bool)
+    for i, target in enumerate(targets):
+        anywhere = i == len(targets) - 1 or not len(creases)
+        for _ in range(CENTRE_TRIES):
+            if anywhere:
+                centre = V[F[rng.integers(len(F))]].mean(axis=0)
+            else:
+                a, b = creases[rng.integers(len(creases))]
+                w = rng.uniform(0.1, 0.9)
+                centre = w * V[a] + (1.0 - w) * V[b]
+            region = ball_hole(V, F, centre, int(target), removed)
+            if region is not None:
+                removed[region] = True
+                break
+    return removed
+
+
 def _box(size=1.0):
     return generated_mesh("create_cube", size=size)
 
@@ -129,12 +175,13 @@ def _cylinder(radius, height, subdiv=96):
     return generated_mesh("create_cone", r0=radius, r1=radius, h=height, subdiv=subdiv)
 
 
-def crossing_centres(V, F, components, specs, edge):
+def crossing_centres(V, F, components, specs, edge, rng=None):
     """Hole centres next to where components cross: removed faces cross nothing, their loop is close.
 
     For each ``(component, target)`` the centre is a vertex of that component whose distance to
     the nearest face of it that crosses another component is about the ball radius of the hole
-    plus two edge lengths; centres keep apart from the ones chosen before.
+    plus two edge lengths (with ``rng``, a random one of the vertices within an edge length of
+    the best); centres keep apart from the ones chosen before.
 
     Parameters
     ----------
@@ -163,12 +210,15 @@ def crossing_centres(V, F, components, specs, edge):
             too_close = np.linalg.norm(V[verts] - c, axis=1) < radius + 2 * _t * edge / (2 * np.pi) + 4 * edge
             score[too_close] = np.inf
         best = int(np.argmin(score))
+        if rng is not None and np.isfinite(score[best]):
+            close = np.flatnonzero(score <= score[best] + edge)
+            best = int(close[rng.integers(len(close))])
         if np.isfinite(score[best]):
             out.append((V[verts[best]].copy(), target))
     return out
 
 
-def creased_case(name, edge=0.025):
+def creased_case(name, edge=0.025, seed=0):
     """One of the creased or interpenetrating cases by name (:data:`CREASED_CASES`).
 
     Parameters
@@ -176,6 +226,8 @@ def creased_case(name, edge=0.025):
     name : str  "creased_box", "bevelled_box", "cylinder_rims", "union" or "interpenetrating"
     edge : float  target edge length of the remeshing (the shapes are about 1 unit across);
         0.08 gives the small test fixtures
+    seed : int  0: the holes placed by hand; otherwise holes of 20-100 edges at random crease
+        points (:func:`random_crease_holes`), or next to random points of the crossing curves
 
     Returns
     -------
@@ -189,24 +241,24 @@ def creased_case(name, edge=0.025):
         V, F = remeshed(*_box(), edge)
         holes = [((0.5, 0.5, 0.0), t(60)), ((-0.5, 0.0, 0.5), t(20)), ((0.5, -0.5, -0.5), t(60)),
                  ((-0.5, -0.5, 0.0), t(100))]
-        return _case(name, V, F, holes)
+        return _seeded_case(name, V, F, holes, seed, t)
     if name == "bevelled_box":
         cutter = _moved(_box(1.2), rotation("z", 45.0))
         V, F = remeshed(*boolean_mesh("intersection", _box(), cutter), edge)
         b = 0.6 * np.sqrt(2) - 0.5  # where a bevel meets a face
         holes = [((0.5, b, 0.0), t(60)), ((0.5, -0.1, 0.5), t(20)), ((0.5 * (b + 0.5), 0.5 * (b + 0.5), 0.5), t(60)),
                  ((-b, -0.5, 0.0), t(60))]
-        return _case(name, V, F, holes)
+        return _seeded_case(name, V, F, holes, seed, t)
     if name == "cylinder_rims":
         V, F = remeshed(*_cylinder(0.5, 1.5), edge)
         holes = [((0.5, 0.75, 0.0), t(60)), ((-0.5, -0.75, 0.0), t(60)), ((0.0, 0.75, -0.5), t(20)),
                  ((0.0, -0.75, 0.5), t(20))]
-        return _case(name, V, F, holes)
+        return _seeded_case(name, V, F, holes, seed, t)
     if name == "union":
         V, F = remeshed(*boolean_mesh("union", _box(), _cylinder(0.3, 1.3)), edge)
         holes = [((0.3, 0.5, 0.0), t(60)), ((-0.3, -0.5, 0.0), t(20)), ((0.0, -0.5, -0.3), t(20)),
                  ((-0.5, 0.5, 0.5), t(60))]
-        return _case(name, V, F, holes)
+        return _seeded_case(name, V, F, holes, seed, t)
     # interpenetrating: three closed parts in one mesh, no boolean
     parts = [remeshed(*_moved(generated_mesh("create_sphere", subdiv=3), 0.6 * np.eye(3)), edge),
              remeshed(*_moved(_cylinder(0.25, 1.2), rotation("z", 90.0), (0.55, 0.0, 0.0)), edge),
@@ -217,7 +269,27 @@ def creased_case(name, edge=0.025):
     components = np.concatenate([np.full(len(p[1]), i) for i, p in enumerate(parts)])
     ell = float(edge_lengths(V, F).mean())
     specs = [(0, t(60)), (0, t(20)), (1, t(40)), (2, t(40))]
-    return _case(name, V, F, crossing_centres(V, F, components, specs, ell), given_class="crossing")
+    rng = None
+    if seed:
+        rng = np.random.default_rng(seed)
+        specs = [(int(rng.integers(len(parts))), t(int(rng.choice(SEEDED_TARGETS)))) for _ in specs]
+    return _case(name, V, F, crossing_centres(V, F, components, specs, ell, rng), given_class="crossing")
+
+
+#: Boundary edges of the seeded holes (:func:`creased_case` with a seed other than 0), at the default edge.
+SEEDED_TARGETS = (20, 40, 60, 100)
+
+
+def _seeded_case(name, V, F, holes, seed, target):
+    """The case with the hand-placed ``holes`` (seed 0) or as many at random crease points (another seed).
+
+    ``target(k)`` is the boundary edges of a k-edge hole at this case's edge length.
+    """
+    if not seed:
+        return _case(name, V, F, holes)
+    rng = np.random.default_rng(seed)
+    targets = [target(int(rng.choice(SEEDED_TARGETS))) for _ in holes]
+    return MeshCase(name, V, F, removed=random_crease_holes(V, F, targets, rng), given_class="crease")
 
 
 CREASED_CASES = ("creased_box", "bevelled_box", "cylinder_rims", "union", "interpenetrating")
@@ -235,13 +307,15 @@ CAD_TESSELLATED_PARTS = {
 }
 
 
-def cad_tessellation_case(name, edge=0.02):
+def cad_tessellation_case(name, edge=0.02, seed=0):
     """One of :data:`CAD_TESSELLATED_PARTS`: the shape remeshed at ``edge``, decimated as a CAD export, holes cut.
 
     Parameters
     ----------
     name : str  "union", "drilled_box" or "cylinder"
     edge : float  edge length of the remeshing before the decimation (the shapes are about 1 unit across)
+    seed : int  0: the holes placed by hand; otherwise as many of 20-60 edges at random crease
+        points (:func:`random_crease_holes`)
 
     Returns
     -------
@@ -251,4 +325,8 @@ def cad_tessellation_case(name, edge=0.02):
         raise ValueError(f"unknown CAD part '{name}' (known: {', '.join(CAD_TESSELLATED_PARTS)})")
     shape, faces, holes = CAD_TESSELLATED_PARTS[name]
     V, F = cad_tessellation(*remeshed(*shape(), edge), faces)
-    return _case(name, V, F, holes)
+    if not seed:
+        return _case(name, V, F, holes)
+    rng = np.random.default_rng(seed)
+    targets = [int(rng.choice(SEEDED_TARGETS[:3])) for _ in holes]
+    return MeshCase(name, V, F, removed=random_crease_holes(V, F, targets, rng), given_class="crease")

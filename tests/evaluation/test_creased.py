@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshlab_holefill.evaluation.comparison import Filler, evaluate_run, prepare_case
+from meshlab_holefill.evaluation.comparison import Filler, MeshCase, evaluate_run, prepare_case
 from meshlab_holefill.evaluation.creased import (CAD_TESSELLATED_PARTS, CREASED_CASES, ball_hole, cad_tessellation_case,
-                                                 creased_case, rotation)
+                                                 creased_case, random_crease_holes, rotation)
 from meshlab_holefill.evaluation.metrics import compact_mesh, crease_metrics, edge_dihedrals, mesh_checks
 from meshlab_holefill.geometry.intersections import faces_intersecting
 from meshlab_holefill.meshlab.mesh_files import boolean_mesh, generated_mesh, remeshed
@@ -22,8 +22,8 @@ FIXTURE_EDGE = 0.08  # coarse versions of the benchmark cases: about 1-3k faces 
 
 
 @functools.lru_cache(maxsize=None)
-def fixture(name):
-    return prepare_case(creased_case(name, FIXTURE_EDGE))
+def fixture(name, seed=0):
+    return prepare_case(creased_case(name, FIXTURE_EDGE, seed=seed))
 
 
 def folded_grid(theta, n=12, equilateral=False):
@@ -92,8 +92,37 @@ def test_creased_cases_have_holes_a_crease_runs_through(name):
         assert m["crease_edges"] >= 1 and m["crease_gt_deg"] > 40.0 and m["crease_error_mean_deg"] == 0.0
 
 
-def test_interpenetrating_case_holes_next_to_crossings_whose_ground_truth_crosses_nothing():
-    case = fixture("interpenetrating")
+def _holds_a_crease(hole):
+    gV, gF = compact_mesh(*hole.ground_truth)
+    return crease_metrics(gV, gF, gV, gF).get("crease_edges", 0) >= 1
+
+
+@pytest.mark.parametrize("name", ["creased_box", "cylinder_rims", "union"])
+def test_another_seed_cuts_other_holes_at_random_crease_points_and_the_same_ones_each_time(name):
+    by_hand = creased_case(name, FIXTURE_EDGE)
+    seeded, again = creased_case(name, FIXTURE_EDGE, seed=1), creased_case(name, FIXTURE_EDGE, seed=1)
+    assert np.array_equal(seeded.removed, again.removed)
+    assert not np.array_equal(seeded.removed, by_hand.removed)
+    assert not np.array_equal(seeded.removed, creased_case(name, FIXTURE_EDGE, seed=2).removed)
+    case = fixture(name, 1)
+    assert len(case.holes) >= 3 and not case.notes and {h.size_class for h in case.holes} == {"crease"}
+    assert sum(map(_holds_a_crease, case.holes)) >= len(case.holes) - 1  # the last is drawn anywhere
+
+
+def test_random_crease_holes_centre_all_but_the_last_on_a_crease_and_take_any_point_without_creases():
+    V, F = remeshed(*generated_mesh("create_cube", size=1.0), FIXTURE_EDGE)
+    for seed in range(5):
+        # a 12-edge hole on a crease, then a smaller one anywhere (most of a cube is flat)
+        removed = random_crease_holes(V, F, [12, 6], np.random.default_rng(seed))
+        case = prepare_case(MeshCase("cube", V, F, removed=removed, given_class="crease"))
+        assert _holds_a_crease(max(case.holes, key=lambda h: h.boundary_edges))
+    sphere = generated_mesh("create_sphere", subdiv=3)
+    assert random_crease_holes(*sphere, [12, 12], np.random.default_rng(0)).any()  # no crease: holes anywhere
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_interpenetrating_case_holes_next_to_crossings_whose_ground_truth_crosses_nothing(seed):
+    case = fixture("interpenetrating", seed)
     V0, F0 = case.V0, case.F0
     everything = np.arange(len(F0))
     assert len(faces_intersecting(V0, F0, everything, everything)) > 20  # parts cross before any fill

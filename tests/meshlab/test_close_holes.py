@@ -365,9 +365,10 @@ def test_the_second_pass_does_not_fill_again_a_hole_whose_surroundings_are_uncha
     monkeypatch.setattr(lssvm_poisson, "fill", counting_fill)
     ms = meshset_from_arrays(V, F)
     res = ms.meshing_close_holes_lssvm_poisson(workers=1)  # counted in this process
-    # pass 1 fills both (the small hole split to 13 edges, then failing); pass 2, without the
-    # failed hole's split, finds the large hole's surroundings unchanged and reuses its patch
-    assert sizes == [36, 13]
+    # pass 1 fills the large hole and refuses the small one (split to 13 edges) before its fill, for its
+    # zero-length border edge; pass 2, without the failed hole's split, finds the large hole's
+    # surroundings unchanged and reuses its patch
+    assert sizes == [36]
     assert [h["status"] for h in sorted(res["holes"], key=lambda h: h["boundary_edges"])] == ["failed", "closed"]
     np.testing.assert_array_equal(ms.current_mesh().vertex_matrix(), reference.current_mesh().vertex_matrix())
     np.testing.assert_array_equal(ms.current_mesh().face_matrix(), reference.current_mesh().face_matrix())
