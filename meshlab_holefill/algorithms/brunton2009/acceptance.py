@@ -58,19 +58,7 @@ def linear_motion_is_simple(Q, eps, near=None):
     in-plane position and equal heights, and heights scaled by the common factor (1 - t) are
     equal exactly when they were equal at t = 0, where the loop is simple (d_MD > eps). So the
     motion is free of self-intersection iff the projected polygon is simple; it is required to
-    keep the clearance d_MD > eps, like the annealing.
-
-    Parameters
-    ----------
-    Q : (m, 2) float64
-        Projected polygon.
-    eps : float
-        Absolute clearance.
-    near : float, optional
-        Distances beyond ``near`` (> eps) are only bounded from below (faster, same answer).
-
-    Returns
-    -------
-    bool
+    keep the clearance d_MD > eps, like the annealing. Q is the (m, 2) projected polygon; ``eps``
+    and ``near`` are as for :func:`meshlab_holefill.geometry.segments.is_simple_polygon`, which decides.
     """
     return is_simple_polygon(Q, eps, near)
