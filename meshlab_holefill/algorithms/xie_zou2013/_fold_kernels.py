@@ -12,9 +12,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...geometry._flip_kernels import _find, _interior_edges
 from ...geometry._vector_kernels import cross3, dot3, norm3, npmin, sub3
 
-__all__ = ["pair_agreements", "fold_swap_scores"]
+__all__ = ["pair_agreements", "fold_swap_scores", "fold_swap_rounds"]
 
 
 @njit(cache=True)
@@ -94,3 +95,127 @@ def _agreement(V, fa, fb, border_normals):
     across = npmin(_border_agreement(fa, na, border_normals), _border_agreement(fb, nb, border_normals))
     proper = (na[0] != 0 or na[1] != 0 or na[2] != 0) and (nb[0] != 0 or nb[1] != 0 or nb[2] != 0)
     return npmin(dot3(na, nb), across), proper
+
+
+@njit(cache=True)
+def _sorted_contains(keys, value):
+    """Whether the sorted array ``keys`` holds ``value``."""
+    i = np.searchsorted(keys, value)
+    return i < keys.shape[0] and keys[i] == value
+
+
+@njit(cache=True)
+def fold_swap_rounds(V, F, fixed, border_normals, max_rounds):
+    """The rounds of folds.unfold_by_swaps: ``geometry.flips.relax_edges`` with the fold score, compiled.
+
+    Each round makes, in order, the numpy rounds' choices (``flips._relax_numpy`` with the scored
+    criterion of :func:`fold_swap_scores`, its priority ``-old``, no orientation test; each face's
+    normal and border agreement computed once per round, the same numbers): the
+    interior edges in half-edge order (``geometry._flip_kernels._interior_edges``), the edges whose
+    swap raises the agreement by more than 1e-9 ranked by a stable sort of ``old``, the swaps that
+    keep (c, d) distinct, create no existing edge and touch no ``fixed`` key, one claiming pass
+    (the highest priority takes a face), then the first of each new edge in priority order.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64  changed in place
+    fixed : (p,) int64  sorted distinct keys min * n + max of the edges no swap may touch or create
+    border_normals : (k, 3) float64  as for :func:`fold_swap_scores`
+    max_rounds : int
+
+    Returns
+    -------
+    swaps : int
+    rounds : int  rounds made (each that ended in swaps, plus the one that stopped)
+    unsure : bool  the edge table of the last round needs the numpy code (a directed edge repeats,
+        or an index is out of range): F holds the swaps of the rounds before it, which that code continues
+    """
+    n, m = V.shape[0], F.shape[0]
+    swaps = 0
+    for r in range(max_rounds):
+        he, tw, start, half, tip, fine = _interior_edges(F, n)
+        if not fine:
+            return swaps, r, True
+        e = he.shape[0]
+        if e == 0:
+            return swaps, r + 1, False
+        # Each face's unit normal and agreement with the mesh across its loop edges, once per round:
+        # the values _agreement computes for every pair holding the face.
+        normal = np.empty((m, 3))
+        across = np.empty(m)
+        for f in range(m):
+            nf = _unit_normal(V, F[f])
+            normal[f, 0], normal[f, 1], normal[f, 2] = nf
+            across[f] = _border_agreement(F[f], nf, border_normals)
+        a = np.empty(e, np.int64)
+        b = np.empty(e, np.int64)
+        c = np.empty(e, np.int64)
+        d = np.empty(e, np.int64)
+        f1 = he // 3
+        f2 = tw // 3
+        old = np.empty(e)
+        new = np.full(e, -np.inf)
+        new1 = np.empty(3, np.int64)
+        new2 = np.empty(3, np.int64)
+        for i in range(e):
+            c1, c2 = he[i] % 3, tw[i] % 3
+            a[i], b[i] = F[f1[i], c1], F[f1[i], (c1 + 1) % 3]
+            c[i], d[i] = F[f1[i], (c1 + 2) % 3], F[f2[i], (c2 + 2) % 3]
+            na = (normal[f1[i], 0], normal[f1[i], 1], normal[f1[i], 2])
+            nb = (normal[f2[i], 0], normal[f2[i], 1], normal[f2[i], 2])
+            old[i] = npmin(dot3(na, nb), npmin(across[f1[i]], across[f2[i]]))
+            if old[i] < 0.0:  # fold_swap_scores: the swapped pair is scored for folds only
+                new1[0], new1[1], new1[2] = a[i], d[i], c[i]
+                new2[0], new2[1], new2[2] = b[i], c[i], d[i]
+                agreement, proper = _agreement(V, new1, new2, border_normals)
+                if proper:
+                    new[i] = agreement
+        failing = np.flatnonzero(new > old + 1e-9)
+        if failing.shape[0] == 0:
+            return swaps, r + 1, False
+        priority = np.zeros(e, np.int64)
+        order = np.argsort(old[failing], kind="mergesort")  # -gain = -(-old): the worst fold first
+        for rank in range(order.shape[0]):
+            priority[failing[order[rank]]] = failing.shape[0] - rank
+        cand = np.empty(failing.shape[0], np.int64)
+        count = 0
+        for i in failing:
+            key = min(c[i], d[i]) * n + max(c[i], d[i])
+            # an edge of F at the round's start, either way round (its half-edge table)
+            if c[i] == d[i] or _find(start, half, tip, c[i], d[i]) >= 0 or _find(start, half, tip, d[i], c[i]) >= 0:
+                continue
+            if fixed.shape[0] and (_sorted_contains(fixed, min(a[i], b[i]) * n + max(a[i], b[i]))
+                                   or _sorted_contains(fixed, key)):
+                continue
+            cand[count] = i
+            count += 1
+        if count == 0:
+            return swaps, r + 1, False
+        cand = cand[:count]  # edge order, as np.flatnonzero(ok)
+        claim = np.full(m, -1, np.int64)
+        for i in cand:
+            claim[f1[i]] = max(claim[f1[i]], priority[i])
+            claim[f2[i]] = max(claim[f2[i]], priority[i])
+        won = np.empty(count, np.int64)
+        w_count = 0
+        for i in cand:
+            if claim[f1[i]] == priority[i] and claim[f2[i]] == priority[i]:
+                won[w_count] = i
+                w_count += 1
+        won = won[:w_count]
+        won = won[np.argsort(-priority[won], kind="mergesort")]
+        keys = np.empty(w_count, np.int64)
+        for t in range(w_count):
+            keys[t] = min(c[won[t]], d[won[t]]) * n + max(c[won[t]], d[won[t]])
+        first = np.argsort(keys, kind="mergesort")  # np.unique(return_index=True): each key's first
+        previous = -1
+        for t in first:
+            if keys[t] == previous:
+                continue
+            previous = keys[t]
+            i = won[t]
+            F[f1[i], 0], F[f1[i], 1], F[f1[i], 2] = a[i], d[i], c[i]
+            F[f2[i], 0], F[f2[i], 1], F[f2[i], 2] = b[i], c[i], d[i]
+            swaps += 1
+    return swaps, max_rounds, False

@@ -10,15 +10,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...geometry.flips import relax_edges
+from ...geometry.flips import fixed_edge_keys, relax_edges
 from ...core.crossings import context_crossings
 from ...geometry.intersections import faces_intersecting
 from ...geometry.quality import cross_rows, face_normals
 from ...geometry.topology import edge_pair_set, interior_edges
-from ._fold_kernels import fold_swap_scores
+from ._fold_kernels import fold_swap_rounds, fold_swap_scores
 from .optimisation import adjacency
 
-__all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_folds", "unfold_by_swaps",
+__all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_folds", "unfold_by_swaps", "unfold_by_swaps_numpy",
            "repair_folds", "intersects_surroundings", "boundary_ears", "border_normals"]
 
 # Neighbouring patch faces whose normals differ by more than this are a fold-over.
@@ -180,13 +180,28 @@ def unfold_by_swaps(V, F, forbidden_edges=(), border_normals=None, max_rounds=20
     that is concave on the surface but convex in the projection, where the triangulation puts
     an ear (i-1, i, i+1) facing against the surface. The swap loop is
     :func:`geometry.flips.relax_edges` with this agreement as its scored criterion (worst fold
-    first) and without its orientation test, which a folded pair cannot pass.
+    first) and without its orientation test, which a folded pair cannot pass. Its rounds run
+    compiled (:func:`._fold_kernels.fold_swap_rounds`, the same swaps); a round whose edge table
+    the compiled code cannot build (a directed edge repeats) and those after it run in numpy.
 
     Returns
     -------
     F : (m, 3) int64
     swaps : int
     """
+    across = np.zeros((0, 3)) if border_normals is None else np.ascontiguousarray(border_normals, np.float64)
+    V = np.ascontiguousarray(V, np.float64)
+    F = np.array(F, np.int64)
+    fixed = fixed_edge_keys(forbidden_edges, len(V))
+    swaps, rounds, unsure = fold_swap_rounds(V, F, fixed, across, max_rounds)
+    if not unsure:
+        return F, swaps
+    F, more = unfold_by_swaps_numpy(V, F, forbidden_edges, border_normals, max_rounds - rounds)
+    return F, swaps + more
+
+
+def unfold_by_swaps_numpy(V, F, forbidden_edges=(), border_normals=None, max_rounds=20):
+    """:func:`unfold_by_swaps` by :func:`geometry.flips.relax_edges` with the fold score as its criterion (the tests' reference)."""
     across = np.zeros((0, 3)) if border_normals is None else np.ascontiguousarray(border_normals, np.float64)
 
     def agreement_gain(V, old1, old2, new1, new2):

@@ -1,5 +1,7 @@
 """The compiled fold agreement (_fold_kernels) against the numpy code it replaces, bit for bit."""
 import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
 import pytest
 
 from meshlab_holefill.algorithms.xie_zou2013._fold_kernels import pair_agreements
@@ -80,3 +82,42 @@ def test_fold_swap_scores_are_the_agreements_of_the_folded_edges(poison):
             old, new = fold_swap_scores(V, *faces, given)
             np.testing.assert_array_equal(old, agreement[0])
             np.testing.assert_array_equal(new, np.where((agreement[0] < 0.0) & proper[1], agreement[1], -np.inf))
+
+
+def _folded_grid(rng, n=7, fold=1.5):
+    """An n x n grid of triangles, its vertices moved up and down (folds where neighbours disagree),
+    some quads flipped the other way; the first 4 (n - 1) vertices, its border in order, are the loop."""
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    V = np.c_[x.ravel(), y.ravel(), fold * rng.normal(size=n * n)]
+    V[:, :2] += 0.3 * rng.normal(size=(n * n, 2))
+    i = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)).ravel()
+    flip = rng.random(len(i)) < 0.5
+    F = np.concatenate([np.where(flip[:, None], np.c_[i, i + 1, i + n], np.c_[i, i + 1, i + n + 1]),
+                        np.where(flip[:, None], np.c_[i + 1, i + n + 1, i + n], np.c_[i, i + n + 1, i + n])])
+    ring = ([r for r in range(n)] + [c * n + n - 1 for c in range(1, n)] + [n * n - 1 - r for r in range(1, n)]
+            + [(n - 1 - c) * n for c in range(1, n - 1)])
+    order = np.r_[ring, np.setdiff1d(np.arange(n * n), ring)]
+    relabel = np.empty(n * n, np.int64)
+    relabel[order] = np.arange(n * n)
+    return V[order], relabel[F], len(ring)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10 ** 6), fold=st.sampled_from([0.3, 1.5, 4.0]), forbidden=st.booleans(),
+       border=st.booleans(), repeat=st.booleans(), rounds=st.integers(1, 20))
+def test_compiled_fold_swap_rounds_make_the_numpy_rounds_swaps(seed, fold, forbidden, border, repeat, rounds):
+    from meshlab_holefill.algorithms.xie_zou2013.folds import unfold_by_swaps, unfold_by_swaps_numpy
+
+    rng = np.random.default_rng(seed)
+    V, F, k = _folded_grid(rng, fold=fold)
+    if repeat:  # a directed edge twice: the compiled rounds hand over to numpy
+        F = np.vstack([F, F[rng.integers(len(F))]])
+    chords = rng.integers(0, k, size=(6, 2)) if forbidden else ()
+    normals = None
+    if border:
+        normals = rng.normal(size=(k, 3))
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    got, got_swaps = unfold_by_swaps(V, F, chords, normals, max_rounds=rounds)
+    want, want_swaps = unfold_by_swaps_numpy(V, F, chords, normals, max_rounds=rounds)
+    np.testing.assert_array_equal(got, want)
+    assert got_swaps == want_swaps
