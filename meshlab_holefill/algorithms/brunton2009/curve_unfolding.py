@@ -74,7 +74,8 @@ from .planar_domains import PlanarDomains, development_domain
 from .quality_swaps import improve_by_swaps
 from .slivers import repair_slivers
 from .unfolded_triangulation import DENSITIES, resample_patch, surrounding_edge_length, triangulate_and_embed
-from .unfolding import anneal_loop, unfold_loop
+from .annealing import anneal_loop
+from .unfolding import unfold_loop
 
 __all__ = ["fill", "PARAMS", "RINGS", "WARM_UP", "warm_up"]
 
