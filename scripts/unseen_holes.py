@@ -37,11 +37,16 @@ TIMED_EDGES = 300  # the slowest hole is reported among holes of at most this ma
 
 
 def group_lines(filler, rows, anchor_rows):
-    """The summary line of one filler on one group's holes (rows of run_comparison, keyed as below)."""
+    """The summary line of one filler on one group's holes, then its holes not closed.
+
+    ``rows`` and ``anchor_rows`` map (case, hole) to the hole rows of run_comparison, the filler's and the
+    anchor's (empty when the anchor did not run: the mean is then over the filler's closed holes).
+    """
     closed = {key: r for key, r in rows.items() if r["closed"]}
-    both = [key for key in closed if anchor_rows.get(key, {}).get("closed")]
+    both = [key for key in closed if anchor_rows.get(key, {}).get("closed")] if anchor_rows else list(closed)
     mean = sum(closed[key]["dist_patch_to_gt_mean_permille"] for key in both) / max(len(both), 1)
-    anchor = sum(anchor_rows[key]["dist_patch_to_gt_mean_permille"] for key in both) / max(len(both), 1)
+    anchor = (sum(anchor_rows[key]["dist_patch_to_gt_mean_permille"] for key in both) / max(len(both), 1)
+              if anchor_rows else float("nan"))
     crossing = sum(r.get("intersecting_new_faces") or 0 for r in closed.values())
     slivers = sum(r["quality_min"] < min(SLIVER, r.get("quality_bound") or 1.0) for r in closed.values())
     timed = [r for r in rows.values() if r["boundary_edges"] <= TIMED_EDGES and r.get("seconds") is not None]
