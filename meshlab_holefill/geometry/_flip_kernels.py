@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._vector_kernels import cross3, dot3, norm3, sub3
+from ._vector_kernels import cross3, dot3, norm3, npmin, sub3
 
 # The kernels of the compiled rounds (pair_angle_parts serves flips.min_angle_scores, the scored rounds).
 __all__ = ["swap_candidates", "apply_swaps", "fixed_keys", "NO_EDGES", "NO_FAILING", "CANDIDATES", "UNSURE", "ANGLE_MARGIN"]
@@ -373,3 +373,143 @@ def fixed_keys(E, n):
             keys[k] = keys[r]
             k += 1
     return keys[:k].copy()
+
+
+@njit(cache=True)
+def min_angle_round_faces(V, F):
+    """The start of a ``criterion="min_angle"`` round of :func:`..flips.relax_edges`: the edge table and scored faces.
+
+    Returns
+    -------
+    fine : bool  False when the numpy code must build the edge table (see :func:`_interior_edges`)
+    he, tw : (e,) int64  each interior edge's half-edge a -> b and its twin, as :func:`_interior_edges`
+    start, half, tip : the half-edge table (:func:`_find` looks an edge up in it)
+    faces : (4, e, 3) int64  each edge's faces F[f1], F[f2] and the swapped pair (a, d, c), (b, c, d)
+    sines, cosines : (4, e, 3) float64  the corners' arctan2 arguments (:func:`pair_angle_parts`)
+    """
+    n = V.shape[0]
+    he, tw, start, half, tip, fine = _interior_edges(F, n)
+    e = he.shape[0]
+    faces = np.empty((4, e, 3), np.int64)
+    if not fine:
+        return False, he, tw, start, half, tip, faces, np.empty((4, e, 3)), np.empty((4, e, 3))
+    for i in range(e):
+        f1, c1, f2, c2 = he[i] // 3, he[i] % 3, tw[i] // 3, tw[i] % 3
+        a, b, c, d = F[f1, c1], F[f1, (c1 + 1) % 3], F[f1, (c1 + 2) % 3], F[f2, (c2 + 2) % 3]
+        for j in range(3):
+            faces[0, i, j], faces[1, i, j] = F[f1, j], F[f2, j]
+        faces[2, i, 0], faces[2, i, 1], faces[2, i, 2] = a, d, c
+        faces[3, i, 0], faces[3, i, 1], faces[3, i, 2] = b, c, d
+    sines, cosines = pair_angle_parts(V, faces)
+    return True, he, tw, start, half, tip, faces, sines, cosines
+
+
+@njit(cache=True)
+def _unit(n):
+    """geometry.quality.face_normals' row division: n / |n|, zero when |n| is not > 0."""
+    ln = norm3(n)
+    if ln > 0:
+        return (n[0] / ln, n[1] / ln, n[2] / ln)
+    return (0.0, 0.0, 0.0)
+
+
+@njit(cache=True)
+def min_angle_round_swaps(V, F, he, tw, start, half, tip, faces, angles, fixed, normal_cos):
+    """The rest of a ``criterion="min_angle"`` round of :func:`..flips.relax_edges` (no ``allowed``), F changed in place.
+
+    The numpy round's choices in order: each pair's smallest angle (pairwise minima of the
+    corners' ``angles``), the edges gaining more than 1e-9 ranked by a stable sort of the gain
+    (largest first), the swaps whose new triangles stay within ``normal_cos`` of the old pair's
+    normal (``flips._keeps_orientation``), keep c and d distinct, create no edge of F and touch no
+    ``fixed`` key, one claiming pass, then the first of each new edge in priority order.
+
+    Returns
+    -------
+    status : NO_FAILING (nothing swapped: the numpy loop stops), CANDIDATES (swapped), or UNSURE
+        (an angle is NaN, where the numpy code takes another minimum: run the round in numpy)
+    swaps : int
+    """
+    e, m = he.shape[0], F.shape[0]
+    n = V.shape[0]
+    smallest = np.empty((4, e))
+    for t in range(4):
+        for i in range(e):
+            x, y, z = angles[t, i, 0], angles[t, i, 1], angles[t, i, 2]
+            if x != x or y != y or z != z:
+                return UNSURE, 0
+            smallest[t, i] = npmin(npmin(x, y), z)
+    old = np.empty(e)
+    new = np.empty(e)
+    for i in range(e):
+        old[i] = npmin(smallest[0, i], smallest[1, i])
+        new[i] = npmin(smallest[2, i], smallest[3, i])
+    failing = np.flatnonzero(new > old + 1e-9)
+    if failing.shape[0] == 0:
+        return NO_FAILING, 0
+    gain = new - old
+    priority = np.zeros(e, np.int64)
+    order = np.argsort(-gain[failing], kind="mergesort")
+    for rank in range(order.shape[0]):
+        priority[failing[order[rank]]] = failing.shape[0] - rank
+    cand = np.empty(failing.shape[0], np.int64)
+    count = 0
+    for i in failing:
+        a, d, c, b = faces[2, i, 0], faces[2, i, 1], faces[2, i, 2], faces[3, i, 0]  # (a, d, c), (b, c, d)
+        pa = (V[a, 0], V[a, 1], V[a, 2])
+        pb = (V[b, 0], V[b, 1], V[b, 2])
+        pc = (V[c, 0], V[c, 1], V[c, 2])
+        pd = (V[d, 0], V[d, 1], V[d, 2])
+        n_old1, n_old2 = cross3(sub3(pb, pa), sub3(pc, pa)), cross3(sub3(pa, pb), sub3(pd, pb))
+        old_n = (n_old1[0] + n_old2[0], n_old1[1] + n_old2[1], n_old1[2] + n_old2[2])
+        n1, n2 = cross3(sub3(pd, pa), sub3(pc, pa)), cross3(sub3(pc, pb), sub3(pd, pb))
+        if normal_cos == 0.0:
+            keeps = dot3(n1, old_n) > 0 and dot3(n2, old_n) > 0
+        else:
+            ln = norm3(old_n)
+            ln = ln if ln != ln or ln > 1e-300 else 1e-300  # np.maximum(norm, 1e-300), NaN kept
+            unit_old = (old_n[0] / ln, old_n[1] / ln, old_n[2] / ln)
+            keeps = dot3(_unit(n1), unit_old) > normal_cos and dot3(_unit(n2), unit_old) > normal_cos
+        if not keeps or c == d:
+            continue
+        if _find(start, half, tip, c, d) >= 0 or _find(start, half, tip, d, c) >= 0:
+            continue
+        key = min(c, d) * n + max(c, d)
+        if fixed.shape[0]:
+            k_old = min(a, b) * n + max(a, b)
+            i_old, i_new = np.searchsorted(fixed, k_old), np.searchsorted(fixed, key)
+            if (i_old < fixed.shape[0] and fixed[i_old] == k_old) or (i_new < fixed.shape[0] and fixed[i_new] == key):
+                continue
+        cand[count] = i
+        count += 1
+    if count == 0:
+        return NO_FAILING, 0
+    cand = cand[:count]
+    claim = np.full(m, -1, np.int64)
+    for i in cand:
+        f1, f2 = he[i] // 3, tw[i] // 3
+        claim[f1] = max(claim[f1], priority[i])
+        claim[f2] = max(claim[f2], priority[i])
+    won = np.empty(count, np.int64)
+    w_count = 0
+    for i in cand:
+        if claim[he[i] // 3] == priority[i] and claim[tw[i] // 3] == priority[i]:
+            won[w_count] = i
+            w_count += 1
+    won = won[:w_count]
+    won = won[np.argsort(-priority[won], kind="mergesort")]
+    keys = np.empty(w_count, np.int64)
+    for t in range(w_count):
+        c, d = faces[2, won[t], 2], faces[2, won[t], 1]
+        keys[t] = min(c, d) * n + max(c, d)
+    swaps = 0
+    previous = -1
+    for t in np.argsort(keys, kind="mergesort"):  # np.unique(return_index=True): each new edge's first
+        if keys[t] == previous:
+            continue
+        previous = keys[t]
+        i = won[t]
+        for j in range(3):
+            F[he[i] // 3, j] = faces[2, i, j]
+            F[tw[i] // 3, j] = faces[3, i, j]
+        swaps += 1
+    return CANDIDATES, swaps

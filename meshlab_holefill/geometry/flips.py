@@ -133,8 +133,9 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
         degrees or more, which keeps the shape of a bent quad). None skips the test, for a
         scorer that judges folds itself.
     compiled : bool
-        With ``criterion="sphere"`` or ``"angles"`` and ``normal_cos=0``, run the rounds
-        compiled (:mod:`._flip_kernels`, the same swaps as the numpy rounds); False runs numpy only.
+        With ``criterion="sphere"`` or ``"angles"`` and ``normal_cos=0``, or ``criterion="min_angle"``
+        without ``allowed``, run the rounds compiled (:mod:`._flip_kernels`, the same swaps as the
+        numpy rounds); False runs numpy only.
 
     Returns
     -------
@@ -149,7 +150,36 @@ def relax_edges(V, F, fixed_edges=None, max_rounds=200, allowed=None, criterion=
     if compiled and isinstance(criterion, str) and criterion in ("angles", "sphere") and normal_cos == 0.0:
         V = np.ascontiguousarray(V, np.float64)
         return _relax_compiled(V, F, fixed, max_rounds, allowed, criterion)
+    if compiled and criterion == "min_angle" and allowed is None and normal_cos is not None:
+        return _relax_min_angle_compiled(np.ascontiguousarray(V, np.float64), F, fixed, max_rounds, float(normal_cos))
     return _relax_numpy(V, F, fixed, max_rounds, allowed, criterion, normal_cos, scorer)
+
+
+def _relax_min_angle_compiled(V, F, fixed, max_rounds, normal_cos):
+    """The ``criterion="min_angle"`` rounds of :func:`relax_edges` (no ``allowed``) compiled around numpy's arctan2.
+
+    Each round: the edge table and scored faces (:func:`._flip_kernels.min_angle_round_faces`),
+    numpy's ``arctan2`` of their corners (as :func:`min_angle_scores`), then the choice and the
+    swaps (:func:`._flip_kernels.min_angle_round_swaps`); the same swaps as the numpy rounds. A
+    round the compiled code cannot decide (a directed edge repeats, an angle is NaN) and those
+    after it run in numpy.
+    """
+    total = 0
+    for done in range(max_rounds):
+        fine, he, tw, start, half, tip, faces, sines, cosines = K.min_angle_round_faces(V, F)
+        status = K.UNSURE
+        if fine:
+            if len(he) == 0:
+                break
+            status, swaps = K.min_angle_round_swaps(V, F, he, tw, start, half, tip, faces, np.arctan2(sines, cosines),
+                                                    fixed, normal_cos)
+        if status == K.UNSURE:
+            F, more = _relax_numpy(V, F, fixed, max_rounds - done, None, "min_angle", normal_cos, min_angle_scores)
+            return F, total + more
+        if status != K.CANDIDATES:
+            break
+        total += swaps
+    return F, total
 
 
 def _relax_compiled(V, F, fixed, max_rounds, allowed, criterion):

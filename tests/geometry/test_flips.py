@@ -228,6 +228,35 @@ def test_compiled_rounds_make_the_numpy_swaps(criterion):
         assert got[1] == want[1]
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10 ** 6), normal_cos=st.sampled_from([0.0, 0.5, -0.2]), fixed=st.booleans(),
+       repeat=st.booleans(), rounds=st.integers(1, 30))
+def test_compiled_min_angle_rounds_make_the_numpy_swaps(seed, normal_cos, fixed, repeat, rounds):
+    # Bumpy patches with many failing edges and near-ties; a repeated directed edge hands the
+    # rounds to numpy.
+    rng = np.random.default_rng(seed)
+    V, F = _bumpy_patch(rng, int(rng.integers(3, 12)))
+    E = interior_edges(F, len(V))[0]
+    keep = E[rng.random(len(E)) < 0.1] if fixed else None
+    if repeat:
+        F = np.vstack([F, F[rng.integers(len(F))]])
+    got = relax_edges(V, F, keep, max_rounds=rounds, criterion="min_angle", normal_cos=normal_cos)
+    want = relax_edges(V, F, keep, max_rounds=rounds, criterion="min_angle", normal_cos=normal_cos, compiled=False)
+    np.testing.assert_array_equal(got[0], want[0])
+    assert got[1] == want[1]
+
+
+@pytest.mark.parametrize("poison", [np.nan, np.inf])
+def test_compiled_min_angle_rounds_with_a_corner_at_nan_or_infinity(poison):
+    V, F = _bumpy_patch(np.random.default_rng(5), 6)
+    V[7] = poison
+    with np.errstate(invalid="ignore", over="ignore"):
+        got = relax_edges(V, F, criterion="min_angle", normal_cos=0.5)
+        want = relax_edges(V, F, criterion="min_angle", normal_cos=0.5, compiled=False)
+    np.testing.assert_array_equal(got[0], want[0])
+    assert got[1] == want[1]
+
+
 def test_compiled_rounds_defer_an_undecided_angle_sum_to_numpy():
     # Edge (a, b) with opposite angles pi / 2 at c and pi / 2 + pi 1e-9 at d: their sum is the
     # test's limit pi (1 + 1e-9) up to rounding, so the round runs in numpy.
