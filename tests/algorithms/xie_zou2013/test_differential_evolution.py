@@ -1324,8 +1324,8 @@ def test_base_point_pairs_are_found_once_per_pairing(cube_edge_hole):
 def test_warm_up_loads_every_kernel_a_fill_calls():
     # The kernels of the DE generation, the Sec. 4.7 steps, the swaps and the quality pass: a
     # worker that warmed up loads none of them within a hole's time.
-    from meshlab_holefill.algorithms.xie_zou2013 import _de_kernels, _incidence_kernels, _optimisation_kernels
-    from meshlab_holefill.algorithms.xie_zou2013 import _quality_pass_ops
+    from meshlab_holefill.algorithms.xie_zou2013 import _de_kernels, _fold_kernels, _incidence_kernels
+    from meshlab_holefill.algorithms.xie_zou2013 import _optimisation_kernels, _quality_pass_ops
     from meshlab_holefill.algorithms.xie_zou2013 import _smoothing_kernels, differential_evolution
     from meshlab_holefill.geometry import _flip_kernels, _quality_kernels
 
@@ -1336,7 +1336,8 @@ def test_warm_up_loads_every_kernel_a_fill_calls():
                _optimisation_kernels.edge_adjacency, _optimisation_kernels.faces_around_edges,
                _optimisation_kernels.independent_link_edges, _incidence_kernels.new_incidence,
                _incidence_kernels.copied_sets, _quality_pass_ops.improve_round, _quality_pass_ops.improve_face,
-               _smoothing_kernels.umbrella_passes, _flip_kernels.pair_angle_parts,
+               _smoothing_kernels.umbrella_passes, _flip_kernels.min_angle_round_faces,
+               _flip_kernels.min_angle_round_swaps, _fold_kernels.fold_swap_rounds,
                _quality_kernels.triangle_quality_kernel]
     assert all(kernel.signatures for kernel in kernels), [k.__name__ for k in kernels if not k.signatures]
 
