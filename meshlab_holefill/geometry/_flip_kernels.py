@@ -429,7 +429,7 @@ def min_angle_round_swaps(V, F, he, tw, start, half, tip, faces, angles, fixed, 
         (an angle is NaN, where the numpy code takes another minimum: run the round in numpy)
     swaps : int
     """
-    e, m = he.shape[0], F.shape[0]
+    e = he.shape[0]
     n = V.shape[0]
     smallest = np.empty((4, e))
     for t in range(4):
@@ -484,32 +484,42 @@ def min_angle_round_swaps(V, F, he, tw, start, half, tip, faces, angles, fixed, 
     if count == 0:
         return NO_FAILING, 0
     cand = cand[:count]
-    claim = np.full(m, -1, np.int64)
+    new_key = np.empty(e, np.int64)
+    for i in range(e):
+        new_key[i] = min(faces[2, i, 2], faces[2, i, 1]) * n + max(faces[2, i, 2], faces[2, i, 1])
+    swaps = apply_scored_swaps(F, he // 3, tw // 3, cand, priority, new_key, faces[2], faces[3])
+    return CANDIDATES, swaps
+
+
+@njit(cache=True)
+def apply_scored_swaps(F, f1, f2, cand, priority, new_key, new1, new2):
+    """``flips._independent_swaps`` of a scored criterion, then the swaps, F changed in place; the swaps made.
+
+    One claiming pass (each face goes to its candidate of highest ``priority``), the winners in
+    priority order (stable), of those creating the same edge (``new_key``) the first; edge i's
+    faces f1[i], f2[i] become new1[i], new2[i]. ``cand`` lists candidate edges in edge order.
+    """
+    claim = np.full(F.shape[0], -1, np.int64)
     for i in cand:
-        f1, f2 = he[i] // 3, tw[i] // 3
-        claim[f1] = max(claim[f1], priority[i])
-        claim[f2] = max(claim[f2], priority[i])
-    won = np.empty(count, np.int64)
-    w_count = 0
+        claim[f1[i]] = max(claim[f1[i]], priority[i])
+        claim[f2[i]] = max(claim[f2[i]], priority[i])
+    won = np.empty(cand.shape[0], np.int64)
+    count = 0
     for i in cand:
-        if claim[he[i] // 3] == priority[i] and claim[tw[i] // 3] == priority[i]:
-            won[w_count] = i
-            w_count += 1
-    won = won[:w_count]
+        if claim[f1[i]] == priority[i] and claim[f2[i]] == priority[i]:
+            won[count] = i
+            count += 1
+    won = won[:count]
     won = won[np.argsort(-priority[won], kind="mergesort")]
-    keys = np.empty(w_count, np.int64)
-    for t in range(w_count):
-        c, d = faces[2, won[t], 2], faces[2, won[t], 1]
-        keys[t] = min(c, d) * n + max(c, d)
+    keys = new_key[won]
     swaps = 0
     previous = -1
     for t in np.argsort(keys, kind="mergesort"):  # np.unique(return_index=True): each new edge's first
         if keys[t] == previous:
             continue
         previous = keys[t]
-        i = won[t]
         for j in range(3):
-            F[he[i] // 3, j] = faces[2, i, j]
-            F[tw[i] // 3, j] = faces[3, i, j]
+            F[f1[won[t]], j] = new1[won[t], j]
+            F[f2[won[t]], j] = new2[won[t], j]
         swaps += 1
-    return CANDIDATES, swaps
+    return swaps

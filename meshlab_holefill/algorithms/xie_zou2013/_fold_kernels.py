@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...geometry._flip_kernels import _find, _interior_edges
+from ...geometry._flip_kernels import _find, _interior_edges, apply_scored_swaps
 from ...geometry._vector_kernels import cross3, dot3, norm3, npmin, sub3
 
 __all__ = ["pair_agreements", "fold_swap_scores", "fold_swap_rounds"]
@@ -156,8 +156,8 @@ def fold_swap_rounds(V, F, fixed, border_normals, max_rounds):
         f2 = tw // 3
         old = np.empty(e)
         new = np.full(e, -np.inf)
-        new1 = np.empty(3, np.int64)
-        new2 = np.empty(3, np.int64)
+        pair1 = np.empty(3, np.int64)
+        pair2 = np.empty(3, np.int64)
         for i in range(e):
             c1, c2 = he[i] % 3, tw[i] % 3
             a[i], b[i] = F[f1[i], c1], F[f1[i], (c1 + 1) % 3]
@@ -166,9 +166,9 @@ def fold_swap_rounds(V, F, fixed, border_normals, max_rounds):
             nb = (normal[f2[i], 0], normal[f2[i], 1], normal[f2[i], 2])
             old[i] = npmin(dot3(na, nb), npmin(across[f1[i]], across[f2[i]]))
             if old[i] < 0.0:  # fold_swap_scores: the swapped pair is scored for folds only
-                new1[0], new1[1], new1[2] = a[i], d[i], c[i]
-                new2[0], new2[1], new2[2] = b[i], c[i], d[i]
-                agreement, proper = _agreement(V, new1, new2, border_normals)
+                pair1[0], pair1[1], pair1[2] = a[i], d[i], c[i]
+                pair2[0], pair2[1], pair2[2] = b[i], c[i], d[i]
+                agreement, proper = _agreement(V, pair1, pair2, border_normals)
                 if proper:
                     new[i] = agreement
         failing = np.flatnonzero(new > old + 1e-9)
@@ -193,29 +193,12 @@ def fold_swap_rounds(V, F, fixed, border_normals, max_rounds):
         if count == 0:
             return swaps, r + 1, False
         cand = cand[:count]  # edge order, as np.flatnonzero(ok)
-        claim = np.full(m, -1, np.int64)
-        for i in cand:
-            claim[f1[i]] = max(claim[f1[i]], priority[i])
-            claim[f2[i]] = max(claim[f2[i]], priority[i])
-        won = np.empty(count, np.int64)
-        w_count = 0
-        for i in cand:
-            if claim[f1[i]] == priority[i] and claim[f2[i]] == priority[i]:
-                won[w_count] = i
-                w_count += 1
-        won = won[:w_count]
-        won = won[np.argsort(-priority[won], kind="mergesort")]
-        keys = np.empty(w_count, np.int64)
-        for t in range(w_count):
-            keys[t] = min(c[won[t]], d[won[t]]) * n + max(c[won[t]], d[won[t]])
-        first = np.argsort(keys, kind="mergesort")  # np.unique(return_index=True): each key's first
-        previous = -1
-        for t in first:
-            if keys[t] == previous:
-                continue
-            previous = keys[t]
-            i = won[t]
-            F[f1[i], 0], F[f1[i], 1], F[f1[i], 2] = a[i], d[i], c[i]
-            F[f2[i], 0], F[f2[i], 1], F[f2[i], 2] = b[i], c[i], d[i]
-            swaps += 1
+        new_key = np.empty(e, np.int64)
+        new1 = np.empty((e, 3), np.int64)
+        new2 = np.empty((e, 3), np.int64)
+        for i in range(e):
+            new_key[i] = min(c[i], d[i]) * n + max(c[i], d[i])
+            new1[i, 0], new1[i, 1], new1[i, 2] = a[i], d[i], c[i]
+            new2[i, 0], new2[i, 1], new2[i, 2] = b[i], c[i], d[i]
+        swaps += apply_scored_swaps(F, f1, f2, cand, priority, new_key, new1, new2)
     return swaps, max_rounds, False
