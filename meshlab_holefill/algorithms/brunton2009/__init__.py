@@ -4,7 +4,7 @@ Where each step lives:
 
 * Sec. 3.1, unfolding the boundary loop into a simple planar polygon (E_PE, simulated
   annealing under the clearance d_MD, projection to the best plane, restarts):
-  :mod:`.annealing` (E_PE, :func:`anneal_loop`), :mod:`.acceptance` (the projection reached by
+  :mod:`.annealing` (E_PE, :func:`anneal_loop`), :mod:`.linear_motion` (the projection reached by
   linear motion), :mod:`.unfolding` (runs and restarts, :func:`unfold_loop`).
 * Sec. 3.2, constrained Delaunay triangulation of the unfolded polygon without Steiner points,
   and Sec. 3.3's planar refinement: :mod:`.unfolded_triangulation`

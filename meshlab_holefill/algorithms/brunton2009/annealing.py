@@ -52,7 +52,7 @@ import numpy as np
 from ...geometry.quality import cross_rows
 from ...geometry.segments import min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
 from ._anneal_kernels import apply_moves, propose_moves
-from .acceptance import _projection_is_simple, linear_motion_is_simple, project_to_best_plane
+from .linear_motion import linear_motion_is_simple, project_to_best_plane, projection_is_simple
 
 __all__ = ["triple_normals", "planarity_terms", "planarity_energy", "colour_classes", "anneal_loop"]
 
@@ -193,7 +193,7 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
     steps = accepted = stages = 0
     simple = False
     while True:
-        if stop_when_simple and _projection_is_simple(P, mask, eps, near):
+        if stop_when_simple and projection_is_simple(P, mask, eps, near):
             simple = True
             break
         if steps >= sa_steps or kT < kT_floor:

@@ -17,7 +17,7 @@ from ...core.crossings import context_crossings
 from ...geometry.quality import triangle_quality
 from ...geometry.topology import edge_pair_set
 from .unfolded_triangulation import triangulate_and_embed
-from .acceptance import linear_motion_is_simple
+from .linear_motion import linear_motion_is_simple
 
 __all__ = ["GOOD_QUALITY", "MAX_REPAIR_ROUNDS", "CrossingCounts", "crossing_faces", "clip_ears", "repair_crossings"]
 

@@ -39,7 +39,7 @@ import numpy as np
 from ...errors import HoleFillError
 from ...geometry.development import close_lengths
 from ...geometry.segments import min_segment_distance
-from .acceptance import linear_motion_is_simple, project_to_best_plane
+from .linear_motion import linear_motion_is_simple, project_to_best_plane
 from .annealing import anneal_loop
 
 __all__ = ["with_loop_lengths", "unfold_loop"]

@@ -157,19 +157,19 @@ def _random_loops(count, seed=0):
 def test_stage_test_equals_projection_and_simplicity_test():
     # The annealing's stage test against the function it stands for: the same answer, for simple
     # and self-crossing projections and clearances near d_MD.
-    from meshlab_holefill.algorithms.brunton2009 import acceptance
+    from meshlab_holefill.algorithms.brunton2009 import linear_motion
     from meshlab_holefill.geometry.segments import min_segment_distance, nonadjacent_mask
 
     answers = set()
     for P in _random_loops(300):
-        Q = acceptance.project_to_best_plane(P)[0]
+        Q = linear_motion.project_to_best_plane(P)[0]
         h = float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).mean())
         d_md = min_segment_distance(Q)
         for eps in (1e-5 * h, d_md * (1 - 1e-12), d_md, 1.5 * d_md):
-            expected = acceptance.linear_motion_is_simple(Q, eps, 4.0 * h) if eps < 4.0 * h else None
+            expected = linear_motion.linear_motion_is_simple(Q, eps, 4.0 * h) if eps < 4.0 * h else None
             if expected is None:
                 continue
-            assert acceptance._projection_is_simple(P, nonadjacent_mask(len(P)), eps, 4.0 * h) == expected
+            assert linear_motion.projection_is_simple(P, nonadjacent_mask(len(P)), eps, 4.0 * h) == expected
             answers.add(expected)
     assert answers == {True, False}
 

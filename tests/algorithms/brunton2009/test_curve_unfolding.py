@@ -16,7 +16,7 @@ from meshlab_holefill.algorithms.brunton2009 import planar_domains
 from meshlab_holefill.algorithms.brunton2009 import quality_swaps
 from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
 from meshlab_holefill.algorithms.brunton2009.embedding import embed_patch, embedding_energy, energy_rows, tangential_relaxation, umbrella_operator, vertex_normals
-from meshlab_holefill.algorithms.brunton2009.acceptance import linear_motion_is_simple, project_to_best_plane
+from meshlab_holefill.algorithms.brunton2009.linear_motion import linear_motion_is_simple, project_to_best_plane
 from meshlab_holefill.algorithms.brunton2009.annealing import anneal_loop, colour_classes, planarity_energy, planarity_terms
 from meshlab_holefill.algorithms.brunton2009.unfolding import unfold_loop
 from meshlab_holefill.geometry.development import MIN_CLOSURE_RATIO, boundary_gap_angles, close_lengths, developed_area, develop_loop, simple_development

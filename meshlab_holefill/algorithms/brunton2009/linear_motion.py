@@ -1,4 +1,4 @@
-"""Sec. 3.1's acceptance of an unfolding: the loop projected to its best-fitting plane, reached by linear motion.
+"""Sec. 3.1's test of an unfolding: the loop projected to its best-fitting plane, reached by linear motion.
 """
 from __future__ import annotations
 
@@ -7,11 +7,11 @@ import numpy as np
 from ...geometry.pca import fit_plane, project_to_plane
 from ...geometry.segments import is_simple_polygon, keeps_clearance
 
-__all__ = ["project_to_best_plane", "linear_motion_is_simple"]
+__all__ = ["project_to_best_plane", "projection_is_simple", "linear_motion_is_simple"]
 
 
-def _projection_is_simple(P, mask, eps, near):
-    """Sec. 3.1's acceptance test at a stage start, m >= 4.
+def projection_is_simple(P, mask, eps, near):
+    """Sec. 3.1's projection test at a stage start, m >= 4.
 
     ``linear_motion_is_simple(project_to_best_plane(P)[0], eps, near)``.
 
