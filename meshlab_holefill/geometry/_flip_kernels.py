@@ -474,11 +474,8 @@ def min_angle_round_swaps(V, F, he, tw, start, half, tip, faces, angles, fixed, 
         if _find(start, half, tip, c, d) >= 0 or _find(start, half, tip, d, c) >= 0:
             continue
         key = min(c, d) * n + max(c, d)
-        if fixed.shape[0]:
-            k_old = min(a, b) * n + max(a, b)
-            i_old, i_new = np.searchsorted(fixed, k_old), np.searchsorted(fixed, key)
-            if (i_old < fixed.shape[0] and fixed[i_old] == k_old) or (i_new < fixed.shape[0] and fixed[i_new] == key):
-                continue
+        if fixed.shape[0] and (sorted_contains(fixed, min(a, b) * n + max(a, b)) or sorted_contains(fixed, key)):
+            continue
         cand[count] = i
         count += 1
     if count == 0:
@@ -523,3 +520,10 @@ def apply_scored_swaps(F, f1, f2, cand, priority, new_key, new1, new2):
             F[f2[won[t]], j] = new2[won[t], j]
         swaps += 1
     return swaps
+
+
+@njit(cache=True)
+def sorted_contains(keys, value):
+    """Whether the sorted array ``keys`` holds ``value``."""
+    i = np.searchsorted(keys, value)
+    return i < keys.shape[0] and keys[i] == value

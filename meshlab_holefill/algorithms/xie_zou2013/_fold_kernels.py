@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...geometry._flip_kernels import _find, _interior_edges, apply_scored_swaps
+from ...geometry._flip_kernels import _find, _interior_edges, apply_scored_swaps, sorted_contains
 from ...geometry._vector_kernels import cross3, dot3, norm3, npmin, sub3
 
 __all__ = ["pair_agreements", "fold_swap_scores", "fold_swap_rounds"]
@@ -98,13 +98,6 @@ def _agreement(V, fa, fb, border_normals):
 
 
 @njit(cache=True)
-def _sorted_contains(keys, value):
-    """Whether the sorted array ``keys`` holds ``value``."""
-    i = np.searchsorted(keys, value)
-    return i < keys.shape[0] and keys[i] == value
-
-
-@njit(cache=True)
 def fold_swap_rounds(V, F, fixed, border_normals, max_rounds):
     """The rounds of folds.unfold_by_swaps: ``geometry.flips.relax_edges`` with the fold score, compiled.
 
@@ -185,8 +178,8 @@ def fold_swap_rounds(V, F, fixed, border_normals, max_rounds):
             # an edge of F at the round's start, either way round (its half-edge table)
             if c[i] == d[i] or _find(start, half, tip, c[i], d[i]) >= 0 or _find(start, half, tip, d[i], c[i]) >= 0:
                 continue
-            if fixed.shape[0] and (_sorted_contains(fixed, min(a[i], b[i]) * n + max(a[i], b[i]))
-                                   or _sorted_contains(fixed, key)):
+            if fixed.shape[0] and (sorted_contains(fixed, min(a[i], b[i]) * n + max(a[i], b[i]))
+                                   or sorted_contains(fixed, key)):
                 continue
             cand[count] = i
             count += 1
