@@ -1,4 +1,5 @@
 """Tests of the HPDE filter (Xie and Zou 2013): each step of Algorithm 2 and the whole filter."""
+import dataclasses
 import itertools
 import os
 
@@ -194,6 +195,24 @@ def test_cube_edge_hole_is_segmented_along_the_characteristic_line(cube_edge_hol
         assert on_y != on_z
         faces.append(on_y)
     assert faces[0] != faces[1]
+
+
+@pytest.mark.parametrize("tilt_deg, segmented", [(0.02, True), (-0.5, True), (0.5, False)])
+def test_cube_edge_tilted_by_the_tessellation_is_still_segmented(cube_edge_hole, tilt_deg, segmented):
+    # Fitted planes of a remeshed right-angled edge meet at 90.007-90.021 degrees: within the slack of
+    # A_c they are the cube's edge; a face tilted by half a degree opens the edge beyond it.
+    _, _, _, ctx = cube_edge_hole
+    base = hpde_sections.base_points(ctx.points, hpde_sections.ring_edge_length(ctx))
+    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
+    on_y0 = np.abs(base.points[:, 1]) < 1e-9  # face y = 0; the other run lies on z = 0
+    c, s = np.cos(np.radians(tilt_deg)), np.sin(np.radians(tilt_deg))
+    tilted = base.points.copy()
+    # Rotate face y = 0 about the edge (the x axis) away from face z = 0: the dihedral grows by the tilt.
+    y, z = tilted[on_y0, 1], tilted[on_y0, 2]
+    tilted[on_y0, 1], tilted[on_y0, 2] = c * y - s * z, s * y + c * z
+    seg = hpde_sections.segment_boundary(dataclasses.replace(base, points=tilted), normals, np.pi / 2)
+    assert np.degrees(seg["dihedral"]) == pytest.approx(90.0 + tilt_deg, abs=1e-6)
+    assert seg["segmented"] == segmented
 
 
 def test_planar_hole_is_not_segmented():
