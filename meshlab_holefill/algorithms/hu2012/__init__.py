@@ -4,7 +4,8 @@ Where each step lives:
 
 * Sec. III.B, the modified principle of minimum angle (convex/concave boundary vertices,
   Eq. 2, the normal-angle threshold): :mod:`.min_angle_triangulation`
-  (:func:`boundary_angles`, :func:`normal_angle_threshold`, :func:`min_angle_triangulation`);
+  (:func:`boundary_angles`, :func:`normal_angle_threshold`, :func:`min_angle_triangulation`, and
+  beyond the paper :func:`.min_angle_triangulation.hole_plane_triangulation`, the same about the loop's normal);
   the ear condition and the hole-sector checks that keep ears and swaps inside the hole:
   :mod:`.hole_guards`.
 * Sec. III.C, Pfeifle-Seidel density refinement with circumsphere edge relaxation: shared
@@ -16,7 +17,8 @@ Where each step lives:
   :func:`fair_patch_in_context`) and ``smoothing`` (:mod:`.tangential_smoothing`,
   :func:`tangential_smoothing`).
 * The filter (``fill``, ``PARAMS``, ``RINGS``, the fallbacks when a step would make the patch
-  cross the mesh): :mod:`.min_angle_bilateral`.
+  cross the mesh): :mod:`.min_angle_bilateral`; its test of whether a patch crosses itself or the
+  surroundings: :mod:`.crossing_test`.
 """
 from .bilateral_filter import bilateral_filter
 from .fairing import fair_patch_in_context

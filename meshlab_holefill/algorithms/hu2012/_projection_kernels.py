@@ -1,4 +1,4 @@
-"""Compiled turn test of :func:`.min_angle_bilateral.embeds_in_projection` (numba).
+"""Compiled turn test of :func:`.crossing_test.embeds_in_projection` (numba).
 
 The projected corner angles are summed per vertex as the numpy code sums them (corner 0 of
 every face, then 1, then 2, each in bincount's order) and compared with the full turn. Angles

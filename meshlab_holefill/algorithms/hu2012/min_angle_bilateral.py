@@ -54,19 +54,17 @@ from .bilateral_filter import bilateral_filter
 from .fairing import fair_patch_in_context
 from ...geometry.flips import relax_edges
 from ...geometry.refine import refine_patch
-from ...geometry.segments import polygon_edges_touch
 from ...geometry.topology import boundary_edges_and_chords
-from .hole_guards import LoopSectors, patch_crossings, patch_guard, relax_in_sectors, swaps_crossing
+from .hole_guards import LoopSectors, patch_guard, relax_in_sectors, swaps_crossing
 from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
 from .tangential_smoothing import tangential_smoothing
-from .min_angle_triangulation import min_angle_triangulation
-from ._projection_kernels import projected_turns
+from .min_angle_triangulation import hole_plane_triangulation, min_angle_triangulation
+from .crossing_test import crosses
 
-__all__ = ["fill", "FAIRED_OPTIONS", "PARAMS", "RINGS", "WARM_UP", "warm_up", "hole_plane_triangulation", "relaxation_guard",
-           "embeds_in_projection"]
+__all__ = ["fill", "FAIRED_OPTIONS", "PARAMS", "RINGS", "WARM_UP", "warm_up", "relaxation_guard"]
 
 RINGS = 2
 # The faired option set (filters/close_holes_min_angle_bilateral_faired.mlx), the fallback's patch.
@@ -244,115 +242,18 @@ def _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations,
         relaxed, swaps = relax_edges(V, F, fixed, allowed=relaxation_guard(ctx), criterion=criterion)
         # The guard checks intersections only where the sector test refuses: a faired patch
         # close to the surrounding surface can be pushed through it by an allowed swap.
-        if swaps and not (_crosses(ctx, V, relaxed) and not _crosses(ctx, V, F)):
+        if swaps and not (crosses(ctx, V, relaxed) and not crosses(ctx, V, F)):
             F = relaxed
     if smoothing > 0 and interior.any():
         Vs, Fs, ss = tangential_smoothing(V, F, interior, smoothing, fixed=fixed, allowed=relaxation_guard(ctx),
                                           criterion=criterion, attr=scale)
-        if not (_crosses(ctx, Vs, Fs) and not _crosses(ctx, V, F)):
+        if not (crosses(ctx, Vs, Fs) and not crosses(ctx, V, F)):
             V, F, scale = Vs, Fs, ss
             interior = np.arange(len(V)) >= k
     if iterations > 0 and interior.any():
         V = bilateral_filter(V, F, interior, sigma_c * scale, sigma_s * scale, iterations,
                              neighbourhood=neighbourhood, fixed_points=ctx.vertices[k:], min_quality=min_quality)
     return V, F
-
-
-def embeds_in_projection(V, F, k, min_sine=1e-6):
-    """True when projecting the patch onto its mean plane is one-to-one (so it cannot self-intersect).
-
-    A sufficient test, linear in the patch size, that spares the quadratic-ish exact
-    self-intersection query on the usual patch. The patch is a triangulated disk bounded
-    by the loop V[:k]. Its projection along the unit area-weighted normal is injective
-    when (i) every face keeps its orientation, clearly (sine of the angle between face
-    normal and projection direction above ``min_sine``), (ii) the projected loop is a
-    simple polygon, and (iii) around every vertex the projected angles add up to the full
-    turn (2 pi inside, the polygon's own angle on the loop): a map of a disk that is a
-    local homeomorphism and one-to-one on the boundary is one-to-one. Two faces whose
-    projections meet only in shared vertices or edges cannot meet elsewhere in space.
-
-    Parameters
-    ----------
-    V : (n, 3) float64  loop points first
-    F : (m, 3) int
-    k : int  loop size
-
-    Returns
-    -------
-    bool  (False means "not shown", not "intersects")
-    """
-    V = np.asarray(V, np.float64)
-    F = np.asarray(F, np.int64)
-    e1, e2 = V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]
-    C = np.stack([e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1], e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2],
-                  e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]], axis=1)
-    n = C.sum(axis=0)
-    length = np.linalg.norm(n)
-    if not length > 0:
-        return False
-    n /= length
-    if np.any(C @ n <= min_sine * np.linalg.norm(C, axis=1)):
-        return False
-    u = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
-    u /= np.linalg.norm(u)
-    Q = V @ np.stack([u, np.cross(n, u)], axis=1)
-    if polygon_edges_touch(Q[:k]):
-        return False
-    ok, sure = projected_turns(np.ascontiguousarray(Q), F, k, 1e-6)
-    return bool(ok) if sure else _turns_numpy(Q, F, k)
-
-
-def _turns_numpy(Q, F, k):
-    """Condition (iii) of :func:`embeds_in_projection` in numpy (the reference of
-    :func:`._projection_kernels.projected_turns`): every vertex of the projection Q used, and its
-    corner angles adding up to 2 pi inside and to the loop's own angle on the loop."""
-    # Projected corner angles summed per vertex (every face is counter-clockwise now).
-    total = np.zeros(len(Q))
-    for c in range(3):
-        a = Q[F[:, (c + 1) % 3]] - Q[F[:, c]]
-        b = Q[F[:, (c + 2) % 3]] - Q[F[:, c]]
-        ang = np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], np.einsum("ij,ij->i", a, b))
-        total += np.bincount(F[:, c], weights=ang, minlength=len(Q))
-    prev, nxt = np.roll(Q[:k], 1, axis=0) - Q[:k], np.roll(Q[:k], -1, axis=0) - Q[:k]
-    # Interior angle of the counter-clockwise loop at each vertex, swept from next to prev.
-    loop_angle = np.mod(np.arctan2(nxt[:, 0] * prev[:, 1] - nxt[:, 1] * prev[:, 0],
-                                   np.einsum("ij,ij->i", nxt, prev)), 2 * np.pi)
-    expected = np.concatenate([loop_angle, np.full(len(Q) - k, 2 * np.pi)])
-    used = np.zeros(len(Q), bool)
-    used[F.ravel()] = True
-    return bool(used.all() and np.all(np.abs(total - expected) < 1e-6))
-
-
-_CROSSES = []  # the last few (ctx, V bytes, F bytes, answer) of _crosses
-
-
-def _crosses(ctx, V, F):
-    """Does the patch (V loop-first, F) intersect itself or the surrounding faces?
-
-    The self-intersection query is skipped when :func:`embeds_in_projection` shows the
-    patch is one-to-one over its mean plane (most patches; the query is the costly part).
-    The answers for the last few patches are kept: with the options the same patch is often
-    checked twice (after smoothing and at the end).
-    """
-    V, F = np.asarray(V), np.asarray(F)
-    key = (V.dtype.str, V.shape, V.tobytes(), F.dtype.str, F.shape, F.tobytes())
-    for c, k, answer in _CROSSES:
-        if c is ctx and k == key:
-            return answer
-    answer = _crosses_uncached(ctx, V, F)
-    _CROSSES.insert(0, (ctx, key, answer))
-    del _CROSSES[4:]
-    return answer
-
-
-def _crosses_uncached(ctx, V, F):
-    from ...geometry.intersections import intersecting_pairs
-
-    if len(patch_crossings(ctx, V, F)):
-        return True
-    if embeds_in_projection(V, F, ctx.size):
-        return False
-    return bool(len(intersecting_pairs(V, F, np.arange(len(F)), np.arange(len(F)))))
 
 
 def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairing="none", relaxation="angles",
@@ -388,7 +289,7 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
         Beyond the paper: a patch that still crosses the mesh is replaced by the
         :data:`FAIRED_OPTIONS` patch when that one crosses nothing, and, where the initial
         triangulation itself crosses the mesh or itself, by the patches grown from
-        :func:`hole_plane_triangulation` (paper's steps, then faired) when one of them crosses nothing;
+        :func:`.min_angle_triangulation.hole_plane_triangulation` (paper's steps, then faired) when one of them crosses nothing;
         last, by the paper's steps grown from the loop's least-bend triangulations
         (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`), for jagged borders
         whose faces tilt every way (noisy scans), then by the faired option set grown from them.
@@ -442,14 +343,14 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
                criterion=relaxation, smoothing=smoothing)
     Vb, Fb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations, **opt)
     info["refinement"], info["bilateral_iterations"] = "plain", iterations
-    if _crosses(ctx, Vb, Fb):
+    if crosses(ctx, Vb, Fb):
         # Swaps can fold a patch through a strongly curved border or onto itself: redo the
         # refinement with every swap checked for intersections, and as a last resort without
         # swaps (centroid splits alone never create an intersection).
         refined = False
         for mode, guard in (("guarded", patch_guard(ctx, check_intersections=True)),
                             ("splits only", lambda V, F, A, B, r: np.zeros(len(A), bool))):
-            if not _crosses(ctx, V, F) or _crosses(ctx, ctx.points, F0):
+            if not crosses(ctx, V, F) or crosses(ctx, ctx.points, F0):
                 break
             V, F, scale, info2 = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
                                               allowed=guard, criterion=relaxation)
@@ -462,14 +363,14 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
             if n_iter == iterations and not refined:
                 continue  # the same refinement and iterations: (Vb, Fb), which crosses
             Vb, Fb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, n_iter, **opt)
-            if n_iter == 0 or not _crosses(ctx, Vb, Fb):
+            if n_iter == 0 or not crosses(ctx, Vb, Fb):
                 break
         info["bilateral_iterations"] = n_iter
     V, F = Vb, Fb
     t3 = time.perf_counter()
     info.update(initial_faces=len(F0), triangulation_seconds=t1 - t0, refinement_seconds=t2 - t1,
                 filter_seconds=t3 - t2, fallback=None)
-    if not fallback or not _crosses(ctx, V, F):
+    if not fallback or not crosses(ctx, V, F):
         return Patch(vertices=V[k:], faces=F, info=info)
     same = dict(alpha=alpha, sigma_c=sigma_c, sigma_s=sigma_s, relaxation=relaxation, neighbourhood=neighbourhood,
                 filter_guard=filter_guard, fallback=False)
@@ -478,7 +379,7 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
     # the normals keep crossing the mesh, where a faired patch bends away from it.
     faired = options == FAIRED_OPTIONS
     tries = [] if faired else [("faired", lambda: F0, FAIRED_OPTIONS)]
-    if _crosses(ctx, ctx.points, F0):
+    if crosses(ctx, ctx.points, F0):
         # The triangulation folds already: a cut across walls standing on the hole's plane.
         plane = functools.cache(lambda: hole_plane_triangulation(ctx.points, ctx.forbidden_edges))
         tries += [("hole plane", plane, options)] + ([] if faired else [("hole plane, faired", plane, FAIRED_OPTIONS)])
@@ -488,7 +389,7 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
             patch = _patch_from(ctx, initial(), **same, **chosen)
         except HoleFillError:  # the hole fails for the paper's patch, not for a fallback's
             continue
-        if not _crosses(ctx, patch.all_points(ctx.points), patch.faces):
+        if not crosses(ctx, patch.all_points(ctx.points), patch.faces):
             patch.info["fallback"] = name
             return patch
     return Patch(vertices=V[k:], faces=F, info=info)
@@ -506,30 +407,3 @@ def _least_bend_tries(ctx, options, faired):
     if not faired:
         for T in seen:
             yield "least bend, faired", (lambda T=T: T), FAIRED_OPTIONS
-
-
-def hole_plane_triangulation(P, forbidden_edges=()):
-    """Sec. III.B's triangulation with every vertex normal replaced by the loop's own normal (beyond the paper).
-
-    Eq. 2 tells convex from concave boundary vertices by the vertex normals of the mesh. Where
-    the mesh stands on the hole's plane (a model cut across, its walls meeting the cut at right
-    angles), those normals lie in that plane, orthogonal to every ear's normal, and the test
-    decides by noise: the triangulation folds over itself (bone.ply cut at 40 % of its height,
-    85 edges: 67 pairs of its triangles cross) or through the walls (cow.obj at 20 % along x).
-    About the loop's vector-area normal the same procedure is ear cutting in the hole's plane.
-
-    Parameters
-    ----------
-    P : (k, 3) float64  loop points, patch orientation
-    forbidden_edges : (p, 2) int
-
-    Returns
-    -------
-    F : (k - 2, 3) int64
-    """
-    P = np.asarray(P, np.float64)
-    n = np.cross(P - P[0], np.roll(P, -1, axis=0) - P[0]).sum(axis=0)
-    length = np.linalg.norm(n)
-    if not length > 0:
-        raise HoleFillError("the hole's loop encloses no area: it has no plane")
-    return min_angle_triangulation(P, np.tile(n / length, (len(P), 1)), forbidden_edges)

@@ -199,7 +199,7 @@ def _disk_patch(n=6):
 
 
 def test_embeds_in_projection_accepts_a_flat_disk_and_rejects_a_folded_one():
-    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import embeds_in_projection
+    from meshlab_holefill.algorithms.hu2012.crossing_test import embeds_in_projection
     from meshlab_holefill.geometry.intersections import intersecting_pairs
 
     V, F, k = _disk_patch()
@@ -219,7 +219,7 @@ def test_embeds_in_projection_accepts_a_flat_disk_and_rejects_a_folded_one():
 def test_embeds_in_projection_rejects_a_doubly_wound_fan():
     # A fan around a centre that winds twice (a helicoid step): every face keeps its
     # orientation over the plane, yet the surface overlaps itself in projection.
-    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import embeds_in_projection
+    from meshlab_holefill.algorithms.hu2012.crossing_test import embeds_in_projection
 
     m = 12
     t = np.linspace(0, 4 * np.pi, m, endpoint=False)
@@ -232,7 +232,7 @@ def test_embeds_in_projection_rejects_a_doubly_wound_fan():
 
 def test_compiled_turn_test_answers_as_the_numpy_code():
     from meshlab_holefill.algorithms.hu2012._projection_kernels import projected_turns
-    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import _turns_numpy
+    from meshlab_holefill.algorithms.hu2012.crossing_test import _turns_numpy
 
     rng = np.random.default_rng(12)
     V, F, k = _disk_patch()
@@ -662,7 +662,7 @@ def test_warm_up_loads_every_kernel_of_the_filter():
 
 
 def test_remembered_crossing_answers_are_those_of_the_check():
-    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import _crosses, _crosses_uncached
+    from meshlab_holefill.algorithms.hu2012.crossing_test import crosses, crosses_uncached
     from meshlab_holefill.core import examples
 
     V, F, loop = examples.bowl_with_hole()
@@ -672,9 +672,9 @@ def test_remembered_crossing_answers_are_those_of_the_check():
     pierced = X.copy()
     pierced[ctx.size:] = X[ctx.size:][::-1] + [0.05, 0.0, 0.0]  # new vertices shuffled: the patch folds through itself
     for _ in range(2):  # the second round answers from memory
-        assert _crosses(ctx, X, patch.faces) is False
-        assert _crosses(ctx, pierced, patch.faces) is True
-    assert _crosses_uncached(ctx, pierced, patch.faces) is True
+        assert crosses(ctx, X, patch.faces) is False
+        assert crosses(ctx, pierced, patch.faces) is True
+    assert crosses_uncached(ctx, pierced, patch.faces) is True
 
 
 # A hole's border at the corner of a subdivided box (pymeshlab's cube, midpoint-subdivided 4 times):
@@ -726,7 +726,8 @@ def test_a_loop_that_cannot_be_closed_still_raises():
 def test_a_paper_patch_crossing_the_mesh_falls_back_to_the_faired_patch(share):
     """The bunny's bottom cut off by height: a 271- or 292-edge loop whose minimum-angle surface, filtered
     along its normals, crosses the bunny's feet; the faired option set's patch crosses nothing."""
-    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import FAIRED_OPTIONS, RINGS, _crosses
+    from meshlab_holefill.algorithms.hu2012.crossing_test import crosses
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import FAIRED_OPTIONS, RINGS
 
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(sample("bunny.obj"))
@@ -737,7 +738,7 @@ def test_a_paper_patch_crossing_the_mesh_falls_back_to_the_faired_patch(share):
     assert len(loop) > 250
     ctx = hole_context(V, F, loop, rings=RINGS)
     paper = fill(ctx, fallback=False)
-    assert _crosses(ctx, paper.all_points(ctx.points), paper.faces)
+    assert crosses(ctx, paper.all_points(ctx.points), paper.faces)
     patch = fill(ctx)
     assert patch.info["fallback"] == "faired"
     faired = fill(ctx, **FAIRED_OPTIONS)
@@ -774,18 +775,20 @@ def test_a_cut_across_walls_is_triangulated_about_the_holes_plane(name, axis, sh
     convexity test decides by noise and the triangulation folds over itself or through the walls. About
     the loop's own normal it does not fold, and the patch grown from it crosses nothing (before, the
     hole failed)."""
-    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import RINGS, _crosses, hole_plane_triangulation
+    from meshlab_holefill.algorithms.hu2012.crossing_test import crosses
+    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import RINGS
+    from meshlab_holefill.algorithms.hu2012.min_angle_triangulation import hole_plane_triangulation
     from meshlab_holefill.array_api import fill_holes
     from meshlab_holefill.geometry.intersections import intersecting_pairs
 
     V, F, loop = cut_across(name, axis, share)
     ctx = hole_context(V, F, loop, rings=RINGS)
     paper = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges)
-    assert _crosses(ctx, ctx.points, paper)  # itself (the bone: 67 pairs of its triangles) or the walls (the cow)
+    assert crosses(ctx, ctx.points, paper)  # itself (the bone: 67 pairs of its triangles) or the walls (the cow)
     plane = hole_plane_triangulation(ctx.points, ctx.forbidden_edges)
     assert len(intersecting_pairs(ctx.points, plane, np.arange(len(plane)), np.arange(len(plane)))) == 0
     without = fill(ctx, fallback=False)
-    assert _crosses(ctx, without.all_points(ctx.points), without.faces)
+    assert crosses(ctx, without.all_points(ctx.points), without.faces)
     patch = fill(ctx)
     assert patch.info["fallback"] == chosen
     validate_patch(patch, ctx.points, ctx.forbidden_edges)
@@ -795,7 +798,7 @@ def test_a_cut_across_walls_is_triangulated_about_the_holes_plane(name, axis, sh
 
 
 def test_a_loop_without_area_has_no_plane():
-    from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import hole_plane_triangulation
+    from meshlab_holefill.algorithms.hu2012.min_angle_triangulation import hole_plane_triangulation
     from meshlab_holefill.errors import HoleFillError
 
     there_and_back = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 0, 0.0]])
