@@ -10,11 +10,13 @@ Where each step lives:
   and Sec. 3.3's planar refinement: :mod:`.unfolded_triangulation`
   (:func:`constrained_delaunay`, :func:`refine_planar`, :func:`triangulate_and_embed`).
 * Sec. 3.3, the embedding energies E_AREA and E_DF, each one sparse solve: :mod:`.embedding`
-  (:func:`embedding_energy`, :func:`minimise_embedding_energy`, :func:`embed_patch`).
+  (:func:`embedding_energy`, :func:`minimise_embedding_energy`, :func:`embed_patch`), built on
+  the umbrella operator U of :mod:`.umbrella`.
 * Beyond the paper: the development fallback
   (:mod:`meshlab_holefill.geometry.development`, shared with Xu et al.) and the planar domains the
   filter tries (:mod:`.planar_domains`), the crossing repair (:mod:`.crossing_repair`:
   :func:`repair_crossings`), the quality swaps (:mod:`.quality_swaps`: :func:`improve_by_swaps`);
+  the tangential relaxation of the embedded patch (:mod:`.tangential_relaxation`, option ``tangential``);
   the resampling of the energy's patch at the surrounding density
   (:func:`.unfolded_triangulation.resample_patch`, option ``density``) and the sliver repair
   (:mod:`.slivers`, option ``slivers``).

@@ -1,11 +1,11 @@
-"""Compiled structure of the tangential relaxation's system (:func:`.embedding.tangential_relaxation`).
+"""Compiled structure of the tangential relaxation's system (:func:`.tangential_relaxation.tangential_relaxation`).
 
 :func:`free_umbrella` builds, from the faces around the free vertices, the rows of the umbrella
-operator U of Sec. 3.3 for the free vertices (as :func:`.embedding.umbrella_operator` then row
+operator U of Sec. 3.3 for the free vertices (as :func:`.umbrella.umbrella_operator` then row
 indexing stores them: entries in decreasing column order, values 1 / d and (1 / d) * -d) and the
 CSC layout of the 2 x 2 block matrix over the free vertices (entries sorted by column, then
 row, as scipy's COO to CSC conversion leaves them). The values that need the tangent frames stay
-numpy's (:func:`.embedding.tangential_system`), so the matrix SuperLU factorises is the same to the
+numpy's (:func:`.tangential_relaxation.tangential_system`), so the matrix SuperLU factorises is the same to the
 last bit. Measured on the 219 systems of the benchmark's 45 cut holes (process time): scipy's
 construction (an operator over every vertex of the surroundings, fancy indexing, a COO to CSC
 conversion) 0.39 s against 0.53 s for their factorisations; this one 0.14 s.

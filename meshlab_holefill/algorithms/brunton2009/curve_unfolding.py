@@ -29,7 +29,7 @@ Beyond the paper (options, on by default because the benchmark targets need them
 ``fallback`` unfolds loops that annealing does not (loops wrapped around a tube or a knob) by
 developing them with the surface's own angles; ``tangential`` moves the embedded interior
 vertices within their tangent planes until the umbrella has no tangential part, even spacing
-on the solved shape (:func:`.embedding.tangential_relaxation`);
+on the solved shape (:func:`.tangential_relaxation.tangential_relaxation`);
 ``repair`` replaces a patch that crosses the surrounding mesh (scan borders with folded sliver
 faces) by the best patch of another planar domain that crosses nothing, else clips the ears of
 the boundary vertices involved and fills the rest of the loop again (:func:`.crossing_repair.repair_crossings`);

@@ -219,7 +219,7 @@ def triangulate_and_embed(ctx, Q, keep, ears, energy, refinement, tangential=Fal
     ears : list of (3,) int  faces already clipped off (loop indices)
     energy : {'area', 'area_interior', 'fairing'}  see :func:`.embedding.embed_patch`
     refinement : bool
-    tangential : bool  follow the solve by :func:`.embedding.tangential_relaxation`
+    tangential : bool  follow the solve by :func:`.tangential_relaxation.tangential_relaxation`
     density : {'surrounding', 'twice', 'equilateral'}
     record : list, optional  gets a :class:`PlanarPatch` appended
 

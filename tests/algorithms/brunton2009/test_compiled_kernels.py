@@ -6,6 +6,8 @@ import pytest
 from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
 from meshlab_holefill.algorithms.brunton2009 import quality_swaps
 from meshlab_holefill.algorithms.brunton2009 import embedding as emb
+from meshlab_holefill.algorithms.brunton2009 import tangential_relaxation as tr
+from meshlab_holefill.algorithms.brunton2009 import umbrella
 from meshlab_holefill.core import examples
 from meshlab_holefill.core.holes import boundary_loops, hole_context
 
@@ -22,7 +24,7 @@ def _joint_system_inputs(ctx, interior_faces, interior):
     is_free = np.zeros(len(X), bool)
     is_free[free] = True
     star = joint[is_free[joint].any(axis=1)]
-    frames = emb.tangent_frames(emb.vertex_normals(X, star)[free])
+    frames = tr.tangent_frames(tr.vertex_normals(X, star)[free])
     return star, X, free, frames
 
 
@@ -57,11 +59,11 @@ def test_tangential_system_direct_equals_scipy_construction(subset):
             is_free = np.zeros(len(X), bool)
             is_free[free] = True
             star = star[is_free[star].any(axis=1)]
-        A, U = emb.tangential_system(star, X, free, frames)
-        A_ref, U_ref = emb.tangential_system(star, X, free, frames, direct=False)
+        A, U = tr.tangential_system(star, X, free, frames)
+        A_ref, U_ref = tr.tangential_system(star, X, free, frames, direct=False)
         assert _same_sparse(A, A_ref)
         assert np.array_equal(U, U_ref)
-        Wf = emb.umbrella_operator(star, len(X))[free]
+        Wf = umbrella.umbrella_operator(star, len(X))[free]
         assert np.allclose(U, Wf @ X)
         checked += 1
     assert checked >= 2
@@ -71,9 +73,9 @@ def test_tangential_system_takes_the_general_construction_for_degenerate_faces()
     X = np.random.default_rng(1).standard_normal((5, 3))
     star = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4], [4, 4, 1]])
     free = np.array([4])
-    frames = emb.tangent_frames(np.array([[0.0, 0.0, 1.0]]))
-    A, U = emb.tangential_system(star, X, free, frames)
-    A_ref, U_ref = emb.tangential_system(star, X, free, frames, direct=False)
+    frames = tr.tangent_frames(np.array([[0.0, 0.0, 1.0]]))
+    A, U = tr.tangential_system(star, X, free, frames)
+    A_ref, U_ref = tr.tangential_system(star, X, free, frames, direct=False)
     assert _same_sparse(A, A_ref) and np.array_equal(U, U_ref)
 
 
@@ -95,7 +97,7 @@ def test_tangential_kernels_equal_numpy():
         assert np.array_equal(b1, frames[0]) and np.array_equal(b2, frames[1])
         assert np.array_equal(K.face_cross(X, star), cross_rows(X[star[:, 1]] - X[star[:, 0]],
                                                                  X[star[:, 2]] - X[star[:, 0]]))
-        Wf = emb.umbrella_operator(star, len(X))[free]
+        Wf = umbrella.umbrella_operator(star, len(X))[free]
         assert np.array_equal(K.rows_times(Wf.indptr.astype(np.int64), Wf.indices, Wf.data, X), Wf @ X)
         r, c = rng.integers(0, len(free), 50), rng.integers(0, len(free), 50)
         left, right = K.frame_pairs(b1, b2, r, c)
@@ -109,7 +111,7 @@ def test_tangential_kernels_equal_numpy():
     star = np.array([[0, 1, 2], [0, 2, 3]])
     free = np.array([0, 2])
     b1, b2 = K.free_frames(X, star, free)
-    ref = emb.tangent_frames(emb.vertex_normals(X, star)[free])
+    ref = tr.tangent_frames(tr.vertex_normals(X, star)[free])
     assert np.array_equal(b1, ref[0]) and np.array_equal(b2, ref[1])
 
 
@@ -193,7 +195,7 @@ def test_area_rows_are_the_rows_touching_a_free_vertex():
         joint = np.concatenate([ctx.faces, np.where(patch.faces < k, patch.faces, patch.faces - k + n_ctx)])
         is_free = np.zeros(len(X), bool)
         is_free[free] = True
-        W = emb.umbrella_operator(joint, len(X))
+        W = umbrella.umbrella_operator(joint, len(X))
         touching = np.asarray(abs(W[:, free]).sum(axis=1)).ravel() > 0
         rows = np.concatenate([free, np.flatnonzero(touching & ~is_free)])
         R = emb.energy_rows(joint, len(X), is_free, order=1, anchors=True)

@@ -15,7 +15,9 @@ from meshlab_holefill.algorithms.brunton2009 import crossing_repair
 from meshlab_holefill.algorithms.brunton2009 import planar_domains
 from meshlab_holefill.algorithms.brunton2009 import quality_swaps
 from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
-from meshlab_holefill.algorithms.brunton2009.embedding import embed_patch, embedding_energy, energy_rows, tangential_relaxation, umbrella_operator, vertex_normals
+from meshlab_holefill.algorithms.brunton2009.embedding import embed_patch, embedding_energy, energy_rows
+from meshlab_holefill.algorithms.brunton2009.tangential_relaxation import tangential_relaxation, vertex_normals
+from meshlab_holefill.algorithms.brunton2009.umbrella import umbrella_operator
 from meshlab_holefill.algorithms.brunton2009.linear_motion import linear_motion_is_simple, project_to_best_plane
 from meshlab_holefill.algorithms.brunton2009.annealing import anneal_loop, colour_classes, planarity_energy, planarity_terms
 from meshlab_holefill.algorithms.brunton2009.unfolding import unfold_loop
@@ -393,11 +395,12 @@ def test_embedding_solves_its_energy(energy, order):
 def test_symmetric_mode_lu_moves_the_patch_by_rounding_only(energy, monkeypatch):
     # SuperLU's symmetric mode (minimum degree on A + A^T, diagonal pivots preferred) against its
     # default (COLAMD, partial pivoting), for the energy solve and the tangential relaxation.
-    from meshlab_holefill.algorithms.brunton2009 import embedding
+    from meshlab_holefill.algorithms.brunton2009 import embedding, tangential_relaxation as relaxation
     ctx, points, Fp = sphere_cap_domain()
     s = len(points) - ctx.size
     fast = embed_patch(ctx, s, Fp, energy=energy, tangential=True)
-    monkeypatch.setattr(embedding, "symmetric_lu", lambda A: scipy.sparse.linalg.splu(A.tocsc()))
+    for module in (embedding, relaxation):
+        monkeypatch.setattr(module, "symmetric_lu", lambda A: scipy.sparse.linalg.splu(A.tocsc()))
     reference = embed_patch(ctx, s, Fp, energy=energy, tangential=True)
     assert np.abs(fast - reference).max() < 1e-12 * np.abs(reference).max()
 
@@ -962,7 +965,7 @@ def test_umbrella_operator_is_scipys_matrix_entry_for_entry():
 
 def test_principal_entries_are_scipys_submatrix_triples():
     from conftest import grid
-    from meshlab_holefill.algorithms.brunton2009.embedding import _principal_entries
+    from meshlab_holefill.algorithms.brunton2009.tangential_relaxation import _principal_entries
 
     rng = np.random.default_rng(0)
     _, F = grid(9)
