@@ -345,12 +345,9 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
         filled = {}
         return smoothest_patch(ctx, lambda choice: _fill_steps(ctx, **dict(params, domain=choice), filled=filled,
                                                                developed=developed))
-    Q, unfold_info = development_domain(planar_domains) if domain == "development" and m > 3 else (None, None)
-    if Q is None:
-        Q, unfold_info = unfold_loop(P, rng, k=k, temperature=temperature, epsilon=epsilon,
-                                     max_restarts=max_restarts, sa_steps=sa_steps, step_bound=step_bound,
-                                     fallback=planar_domains.fallback if fallback and m > 3 else None,
-                                     lengths=lengths)
+    Q, unfold_info = _planar_domain(P, rng, planar_domains, domain, fallback, k=k, temperature=temperature,
+                                    epsilon=epsilon, max_restarts=max_restarts, sa_steps=sa_steps,
+                                    step_bound=step_bound, lengths=lengths)
     method = unfold_info["method"]
     relax = planar_domains.relax
     domains = planar_domains.first(Q, method)
@@ -382,12 +379,61 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     counts = CrossingCounts(ctx)
     if repair:
         counts.remember(vertices, faces, n_bad)
-    n_swaps = 0
+    t3 = time.perf_counter()
+    vertices, faces, finishing = _finished(ctx, vertices, faces, n_bad if repair else None, records, counts,
+                                           energy=energy, refinement=refinement, density=density, swaps=swaps,
+                                           tangential=tangential, slivers=slivers)
+    info = {
+        "unfolding": method,
+        **unfolding_info,
+        "development_relax": relax,
+        "ears_clipped": clipped,
+        "crossing_faces": int(n_bad),
+        "unfolding_seconds": t1 - t0,
+        "embedding_seconds": t2 - t1,
+        "repair_seconds": t3 - t2,
+        **finishing,
+    }
+    if unfolding_only:
+        info["domain"] = "unfolding"
+    patch = Patch(vertices=vertices, faces=faces, info=info)
+    if filled is not None:
+        filled[key] = patch
+    return patch
+
+
+def _planar_domain(P, rng, planar_domains, domain, fallback, **annealing):
+    """Sec. 3.1: the loop's simple planar polygon and how it was found (:func:`.unfolding.unfold_loop`'s info).
+
+    The development when ``domain`` asks for it and the loop has one; else the annealed unfolding,
+    offered the development as its fallback (beyond the paper) after a failed first run.
+    """
+    m = len(P)
+    Q, unfold_info = development_domain(planar_domains) if domain == "development" and m > 3 else (None, None)
+    if Q is None:
+        Q, unfold_info = unfold_loop(P, rng, fallback=planar_domains.fallback if fallback and m > 3 else None,
+                                     **annealing)
+    return Q, unfold_info
+
+
+def _finished(ctx, vertices, faces, n_bad, records, counts, *, energy, refinement, density, swaps, tangential,
+              slivers):
+    """The steps beyond the paper after the embedding: quality swaps, resampling at the surrounding density,
+    sliver repair.
+
+    ``n_bad`` is the patch's faces crossing the mesh (None without the crossing repair), ``records``
+    the planar triangulations built for it, ``counts`` its :class:`.crossing_repair.CrossingCounts`.
+
+    Returns
+    -------
+    vertices, faces : the patch
+    info : dict  ``edge_swaps``, ``resampled``, ``sliver_rounds`` and the seconds of each step
+    """
     t3 = time.perf_counter()
     planar = next((r for r in records if r.faces.shape == faces.shape and np.array_equal(r.faces, faces)), None)
+    n_swaps = 0
     if swaps:
-        vertices, faces, n_swaps = improve_by_swaps(ctx, vertices, faces, energy,
-                                                    crossings=int(n_bad) if repair else None,
+        vertices, faces, n_swaps = improve_by_swaps(ctx, vertices, faces, energy, crossings=n_bad,
                                                     tangential=tangential, count_crossings=counts)
     t4 = time.perf_counter()
     resampled = False
@@ -400,7 +446,7 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
         resampled_patch = resample_patch(ctx, planar, vertices, tangential=tangential,
                                          finish=finish if swaps else None)
         # The sampled patch lies on the shape; it is kept unless it crosses more of the mesh.
-        if counts(*resampled_patch) <= n_bad:
+        if counts(*resampled_patch) <= (n_bad or 0):
             vertices, faces = resampled_patch
             resampled = True
     t5 = time.perf_counter()
@@ -408,28 +454,8 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     if slivers:
         vertices, faces, sliver_rounds = repair_slivers(ctx, vertices, faces, counts)
     t6 = time.perf_counter()
-    info = {
-        "unfolding": method,
-        **unfolding_info,
-        "development_relax": relax,
-        "ears_clipped": clipped,
-        "edge_swaps": n_swaps,
-        "crossing_faces": int(n_bad),
-        "unfolding_seconds": t1 - t0,
-        "embedding_seconds": t2 - t1,
-        "repair_seconds": t3 - t2,
-        "swap_seconds": t4 - t3,
-        "resampled": resampled,
-        "resample_seconds": t5 - t4,
-        "sliver_rounds": sliver_rounds,
-        "sliver_seconds": t6 - t5,
-    }
-    if unfolding_only:
-        info["domain"] = "unfolding"
-    patch = Patch(vertices=vertices, faces=faces, info=info)
-    if filled is not None:
-        filled[key] = patch
-    return patch
+    return vertices, faces, {"edge_swaps": n_swaps, "swap_seconds": t4 - t3, "resampled": resampled,
+                             "resample_seconds": t5 - t4, "sliver_rounds": sliver_rounds, "sliver_seconds": t6 - t5}
 
 
 _WARM = []  # set once the compiled kernels are loaded in this process
