@@ -348,10 +348,29 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, se
                 fills[i] = (None,) + fills[i][1:]
                 patch, checked[i], seconds = refill_clear(i, patch, checked[i], seconds)
                 filled[position] = (i, loop, patch, seconds)
+    V2, F2, done_loops, patches = _closed_patches(V, F, filled, checked, loops, report, incidence,
+                                                 params["selfintersection"])
+    return arrays, V, F, V2, F2, done_loops, patches, refinement, report
+
+
+def _closed_patches(V, F, filled, checked, loops, report, incidence, selfintersection):
+    """The validated patches that close their holes, merged into the mesh; the report entries updated.
+
+    ``filled`` holds (hole id, loop vertices, patch, seconds) of the patches that passed validation,
+    ``checked`` (mesh faces crossed, seconds) per hole. With ``selfintersection`` a patch crossing the mesh
+    fails its hole, and of two patches that cross each other the later one is withdrawn
+    (:func:`.crossings.crossing_patches`); so is the later of two that would leave an edge of a pinched
+    vertex with more than two faces (:func:`.crossings.clashing_patches`).
+
+    Returns
+    -------
+    V2 : (n2, 3) float64, F2 : (m2, 3) int  the mesh with the patches
+    done_loops : list of (k,) int64, patches : list of Patch  the holes closed, in ``filled``'s order
+    """
     done_loops, patches, closed_ids, crossing = [], [], [], []
     for i, loop, patch, seconds in filled:
         entry = report[i]
-        if params["selfintersection"]:
+        if selfintersection:
             hits, check_seconds = checked[i]
             seconds += check_seconds
             if hits:
@@ -368,14 +387,14 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, se
         _explain_outlines(V, F, crossing, report, incidence)
     V2, F2 = merge_patches(V, F, done_loops, patches)
     # Patches checked one by one can still meet one another: withdraw the later ones.
-    checks = ([crossing_patches] if params["selfintersection"] else []) + [clashing_patches]
+    checks = ([crossing_patches] if selfintersection else []) + [clashing_patches]
     for check in checks:
         kept = check(V2, F, F2, done_loops, patches, report, closed_ids)
         if len(kept) < len(patches):
             done_loops, patches, closed_ids = ([done_loops[j] for j in kept], [patches[j] for j in kept],
                                                [closed_ids[j] for j in kept])
             V2, F2 = merge_patches(V, F, done_loops, patches)
-    return arrays, V, F, V2, F2, done_loops, patches, refinement, report
+    return V2, F2, done_loops, patches
 
 
 def _key_here(V, F, loop, incidence, rings, index):
