@@ -173,33 +173,16 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
         if layout == "development":
             # The disc, the other fallback layout, may continue the surface better (a cap round a knob).
             discs[segmented] = _layout_patch(hole, "disc", result, name.replace("development", "disc"))
-            disc = discs[segmented][0]
-            if disc is not None:
-                bends = {"development": border_bend(ctx, clean.V[k:], clean.F),
-                         "disc": border_bend(ctx, disc.V[k:], disc.F)}
-                if bends["disc"] < bends["development"]:
-                    clean, layout = disc, "disc"
-        info = dict(result[3])
-        # Points left out next to long loop edges (triangulation.EDGE_CLEARANCE) are not lost by the layout.
-        kept = (clean.stats["kept"] + clean.edge_cleared) / max(info["predicted"], 1)
-        info.update(base_points=len(base), segmented=bool(segmented), layout=layout,
-                    dihedral_deg=None if seg["dihedral"] is None else float(np.degrees(seg["dihedral"])),
-                    outliers=clean.outliers, rate=float((len(clean.V) - k) / max(info["predicted"], 1)),
-                    kept_share=float(kept), boundary_seconds=t1 - t0, prediction_seconds=prediction_seconds,
-                    triangulation_seconds=clean.triangulation_seconds,
-                    optimisation_seconds=clean.optimisation_seconds, **clean.stats)
-        if bends is not None:
-            info["border_bends"] = bends
+            clean, layout, bends = _less_bent_of_development(ctx, clean, discs[segmented][0])
+        info = _attempt_info(ctx, result, base, seg, segmented, layout, clean, bends,
+                             boundary_seconds=t1 - t0, prediction_seconds=prediction_seconds)
+        kept = info["kept_share"]
         patch = Patch(vertices=clean.V[k:], faces=clean.F, info=info)
         if layouts == "smoothest":
             made.append((border_bend(ctx, patch.vertices, patch.faces), name, patch, clean.record))
             continue
         if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
-            if reasons:
-                info["attempts_failed"] = "; ".join(reasons)
-            if record is not None:
-                record.update(clean.record)
-            return patch
+            return _returned(patch, clean.record, reasons, record)
         # The layout lost many prediction points: keep it, but try the others first.
         if best is None or kept > best.info["kept_share"]:
             best, best_record = patch, clean.record
@@ -207,16 +190,9 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
     if made:
         _, _, patch, kept_record = min(made, key=lambda m: m[0] if m[0] == m[0] else np.inf)  # NaN: no border edge
         patch.info["layout_bends"] = {name: float(b) for b, name, _, _ in made}
-        if reasons:
-            patch.info["attempts_failed"] = "; ".join(reasons)
-        if record is not None:
-            record.update(kept_record)
-        return patch
+        return _returned(patch, kept_record, reasons, record)
     if best is not None:
-        best.info["attempts_failed"] = "; ".join(reasons)
-        if record is not None:
-            record.update(best_record)
-        return best
+        return _returned(best, best_record, reasons, record)
     info = {"base_points": len(base), "segmented": False, "layout": "loop only", "pairs": 0, "predicted": 0,
             "rate": 0.0, "attempts_failed": "; ".join(reasons), "boundary_seconds": t1 - t0,
             "prediction_seconds": prediction_seconds}
@@ -224,6 +200,47 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
     if patch is not None:
         return patch
     raise HoleFillError("; ".join(reasons))
+
+
+def _less_bent_of_development(ctx, development, disc):
+    """The development's patch or the disc's (None: no clean disc), whichever bends less against the surface.
+
+    Returns (the kept layout's patch, its name, the two bends or None); a tie keeps the development.
+    """
+    if disc is None:
+        return development, "development", None
+    k = ctx.size
+    bends = {"development": border_bend(ctx, development.V[k:], development.F),
+             "disc": border_bend(ctx, disc.V[k:], disc.F)}
+    if bends["disc"] < bends["development"]:
+        return disc, "disc", bends
+    return development, "development", bends
+
+
+def _attempt_info(ctx, result, base, seg, segmented, layout, clean, bends, boundary_seconds, prediction_seconds):
+    """The report of one attempt's patch: the prediction's counts, the layout's, and the seconds so far."""
+    k = ctx.size
+    info = dict(result[3])
+    # Points left out next to long loop edges (triangulation.EDGE_CLEARANCE) are not lost by the layout.
+    kept = (clean.stats["kept"] + clean.edge_cleared) / max(info["predicted"], 1)
+    info.update(base_points=len(base), segmented=bool(segmented), layout=layout,
+                dihedral_deg=None if seg["dihedral"] is None else float(np.degrees(seg["dihedral"])),
+                outliers=clean.outliers, rate=float((len(clean.V) - k) / max(info["predicted"], 1)),
+                kept_share=float(kept), boundary_seconds=boundary_seconds, prediction_seconds=prediction_seconds,
+                triangulation_seconds=clean.triangulation_seconds,
+                optimisation_seconds=clean.optimisation_seconds, **clean.stats)
+    if bends is not None:
+        info["border_bends"] = bends
+    return info
+
+
+def _returned(patch, patch_record, reasons, record):
+    """``patch``, with the attempts that failed before it named and ``record`` given its smoothed points."""
+    if reasons:
+        patch.info["attempts_failed"] = "; ".join(reasons)
+    if record is not None:
+        record.update(patch_record)
+    return patch
 
 
 def boundary_step(ctx, critical_dihedral):
