@@ -268,27 +268,15 @@ GRID_SCANS = 9
 def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, seconds_per_edge=None, progress=None):
     """One pass of :func:`close_holes` over the holes ``todo``: refine, fill, check, merge.
 
-    ``base`` is (arrays, loops, report entries) of the mesh as given; nothing is written to
+    ``base`` is (arrays, loops, report entries, vertex-face incidence) of the mesh as given; nothing is written to
     the MeshSet here. ``fills`` maps a hole to (context key, patch or failure reason, seconds)
     of an earlier pass: a hole whose surroundings did not change is not filled again (a
     second pass only undoes the border refinement of holes that failed, and on face000.ply
     with LS-SVM refilling every hole doubled the run).
     """
     arrays, loops, report, incidence = base[0], list(base[1]), [dict(entry) for entry in base[2]], base[3]
+    arrays, incidence, refinement = _prepared_borders(arrays, loops, report, incidence, todo, params, prepare)
     V, F = arrays.V, arrays.F
-    refinement = None
-    if prepare is not None and todo:  # the algorithms' own steps see int64 faces, whatever the mesh holds
-        refinement = prepare(V, np.asarray(F, np.int64), [loops[i] for i in todo], params)
-    if refinement is not None:
-        arrays = refine_mesh_arrays(arrays, refinement)
-        V, F = arrays.V, arrays.F
-        incidence = vertex_face_incidence(F, len(V))
-        for i, loop, count in zip(todo, refinement.loops, refinement.split_counts):
-            loops[i] = loop
-            report[i]["split_boundary_edges"] = int(count)
-    elif prepare is not None:
-        for i in todo:
-            report[i]["split_boundary_edges"] = 0
     # A hole met in an earlier pass is filled again only where its surroundings changed.
     refill = [i for i in todo if i not in fills or fills[i][0] != _key_here(V, F, loops[i], incidence, rings, i)]
     # Largest holes first: the run ends when its longest fill does, so start that one early.
@@ -351,6 +339,34 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, se
     V2, F2, done_loops, patches = _closed_patches(V, F, filled, checked, loops, report, incidence,
                                                  params["selfintersection"])
     return arrays, V, F, V2, F2, done_loops, patches, refinement, report
+
+
+def _prepared_borders(arrays, loops, report, incidence, todo, params, prepare):
+    """The algorithm's own preparation of the borders of the holes ``todo`` (``prepare``: LS-SVM's border split).
+
+    ``loops`` and ``report`` are updated in place (the split loops, each hole's
+    ``split_boundary_edges``).
+
+    Returns
+    -------
+    arrays : MeshArrays  the mesh with the split border faces, or as given
+    incidence : its vertex-face incidence
+    refinement : the ``prepare`` result, or None
+    """
+    if prepare is None:
+        return arrays, incidence, None
+    refinement = None
+    if todo:  # the algorithms' own steps see int64 faces, whatever the mesh holds
+        refinement = prepare(arrays.V, np.asarray(arrays.F, np.int64), [loops[i] for i in todo], params)
+    if refinement is None:
+        for i in todo:
+            report[i]["split_boundary_edges"] = 0
+        return arrays, incidence, None
+    arrays = refine_mesh_arrays(arrays, refinement)
+    for i, loop, count in zip(todo, refinement.loops, refinement.split_counts):
+        loops[i] = loop
+        report[i]["split_boundary_edges"] = int(count)
+    return arrays, vertex_face_incidence(arrays.F, len(arrays.V)), refinement
 
 
 def _closed_patches(V, F, filled, checked, loops, report, incidence, selfintersection):

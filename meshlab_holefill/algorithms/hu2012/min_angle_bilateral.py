@@ -338,35 +338,14 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
     fixed = boundary_edges_and_chords(k, ctx.forbidden_edges)
     V, F, scale, info = _refine(ctx, F0, alpha, fixed, criterion=relaxation)
     t2 = time.perf_counter()
-    interior = np.arange(len(V)) >= k
-    opt = dict(neighbourhood=neighbourhood, min_quality=filter_guard if filter_guard > 0 else None, fixed=fixed,
-               criterion=relaxation, smoothing=smoothing)
-    Vb, Fb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, iterations, **opt)
-    info["refinement"], info["bilateral_iterations"] = "plain", iterations
-    if crosses(ctx, Vb, Fb):
-        # Swaps can fold a patch through a strongly curved border or onto itself: redo the
-        # refinement with every swap checked for intersections, and as a last resort without
-        # swaps (centroid splits alone never create an intersection).
-        refined = False
-        for mode, guard in (("guarded", patch_guard(ctx, check_intersections=True)),
-                            ("splits only", lambda V, F, A, B, r: np.zeros(len(A), bool))):
-            if not crosses(ctx, V, F) or crosses(ctx, ctx.points, F0):
-                break
-            V, F, scale, info2 = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
-                                              allowed=guard, criterion=relaxation)
-            refined = True
-            info.update(info2, refinement=mode)
+
+    def optimise(V, F, scale, n_iter):
         interior = np.arange(len(V)) >= k
-        # The filter moves vertices along their normals; on a large, nearly flat patch that
-        # can fold it. Use as many iterations as keep it free of intersections.
-        for n_iter in range(iterations, -1, -1):
-            if n_iter == iterations and not refined:
-                continue  # the same refinement and iterations: (Vb, Fb), which crosses
-            Vb, Fb = _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, n_iter, **opt)
-            if n_iter == 0 or not crosses(ctx, Vb, Fb):
-                break
-        info["bilateral_iterations"] = n_iter
-    V, F = Vb, Fb
+        return _optimise(ctx, V, F, interior, scale, fairing, sigma_c, sigma_s, n_iter, neighbourhood=neighbourhood,
+                         min_quality=filter_guard if filter_guard > 0 else None, fixed=fixed, criterion=relaxation,
+                         smoothing=smoothing)
+
+    V, F = _optimised_clear_of_mesh(ctx, F0, V, F, scale, info, optimise, alpha, fixed, relaxation, iterations)
     t3 = time.perf_counter()
     info.update(initial_faces=len(F0), triangulation_seconds=t1 - t0, refinement_seconds=t2 - t1,
                 filter_seconds=t3 - t2, fallback=None)
@@ -375,15 +354,63 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
     same = dict(alpha=alpha, sigma_c=sigma_c, sigma_s=sigma_s, relaxation=relaxation, neighbourhood=neighbourhood,
                 filter_guard=filter_guard, fallback=False)
     options = dict(fairing=fairing, iterations=iterations, smoothing=smoothing)
-    # A large, strongly curved hole: the flat minimum-angle surface and the filter's moves along
-    # the normals keep crossing the mesh, where a faired patch bends away from it.
+    patch = _fallback_patch(ctx, F0, same, options)
+    return Patch(vertices=V[k:], faces=F, info=info) if patch is None else patch
+
+
+def _optimised_clear_of_mesh(ctx, F0, V, F, scale, info, optimise, alpha, fixed, relaxation, iterations):
+    """Sec. III.D on the refined patch (V, F), then, if that crosses the mesh, the steps that avoid it.
+
+    Swaps can fold a patch through a strongly curved border or onto itself: the refinement is
+    redone with every swap checked for intersections, and as a last resort without swaps
+    (centroid splits alone never create an intersection). The filter moves vertices along their
+    normals, which can fold a large, nearly flat patch: as many iterations are used as keep it
+    free of intersections. ``optimise(V, F, scale, iterations)`` is :func:`_optimise` with the
+    filter's options; ``info`` gets the refinement used and the filter's iterations.
+
+    Returns
+    -------
+    V : (n, 3) float64, F : (m, 3) int64  the patch, which may still cross the mesh
+    """
+    Vb, Fb = optimise(V, F, scale, iterations)
+    info["refinement"], info["bilateral_iterations"] = "plain", iterations
+    if not crosses(ctx, Vb, Fb):
+        return Vb, Fb
+    refined = False
+    for mode, guard in (("guarded", patch_guard(ctx, check_intersections=True)),
+                        ("splits only", lambda V, F, A, B, r: np.zeros(len(A), bool))):
+        if not crosses(ctx, V, F) or crosses(ctx, ctx.points, F0):
+            break
+        V, F, scale, info2 = refine_patch(ctx.points, F0, ctx.edge_scale, alpha=alpha, fixed_edges=fixed,
+                                          allowed=guard, criterion=relaxation)
+        refined = True
+        info.update(info2, refinement=mode)
+    for n_iter in range(iterations, -1, -1):
+        if n_iter == iterations and not refined:
+            continue  # the same refinement and iterations: (Vb, Fb), which crosses
+        Vb, Fb = optimise(V, F, scale, n_iter)
+        if n_iter == 0 or not crosses(ctx, Vb, Fb):
+            break
+    info["bilateral_iterations"] = n_iter
+    return Vb, Fb
+
+
+def _fallback_patch(ctx, F0, same, options):
+    """The first fallback patch that crosses nothing (``fallback`` of :func:`fill`), or None.
+
+    A large, strongly curved hole: the flat minimum-angle surface and the filter's moves along
+    the normals keep crossing the mesh, where a faired patch bends away from it; so the faired
+    option set is tried first from ``F0``. Where ``F0`` folds already (a cut across walls standing
+    on the hole's plane), the steps are tried from the hole plane's triangulation. Last, a jagged
+    border, whose faces tilt every way so that the ears fold onto them: the loop's least-bend
+    triangulations. ``same`` are the options every attempt keeps, ``options`` the filter's own
+    (fairing, iterations, smoothing).
+    """
     faired = options == FAIRED_OPTIONS
     tries = [] if faired else [("faired", lambda: F0, FAIRED_OPTIONS)]
     if crosses(ctx, ctx.points, F0):
-        # The triangulation folds already: a cut across walls standing on the hole's plane.
         plane = functools.cache(lambda: hole_plane_triangulation(ctx.points, ctx.forbidden_edges))
         tries += [("hole plane", plane, options)] + ([] if faired else [("hole plane, faired", plane, FAIRED_OPTIONS)])
-    # Last, a jagged border: the faces beside the hole tilt every way and the ears fold onto them.
     for name, initial, chosen in itertools.chain(tries, _least_bend_tries(ctx, options, faired)):
         try:
             patch = _patch_from(ctx, initial(), **same, **chosen)
@@ -392,7 +419,7 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
         if not crosses(ctx, patch.all_points(ctx.points), patch.faces):
             patch.info["fallback"] = name
             return patch
-    return Patch(vertices=V[k:], faces=F, info=info)
+    return None
 
 
 def _least_bend_tries(ctx, options, faired):
