@@ -153,8 +153,11 @@ def main(argv=None):
                  "bunny Loop-subdivided once; reference for `min_angle_bilateral`: whole run under 1.5 s):\n\n"
                  + markdown_table(*scaling_table(rows)) + "\n")
     if args.workers:
-        text += ("\n**Holes on all cores** (face000.ply, whole run of each filter in one process, its kernels "
-                 "loaded first, `workers=1` and `workers=2` alternating three times, medians):\n\n" + markdown_table(*workers_speedup()) + "\n")
+        text += ("\n**Holes on all cores** (face000.ply, each filter in one process, its kernels loaded first, "
+                 "`workers=1` and `workers=2` alternating three times, medians; 'MeshSet': the filter's whole run "
+                 "on a MeshSet; 'arrays': the same fill on the scan's arrays through `meshlab_holefill.fill_holes`, "
+                 "without pymeshlab's serial transfer of the mesh and of the new layer):\n\n"
+                 + markdown_table(*workers_speedup()) + "\n")
     if args.compile_cost:
         text += ("\n**Compiling the kernels** (`meshlab-holefill compile` with an empty numba cache, as after an "
                  "install, then again with the cache current; each filter's process seconds, compiling included, "
