@@ -49,8 +49,9 @@ Readings of passages the paper leaves open (each documented at the function that
   0.240 / 0.148 -> 0.51 / 0.59 / 0.55). Points left out this way do not count as lost by
   the layout (the kept share that ranks layouts).
   Layouts are tried until one gives a patch without fold-over and not
-  crossing the surrounding rings: the paper's choice, the other plane layout, a disc layout
-  (beyond the paper), then the same with the other prediction (segmented / not). Fold-overs:
+  crossing the surrounding rings: the paper's choice, then (beyond the paper) the loop's
+  development or a disc, the other plane layout, then the same with the other prediction
+  (segmented / not). Fold-overs:
   a face turned against its projection plane after the mapping back, or two neighbouring
   faces (or a face and the mesh face across a loop edge) bent by more than 150 degrees;
   swaps and local relaxation repair what they can, prediction points left on folds are
@@ -198,9 +199,9 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
     """Fill one hole by HPDE, Algorithm 2 steps 2-7.
 
     Attempts (first clean one wins): the paper's choice (segmented prediction with two
-    unfolded planes, or unsegmented with the PCA plane), the other plane layout and the disc
-    layout with the same prediction, then the three layouts with the other prediction. An
-    attempt is clean when no fold-over is left after smoothing, optimisation and repairs, its
+    unfolded planes, or unsegmented with the PCA plane), the loop's development and the disc,
+    and the other plane layout with the same prediction, then the layouts with the other
+    prediction (:func:`._algorithm2.attempt_order`). An attempt is clean when no fold-over is left after smoothing, optimisation and repairs, its
     patch is a disc closing the loop once (:func:`meshlab_holefill.core.patch.validate_patch`)
     and it does not cross the surrounding rings; one that kept under half of the prediction
     points is used only if no other keeps more. The loop-only triangulation is the last

@@ -158,7 +158,7 @@ def disc_coordinates(loop_arc, perimeter, base_count, pair_a, pair_b, fraction, 
 def development_coordinates(Q, base, pair_a, pair_b, fraction):
     """Fallback layout of the prediction points on the loop's development (beyond the paper).
 
-    Tried after both plane layouts and before the disc (:func:`disc_coordinates`): the loop is
+    Tried after the paper's plane layout, beside the disc (:func:`disc_coordinates`): the loop is
     laid out with its edge lengths and the surrounding surface's angles
     (:func:`geometry.development.simple_development`), which keeps a long strip a strip where
     the disc rounds it, and is the surface's own layout on a developable one. BP_j goes to the

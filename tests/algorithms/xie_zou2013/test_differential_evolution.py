@@ -557,6 +557,22 @@ def test_layouts_smoothest_makes_every_attempt_and_keeps_the_least_bent_patch():
     validate_patch(patch, ctx.points, ctx.forbidden_edges)
 
 
+@pytest.mark.parametrize("segmented", [False, True])
+def test_after_the_papers_layout_the_loop_layouts_go_before_the_other_plane_layout(monkeypatch, segmented):
+    # The other plane layout overrules the A_c test (two planes across a planar boundary, or one
+    # plane across a crease); the development and the disc follow the loop, so they come first.
+    monkeypatch.setattr(hpde_sections, "pairing_coverage", lambda *a: 1.0)  # both pairings cover the hole
+    seg = {"split": (2, 6), "segmented": segmented}
+    order = hpde_algorithm2.attempt_order(None, None, seg, np.radians(12.0))
+    papers, other = ("two planes", "plane") if segmented else ("plane", "two planes")
+    assert order[:4] == [(segmented, papers), (segmented, "development"), (segmented, "disc"), (segmented, other)]
+    flipped_papers = "plane" if segmented else "two planes"
+    assert order[4:] == [(not segmented, flipped_papers), (not segmented, papers), (not segmented, "development"),
+                         (not segmented, "disc")]
+    unsplit = hpde_algorithm2.attempt_order(None, None, {"split": None, "segmented": False}, np.radians(12.0))
+    assert unsplit == [(False, "plane"), (False, "development"), (False, "disc")]
+
+
 def _attempt_inputs(ctx):
     """The arguments :func:`_algorithm2.patch_hole` passes to ``attempt_order`` for the default options."""
     _, base, normals, seg = hpde_algorithm2.boundary_step(ctx, 90.0)
