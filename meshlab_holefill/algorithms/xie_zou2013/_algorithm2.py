@@ -52,7 +52,7 @@ class PredictionOptions:
     population_factor: float = 3.0
     mutation: float = 0.8
     crossover: float = 0.05
-    generations: int = 100
+    generations: int = prediction_steps.NUM_ITER
     seed: int = 0
     arc_tangent: str = "secant"
 

@@ -31,8 +31,9 @@ Readings of passages the paper leaves open (each documented at the function that
   other is dropped. Eq. 14 minimises the sum of squared deviations of the m + 2 turning
   angles along AP_i, P_1, PP_1..PP_m, P_2, AP_{n-i+1} from their mean; the population is
   the Eq. 16 vector plus copies perturbed by up to 1/4 of the bound width; NumIter
-  (``generations``) = 100; Algorithm 1 is followed literally (selection on the raw trial,
-  then reflection, then the objective renewed).
+  (``generations``) = 20, a small constant as Sec. 4.8 asks (measured against 5-100 in
+  :func:`.prediction.predict_y`); Algorithm 1 is followed literally (selection on the raw
+  trial, then reflection, then the objective renewed).
 * Sec. 4.5 arcs: the start angle is that of TV = BP - AP, the paper's words (option
   ``arc_tangent='circle'``: the tangent of the circle through AP, BP and the other base
   point, exact on a sphere; sphere experiment MPE 2.85e-2 -> 2.10e-2, but worse on the
@@ -94,6 +95,7 @@ import numpy as np
 
 from ...core.parameters import ParamSpec
 from ._algorithm2 import OptimisationOptions, PredictionOptions, SmoothingOptions, patch_hole
+from .prediction import NUM_ITER
 from .quality_pass import raise_min_quality
 
 __all__ = ["fill", "PARAMS", "RINGS", "WARM_UP", "warm_up"]
@@ -106,8 +108,9 @@ PARAMS = [
     ParamSpec("mutation", "float", 0.8, "DE mutation factor F of Eq. 2 (Sec. 4.8: 0.8).", minimum=0.0, maximum=2.0),
     ParamSpec("crossover", "float", 0.05, "DE crossover probability CR of Eq. 3 (Sec. 4.8: 0.05).",
               minimum=0.0, maximum=1.0),
-    ParamSpec("generations", "int", 100,
-              "DE generations (NumIter; the paper gives no value).", minimum=0, maximum=100000),
+    ParamSpec("generations", "int", NUM_ITER,
+              "DE generations (NumIter of Sec. 4.8, which the paper calls a small constant without a value).",
+              minimum=0, maximum=100000),
     ParamSpec("critical_dihedral", "float", 90.0,
               "A_c in degrees: the boundary is split in two planes when their dihedral angle is below it, "
               "or above it by at most 0.1 degree (fitted planes of a tessellated right-angled edge) "
@@ -192,7 +195,7 @@ def warm_up():
     _WARM.append(True)
 
 
-def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=100, critical_dihedral=90.0,
+def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=NUM_ITER, critical_dihedral=90.0,
          critical_intersection=12.0, num_smooth=60, decimation_rate=0.6, seed=0, relax=10, smoothing="taubin",
          record=None, smoothing_anchor=0.15, arc_tangent="secant", quality_floor=0.4, taubin_pass_band=0.0,
          taubin_lambda=0.33, layouts="first"):
@@ -201,12 +204,13 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=1
     Attempts (first clean one wins): the paper's choice (segmented prediction with two
     unfolded planes, or unsegmented with the PCA plane), the loop's development and the disc,
     and the other plane layout with the same prediction, then the layouts with the other
-    prediction (:func:`._algorithm2.attempt_order`). An attempt is clean when no fold-over is left after smoothing, optimisation and repairs, its
-    patch is a disc closing the loop once (:func:`meshlab_holefill.core.patch.validate_patch`)
-    and it does not cross the surrounding rings; one that kept under half of the prediction
-    points is used only if no other keeps more. The loop-only triangulation is the last
-    resort. The steps run in :func:`._algorithm2.patch_hole`; the keywords are grouped there
-    into :class:`PredictionOptions` (steps 2-5), :class:`SmoothingOptions` and
+    prediction (:func:`._algorithm2.attempt_order`). An attempt is clean when no fold-over is
+    left after smoothing, optimisation and repairs, its patch is a disc closing the loop once
+    (:func:`meshlab_holefill.core.patch.validate_patch`) and it does not cross the surrounding
+    rings; one that kept under half of the prediction points is used only if no other keeps
+    more. The loop-only triangulation is the last resort. The steps run in
+    :func:`._algorithm2.patch_hole`; the keywords are grouped there into
+    :class:`PredictionOptions` (steps 2-5), :class:`SmoothingOptions` and
     :class:`OptimisationOptions` (step 7).
 
     Parameters
