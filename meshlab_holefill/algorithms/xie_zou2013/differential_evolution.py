@@ -56,7 +56,7 @@ Readings of passages the paper leaves open (each documented at the function that
   a face turned against its projection plane after the mapping back, or two neighbouring
   faces (or a face and the mesh face across a loop edge) bent by more than 150 degrees;
   swaps and local relaxation repair what they can, prediction points left on folds are
-  dropped for up to 4 rounds. A loop-only triangulation with Liepa's weights is the last
+  dropped for up to 2 rounds. A loop-only triangulation with Liepa's weights is the last
   resort. A chord duplicating a mesh edge is split at its midpoint.
 * Sec. 4.7. NumSmooth = 60 passes of Taubin's non-shrinking lambda|mu filter (ref. [26]: the
   paper names no operator for step 7, and Taubin's filter does not shrink the patch) on the new vertices, loop fixed,

@@ -1401,3 +1401,51 @@ def test_triangles_closing_a_short_notch_of_the_loop_count_as_the_loop_s_own():
                   [0, 1, 20]])  # a new vertex
     assert boundary_ears(F, k).tolist() == [True, True, False, False, False, False]
     assert boundary_ears(F, k, 8).tolist() == [True, True, True, True, False, False]
+
+
+def _folds_in_first_rounds(monkeypatch, folded_rounds):
+    """Make smooth_and_optimise report a fold on its first ``folded_rounds`` calls of each attempt.
+
+    Returns the list of the prediction points each call was given (the triangulation left out the
+    excluded ones), one list per attempt.
+    """
+    real = hpde_algorithm2.smooth_and_optimise
+    given = []
+
+    def folded(V, F, ids, *args, **kwargs):
+        V, F, stats, bad = real(V, F, ids, *args, **kwargs)
+        given[-1].append(set(ids[ids >= 0].tolist()))
+        if len(given[-1]) <= folded_rounds and len(ids[ids >= 0]):
+            stats = dict(stats, folds_left=1)
+            bad = ids[ids >= 0][:1]  # one prediction point on a "fold"
+        return V, F, stats, bad
+
+    real_layout = hpde_algorithm2._layout_patch
+
+    def layout(*args):
+        given.append([])
+        return real_layout(*args)
+
+    monkeypatch.setattr(hpde_algorithm2, "smooth_and_optimise", folded)
+    monkeypatch.setattr(hpde_algorithm2, "_layout_patch", layout)
+    return given
+
+
+def test_a_prediction_point_left_on_a_fold_is_left_out_in_the_next_round(monkeypatch, sphere_hole):
+    _, _, _, ctx = sphere_hole
+    given = _folds_in_first_rounds(monkeypatch, folded_rounds=1)
+    patch = hpde.fill(ctx, seed=0)
+    first = given[0]
+    assert len(first) == 2  # the fold's round, then a clean one
+    left_out = first[0] - first[1]
+    assert len(left_out) == 1 and patch.info["outliers"] == 1
+    assert patch.info["layout"] != "loop only"
+
+
+def test_an_attempt_whose_folds_stay_ends_after_the_outlier_rounds(monkeypatch, sphere_hole):
+    _, _, _, ctx = sphere_hole
+    given = _folds_in_first_rounds(monkeypatch, folded_rounds=10**6)
+    patch = hpde.fill(ctx, seed=0)
+    assert given and all(len(rounds) == hpde_algorithm2.OUTLIER_ROUNDS for rounds in given if rounds)
+    assert f"({hpde_algorithm2.OUTLIER_ROUNDS} rounds)" in patch.info["attempts_failed"]
+    assert patch.info["layout"] == "loop only"
