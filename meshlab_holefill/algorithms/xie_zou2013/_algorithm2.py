@@ -296,9 +296,12 @@ def attempt_order(base, normals, seg, I_c):
     """
     first = bool(seg["segmented"])
     if seg["split"] is not None:
-        coverage = {s: sections.pairing_coverage(base, normals, seg["split"] if s else None, I_c)
-                    for s in (True, False)}
-        if coverage[first] < MIN_COVERAGE and coverage[not first] > coverage[first]:
+        def coverage(segmented):
+            return sections.pairing_coverage(base, normals, seg["split"] if segmented else None, I_c)
+
+        # The other pairing is found only when the first covers too little (most holes never need it).
+        covered = coverage(first)
+        if covered < MIN_COVERAGE and coverage(not first) > covered:
             first = not first
     choices = [first] + ([not first] if seg["split"] is not None else [])
     attempts = []
