@@ -573,6 +573,30 @@ def test_after_the_papers_layout_the_loop_layouts_go_before_the_other_plane_layo
     assert unsplit == [(False, "plane"), (False, "development"), (False, "disc")]
 
 
+@pytest.mark.parametrize("segmented", [False, True])
+def test_a_pairing_that_covers_under_half_the_base_points_yields_to_one_that_covers_more(monkeypatch, segmented):
+    seg = {"split": (2, 6), "segmented": segmented}
+    asked = []
+
+    def coverage_of(shares):
+        def coverage(base, normals, split, I_c):
+            asked.append(split is not None)
+            return shares[split is not None]
+        return coverage
+
+    monkeypatch.setattr(hpde_sections, "pairing_coverage", coverage_of({segmented: 0.3, not segmented: 0.9}))
+    assert hpde_algorithm2.attempt_order(None, None, seg, np.radians(12.0))[0][0] == (not segmented)
+    assert asked == [segmented, not segmented]
+    asked.clear()
+    monkeypatch.setattr(hpde_sections, "pairing_coverage", coverage_of({segmented: 0.3, not segmented: 0.2}))
+    assert hpde_algorithm2.attempt_order(None, None, seg, np.radians(12.0))[0][0] == segmented
+    asked.clear()
+    # Covering at least half, the paper's choice stands and the other pairing is not even found.
+    monkeypatch.setattr(hpde_sections, "pairing_coverage", coverage_of({segmented: 0.6, not segmented: 1.0}))
+    assert hpde_algorithm2.attempt_order(None, None, seg, np.radians(12.0))[0][0] == segmented
+    assert asked == [segmented]
+
+
 def _attempt_inputs(ctx):
     """The arguments :func:`_algorithm2.patch_hole` passes to ``attempt_order`` for the default options."""
     _, base, normals, seg = hpde_algorithm2.boundary_step(ctx, 90.0)
