@@ -16,9 +16,46 @@ import numpy as np
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
-from ._smoothing_kernels import refuse_worse
+from ._smoothing_kernels import refuse_worse, tangential_steps
 
 __all__ = ["bisect_obtuse", "collapse_poor", "tangential_smoothing"]
+
+
+def _tangential_steps(V, F, movable):
+    """Each movable vertex's step of a smoothing round: d (n, 3) float64 and ok (n,) bool (movable, on a face).
+
+    The step goes to the mean of the vertex's ideal positions, one per incident face (the apex
+    of the equilateral triangle on the opposite edge, in the face's plane on the vertex's side),
+    without its part along the area-weighted vertex normal. Compiled
+    (:func:`._smoothing_kernels.tangential_steps`, the bits of :func:`_tangential_steps_numpy`).
+    """
+    F = np.ascontiguousarray(F, np.int64)
+    if len(F) and (F.min() < 0 or F.max() >= len(V)):
+        return _tangential_steps_numpy(V, F, movable)
+    return tangential_steps(np.ascontiguousarray(V, np.float64), F, np.ascontiguousarray(movable, bool))
+
+
+def _tangential_steps_numpy(V, F, movable):
+    """:func:`_tangential_steps` in numpy (the reference of the compiled steps)."""
+    n = len(V)
+    target = np.zeros_like(V)
+    count = np.bincount(F.ravel(), minlength=n).astype(np.float64)
+    fn = cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+    for c in range(3):
+        v, a, b = F[:, c], F[:, (c + 1) % 3], F[:, (c + 2) % 3]
+        e = V[b] - V[a]
+        # (v, a, b) counter-clockwise about fn: v lies to the left of a -> b, along fn x e.
+        apex = 0.5 * (V[a] + V[b]) + (np.sqrt(3.0) / 2.0) * cross_rows(fn, e)
+        for j in range(3):
+            target[:, j] += np.bincount(v, weights=apex[:, j], minlength=n)
+    ok = movable & (count > 0)
+    target[ok] /= count[ok, None]
+    N = vertex_normals(V, F, n)
+    d = np.zeros_like(V)
+    d[ok] = target[ok] - V[ok]
+    d[ok] -= np.einsum("ij,ij->i", d[ok], N[ok])[:, None] * N[ok]
+    return d, ok
 
 
 def _refuse_worse(V_old, V_new, F, moved):
@@ -246,31 +283,13 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
 
     V = np.array(V, np.float64)
     F = np.array(F, np.int64)
-    n = len(V)
     movable = np.asarray(movable, bool)
     for _ in range(rounds):
         if split:
             # Collapse first: a fresh bisection vertex gets a round of moves before it is judged.
             V, F, movable, attr = collapse_poor(V, F, movable, fixed, attr)
             V, F, movable, attr = bisect_obtuse(V, F, movable, fixed, attr)
-            n = len(V)
-        target = np.zeros_like(V)
-        count = np.bincount(F.ravel(), minlength=n).astype(np.float64)
-        fn = cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-        fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
-        for c in range(3):
-            v, a, b = F[:, c], F[:, (c + 1) % 3], F[:, (c + 2) % 3]
-            e = V[b] - V[a]
-            # (v, a, b) counter-clockwise about fn: v lies to the left of a -> b, along fn x e.
-            apex = 0.5 * (V[a] + V[b]) + (np.sqrt(3.0) / 2.0) * cross_rows(fn, e)
-            for j in range(3):
-                target[:, j] += np.bincount(v, weights=apex[:, j], minlength=n)
-        ok = movable & (count > 0)
-        target[ok] /= count[ok, None]
-        N = vertex_normals(V, F, n)
-        d = np.zeros_like(V)
-        d[ok] = target[ok] - V[ok]
-        d[ok] -= np.einsum("ij,ij->i", d[ok], N[ok])[:, None] * N[ok]
+        d, ok = _tangential_steps(V, F, movable)
         pending = ok & np.any(d != 0, axis=1)
         for step in (1.0, 0.5, 0.25):
             # Vertices whose move was undone try a shorter one (the others keep theirs).

@@ -1,7 +1,9 @@
-"""The compiled guard of the tangential smoothing against its numpy reference (the same bits)."""
+"""The compiled steps and guard of the tangential smoothing against their numpy references (the same bits)."""
 import numpy as np
+import pytest
 
-from meshlab_holefill.algorithms.hu2012.tangential_smoothing import _refuse_worse, _refuse_worse_numpy
+from meshlab_holefill.algorithms.hu2012.tangential_smoothing import (_refuse_worse, _refuse_worse_numpy,
+                                                                     _tangential_steps, _tangential_steps_numpy)
 
 from conftest import grid
 
@@ -25,3 +27,33 @@ def test_a_move_that_flips_a_face_is_undone():
     V_new = V.copy()
     V_new[2] = [0, -1, 0]  # the face turns over
     np.testing.assert_array_equal(_refuse_worse(V, V_new, F, np.array([False, False, True])), V)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_compiled_steps_are_the_numpy_steps_bit_for_bit(seed):
+    rng = np.random.default_rng(seed)
+    for trial in range(20):
+        V, F = grid(int(rng.integers(2, 9)), int(rng.integers(2, 9)))
+        scale = 10.0 ** rng.uniform(-6, 6)
+        V = (V + rng.normal(scale=10.0 ** rng.uniform(-4, -0.5), size=V.shape)) * scale + rng.normal(size=3) * scale
+        V = np.concatenate([V, rng.normal(size=(2, 3))])  # two vertices on no face
+        if trial % 4 == 0:
+            F = np.concatenate([F, [[0, 0, 1]]])  # a degenerate face: a zero normal, a zero apex offset
+        movable = rng.random(len(V)) < 0.7
+        d, ok = _tangential_steps(V, F, movable)
+        d_ref, ok_ref = _tangential_steps_numpy(V, np.asarray(F, np.int64), movable)
+        np.testing.assert_array_equal(ok, ok_ref)
+        np.testing.assert_array_equal(d.view(np.int64), d_ref.view(np.int64))
+        assert not ok[-2:].any() and not d[~ok].any()  # isolated and fixed vertices stay
+
+
+def test_a_step_is_tangential_and_moves_a_vertex_towards_the_equilateral_apexes():
+    # A fan of six triangles around vertex 0 on the plane z = 0, vertex 0 off centre: its step stays in
+    # the plane and points back to the centre, where the six apexes average.
+    ring = np.array([[np.cos(a), np.sin(a), 0.0] for a in np.arange(6) * np.pi / 3])
+    V = np.concatenate([[[0.2, -0.1, 0.0]], ring])
+    F = np.array([[0, 1 + i, 1 + (i + 1) % 6] for i in range(6)])
+    d, ok = _tangential_steps(V, F, np.array([True] + [False] * 6))
+    assert ok[0] and not ok[1:].any()
+    assert d[0, 2] == 0.0
+    assert np.dot(d[0, :2], -V[0, :2]) > 0.9 * np.linalg.norm(d[0, :2]) * np.linalg.norm(V[0, :2])
