@@ -1,9 +1,11 @@
-"""Compiled steps of the tangential smoothing (numba): its moves and its guard.
+"""Compiled steps of the tangential smoothing (numba): its moves, its guard and its collapse search.
 
 :func:`tangential_steps` is :func:`.tangential_smoothing._tangential_steps_numpy` (each round's
 move of every movable vertex), :func:`refuse_worse` is :func:`.tangential_smoothing._refuse_worse_numpy`
-(the guard run after every trial move). Both run on a few hundred faces, every round, and their
-numpy forms are dominated by the overhead of small array operations. The kernels do the same
+(the guard run after every trial move), :func:`best_collapse` the search of
+:func:`.tangential_smoothing._best_collapse_numpy` (each round's collapse). They run on a few
+hundred faces, every round, and their numpy forms are dominated by the overhead of small array
+operations (the collapse search by Python sets, on noisy borders with many poor triangles). The kernels do the same
 IEEE operations in the same order (face qualities as :func:`geometry.quality.triangle_quality`,
 cross products as ``cross_rows``, row norms and dots as numpy's add.reduce and einsum, sums
 over faces in bincount's order), and take minima, which are exact, so they return the same
@@ -18,7 +20,7 @@ from ...geometry._quality_kernels import face_cross, face_quality
 from ...geometry._vector_kernels import dot3, norm3, npmax
 from ._bilateral_kernels import undo_moves
 
-__all__ = ["refuse_worse", "tangential_steps"]
+__all__ = ["best_collapse", "refuse_worse", "tangential_steps"]
 
 _HALF_SQRT3 = np.sqrt(3.0) / 2.0  # the numpy code's constant, the same double
 
@@ -134,3 +136,153 @@ def refuse_worse(V_old, V_new, F, moved):
             if back[F[f, 0]] or back[F[f, 1]] or back[F[f, 2]]:
                 q[f] = _quality_or_flipped(V, F, f, n_old)
     return V
+
+
+NO_COLLAPSE = -1  # :func:`best_collapse`'s status when it finds none
+
+
+@njit(cache=True)
+def _faces_with(F, v):
+    """Indices of the faces with corner v, increasing."""
+    out = np.empty(F.shape[0], np.int64)
+    count = 0
+    for f in range(F.shape[0]):
+        if F[f, 0] == v or F[f, 1] == v or F[f, 2] == v:
+            out[count] = f
+            count += 1
+    return out[:count]
+
+
+@njit(cache=True)
+def _corners_but(F, faces, a, b):
+    """The distinct corners of ``faces`` other than a and b, increasing."""
+    corners = np.empty(3 * len(faces), np.int64)
+    count = 0
+    for f in faces:
+        for c in range(3):
+            x = F[f, c]
+            if x != a and x != b:
+                corners[count] = x
+                count += 1
+    return np.unique(corners[:count])
+
+
+@njit(cache=True)
+def _same(a, b):
+    """Whether two increasing arrays hold the same numbers."""
+    if len(a) != len(b):
+        return False
+    for i in range(len(a)):
+        if a[i] != b[i]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _common(a, b):
+    """The numbers in both increasing arrays a and b, increasing."""
+    out = np.empty(min(len(a), len(b)), np.int64)
+    i = j = count = 0
+    while i < len(a) and j < len(b):
+        if a[i] == b[j]:
+            out[count] = a[i]
+            count += 1
+            i += 1
+            j += 1
+        elif a[i] < b[j]:
+            i += 1
+        else:
+            j += 1
+    return out[:count]
+
+
+@njit(cache=True)
+def _nan_min(values):
+    """np.min: NaN if any value is NaN (``values`` not empty)."""
+    out = values[0]
+    for x in values[1:]:
+        out = _minimum(out, x)
+    return out
+
+
+@njit(cache=True)
+def _is_fixed(fixed_keys, base, a, b):
+    """Whether the edge (a, b) is one of the sorted keys min * base + max."""
+    key = min(a, b) * base + max(a, b)
+    i = np.searchsorted(fixed_keys, key)
+    return i < len(fixed_keys) and fixed_keys[i] == key
+
+
+@njit(cache=True)
+def best_collapse(V, F, q, order, movable, fixed_keys, base, max_quality):
+    """(status, v, u): the collapse of v into u that :func:`.tangential_smoothing.collapse_poor` makes.
+
+    V (n, 3) float64; F (m, 3) int64 (valid indices); q (m,) the faces' qualities; order (m,)
+    the faces by increasing quality (np.argsort(q)); movable (n,) bool; fixed_keys the sorted
+    keys min * base + max of the fixed edges. status: 0 with the collapse, :data:`NO_COLLAPSE`
+    when there is none.
+    """
+    for f in order:
+        if q[f] >= max_quality:
+            break
+        found, best_q, best_v, best_u = False, 0.0, -1, -1
+        for corner in range(3):
+            v = F[f, corner]
+            if not movable[v]:
+                continue
+            ring = _faces_with(F, v)
+            nbrs = _corners_but(F, ring, v, v)
+            old_min = _nan_min(q[ring])
+            for u in nbrs:
+                both_count = 0
+                for g in ring:
+                    if F[g, 0] == u or F[g, 1] == u or F[g, 2] == u:
+                        both_count += 1
+                both = np.empty(both_count, np.int64)
+                stay = np.empty(len(ring) - both_count, np.int64)
+                i = j = 0
+                for g in ring:
+                    if F[g, 0] == u or F[g, 1] == u or F[g, 2] == u:
+                        both[i] = g
+                        i += 1
+                    else:
+                        stay[j] = g
+                        j += 1
+                opposite = _corners_but(F, both, u, v)
+                u_nbrs = _corners_but(F, _faces_with(F, u), u, u)
+                if not _same(_common(nbrs, u_nbrs), opposite) or both_count != 2:
+                    continue
+                refused = False
+                for x in nbrs:
+                    if x != u and not _is_member(opposite, x) and _is_fixed(fixed_keys, base, u, x):
+                        refused = True
+                        break
+                if refused or len(stay) == 0:  # every face of v has u: all would go
+                    continue
+                G = np.empty((len(stay), 3), np.int64)
+                for i in range(len(stay)):
+                    for c in range(3):
+                        G[i, c] = u if F[stay[i], c] == v else F[stay[i], c]
+                for i in range(len(stay)):
+                    n_old = face_cross(V, F, stay[i])
+                    n_new = face_cross(V, G, i)
+                    if dot3(n_new, n_old) <= 0:
+                        refused = True
+                        break
+                if refused:
+                    continue
+                new_min = face_quality(V, G[0, 0], G[0, 1], G[0, 2])
+                for i in range(1, len(stay)):
+                    new_min = _minimum(new_min, face_quality(V, G[i, 0], G[i, 1], G[i, 2]))
+                if new_min > old_min + 1e-9 and (not found or new_min > best_q):
+                    found, best_q, best_v, best_u = True, new_min, v, u
+        if found:
+            return 0, best_v, best_u
+    return NO_COLLAPSE, -1, -1
+
+
+@njit(cache=True)
+def _is_member(values, x):
+    """Whether x is in the increasing array ``values``."""
+    i = np.searchsorted(values, x)
+    return i < len(values) and values[i] == x

@@ -16,7 +16,7 @@ import numpy as np
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
-from ._smoothing_kernels import refuse_worse, tangential_steps
+from ._smoothing_kernels import NO_COLLAPSE, best_collapse, refuse_worse, tangential_steps
 
 __all__ = ["bisect_obtuse", "collapse_poor", "tangential_smoothing"]
 
@@ -190,8 +190,9 @@ def collapse_poor(V, F, movable, fixed=None, attr=None, max_quality=0.3):
     (worst first), each of its movable vertices v is collapsed into the neighbour u that gives
     the best smallest quality around v, when the collapse passes the link condition (the
     common neighbours of u and v are the two vertices opposite the edge), creates no ``fixed``
-    edge, flips no face, and raises that smallest quality. At most one collapse per call (the
-    smoothing calls it once a round).
+    edge, flips no face, and raises that smallest quality (a vertex all of whose faces hold u,
+    which the collapse would take away with it, is not collapsed into u). At most one collapse
+    per call (the smoothing calls it once a round).
 
     Returns
     -------
@@ -201,15 +202,43 @@ def collapse_poor(V, F, movable, fixed=None, attr=None, max_quality=0.3):
     V = np.asarray(V, np.float64)
     F = np.asarray(F, np.int64)
     movable = np.asarray(movable, bool)
+    found = _best_collapse(V, F, movable, fixed, max_quality)
+    if found is None:
+        return V, F, movable, attr
+    v, u = found
+    F = np.where(F == v, u, F)
+    F = F[~((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0]))]
+    keep = np.ones(len(V), bool)
+    keep[v] = False
+    remap = np.cumsum(keep) - 1
+    return (V[keep], remap[F], movable[keep], None if attr is None else np.asarray(attr)[keep])
+
+
+def _best_collapse(V, F, movable, fixed, max_quality):
+    """(v, u): the collapse :func:`collapse_poor` makes, v into u, or None.
+
+    Compiled (:func:`._smoothing_kernels.best_collapse`, the choice of :func:`_best_collapse_numpy`).
+    """
+    q = triangle_quality(V, F)
+    if len(F) and (F.min() < 0 or F.max() >= len(V)):
+        return _best_collapse_numpy(V, F, movable, fixed, max_quality)
+    E = np.sort(np.asarray(fixed if fixed is not None else np.zeros((0, 2)), np.int64).reshape(-1, 2), axis=1)
+    base = max(len(V), int(E.max()) + 1 if len(E) else 0)
+    status, v, u = best_collapse(V, np.ascontiguousarray(F), q, np.argsort(q), np.ascontiguousarray(movable),
+                                 np.unique(E[:, 0] * base + E[:, 1]), base, float(max_quality))
+    return None if status == NO_COLLAPSE else (int(v), int(u))
+
+
+def _best_collapse_numpy(V, F, movable, fixed, max_quality):
+    """:func:`_best_collapse` in numpy and Python sets (the reference of the compiled search)."""
     forbidden = edge_pair_set(fixed) if fixed is not None and len(fixed) else set()
     q = triangle_quality(V, F)
-    removed = []
     for f in np.argsort(q).tolist():
         if q[f] >= max_quality:
             break
         best = None
         for v in F[f].tolist():
-            if not movable[v] or v in removed:
+            if not movable[v]:
                 continue
             ring = np.flatnonzero((F == v).any(axis=1))
             nbrs = set(F[ring].ravel().tolist()) - {v}
@@ -223,6 +252,8 @@ def collapse_poor(V, F, movable, fixed=None, attr=None, max_quality=0.3):
                 if (nbrs & u_nbrs) != opposite or len(both) != 2:
                     continue
                 stay = ~(F[ring] == u).any(axis=1)
+                if not stay.any():  # every face of v has u: the collapse would take them all away
+                    continue
                 G = np.where(F[ring][stay] == v, u, F[ring][stay])
                 if any(tuple(sorted((u, x))) in forbidden for x in nbrs - {u} - opposite):
                     continue
@@ -232,20 +263,9 @@ def collapse_poor(V, F, movable, fixed=None, attr=None, max_quality=0.3):
                 new_min = triangle_quality(V, G).min()
                 if new_min > old_min + 1e-9 and (best is None or new_min > best[0]):
                     best = (new_min, v, u)
-        if best is None:
-            continue
-        _, v, u = best
-        F = np.where(F == v, u, F)
-        F = F[~((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0]))]
-        removed.append(v)
-        q = triangle_quality(V, F)  # faces were renumbered: restart the scan on the new ones
-        break
-    if not removed:
-        return V, F, movable, attr
-    keep = np.ones(len(V), bool)
-    keep[removed] = False
-    remap = np.cumsum(keep) - 1
-    return (V[keep], remap[F], movable[keep], None if attr is None else np.asarray(attr)[keep])
+        if best is not None:
+            return best[1], best[2]
+    return None
 
 
 def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criterion="angles", split=True,

@@ -57,3 +57,23 @@ def test_a_step_is_tangential_and_moves_a_vertex_towards_the_equilateral_apexes(
     assert ok[0] and not ok[1:].any()
     assert d[0, 2] == 0.0
     assert np.dot(d[0, :2], -V[0, :2]) > 0.9 * np.linalg.norm(d[0, :2]) * np.linalg.norm(V[0, :2])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_compiled_collapse_search_chooses_the_numpy_collapse(seed):
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import _best_collapse, _best_collapse_numpy
+
+    rng = np.random.default_rng(seed)
+    chosen = 0
+    for trial in range(25):
+        V, F = grid(int(rng.integers(3, 8)), int(rng.integers(3, 8)))
+        V = V + rng.normal(scale=10.0 ** rng.uniform(-2.5, -0.5), size=V.shape)  # poor and flipped triangles
+        F = np.asarray(F, np.int64)
+        movable = rng.random(len(V)) < 0.7
+        E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]]]), axis=1)
+        fixed = E[rng.random(len(E)) < 0.2] if trial % 3 else None
+        max_quality = float(rng.uniform(0.3, 0.95))
+        got = _best_collapse(V, F, movable, fixed, max_quality)
+        assert got == _best_collapse_numpy(V, F, movable, fixed, max_quality)
+        chosen += got is not None
+    assert chosen > 0  # the search found collapses, not only refusals
