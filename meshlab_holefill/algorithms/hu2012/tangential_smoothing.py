@@ -219,9 +219,9 @@ def _best_collapse(V, F, movable, fixed, max_quality):
 
     Compiled (:func:`._smoothing_kernels.best_collapse`, the choice of :func:`_best_collapse_numpy`).
     """
-    q = triangle_quality(V, F)
     if len(F) and (F.min() < 0 or F.max() >= len(V)):
         return _best_collapse_numpy(V, F, movable, fixed, max_quality)
+    q = triangle_quality(V, F)
     E = np.sort(np.asarray(fixed if fixed is not None else np.zeros((0, 2)), np.int64).reshape(-1, 2), axis=1)
     base = max(len(V), int(E.max()) + 1 if len(E) else 0)
     status, v, u = best_collapse(V, np.ascontiguousarray(F), q, np.argsort(q), np.ascontiguousarray(movable),
