@@ -14,7 +14,9 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["face_cross", "face_quality", "triangle_quality_kernel"]
+from ._vector_kernels import norm3
+
+__all__ = ["face_cross", "face_quality", "triangle_quality_kernel", "face_normals_kernel", "vertex_normals_kernel"]
 
 
 @njit(cache=True)
@@ -68,3 +70,53 @@ def triangle_quality_kernel(V, F):
             return q, False
         q[f] = face_quality(V, i % n, j % n, k % n)
     return q, True
+
+
+@njit(cache=True)
+def face_normals_kernel(V, F, normalize):
+    """(N, ok): :func:`quality.face_normals` of V (n, 3) float64, F (m, 3) int64; ok is False when an
+    index is out of range (negative ones wrap, as numpy's indexing does)."""
+    n, m = V.shape[0], F.shape[0]
+    out = np.zeros((m, 3))
+    for f in range(m):
+        i, j, k = F[f, 0], F[f, 1], F[f, 2]
+        if i < -n or i >= n or j < -n or j >= n or k < -n or k >= n:
+            return out, False
+        i, j, k = i % n, j % n, k % n
+        u0, u1, u2 = V[j, 0] - V[i, 0], V[j, 1] - V[i, 1], V[j, 2] - V[i, 2]
+        w0, w1, w2 = V[k, 0] - V[i, 0], V[k, 1] - V[i, 1], V[k, 2] - V[i, 2]
+        x = (u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0)
+        if not normalize:
+            out[f, 0], out[f, 1], out[f, 2] = x
+            continue
+        length = norm3(x)
+        if length > 0:  # a degenerate face (or a NaN length) keeps its zero row
+            out[f, 0], out[f, 1], out[f, 2] = x[0] / length, x[1] / length, x[2] / length
+    return out, True
+
+
+@njit(cache=True)
+def vertex_normals_kernel(V, F, n):
+    """(N, ok): :func:`quality.vertex_normals` for ``n`` vertices; ok is False when an index is
+    negative or not below n and len(V) (numpy then raises, or gives more rows)."""
+    m = F.shape[0]
+    N = np.zeros((n, 3))
+    for f in range(m):
+        for c in range(3):
+            if F[f, c] < 0 or F[f, c] >= n or F[f, c] >= V.shape[0]:
+                return N, False
+    C = np.empty((m, 3))
+    for f in range(m):
+        C[f, 0], C[f, 1], C[f, 2] = face_cross(V, F, f)
+    # corner_sums' order: every face's corner 0, then corner 1, then corner 2
+    for c in range(3):
+        for f in range(m):
+            v = F[f, c]
+            N[v, 0] += C[f, 0]
+            N[v, 1] += C[f, 1]
+            N[v, 2] += C[f, 2]
+    for v in range(n):
+        length = norm3((N[v, 0], N[v, 1], N[v, 2]))
+        if length > 0:
+            N[v, 0], N[v, 1], N[v, 2] = N[v, 0] / length, N[v, 1] / length, N[v, 2] / length
+    return N, True

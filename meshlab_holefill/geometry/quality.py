@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._quality_kernels import triangle_quality_kernel
+from ._quality_kernels import face_normals_kernel, triangle_quality_kernel, vertex_normals_kernel
 
 __all__ = ["cross_rows", "face_normals", "face_areas", "vertex_normals", "edge_lengths", "triangle_quality",
            "corner_angles", "corner_sums", "unique_edges", "mean_edge_length"]
@@ -25,6 +25,9 @@ def cross_rows(a, b):
 def face_normals(V, F, normalize=True):
     """Face normals from the right-hand rule.
 
+    Compiled (:func:`._quality_kernels.face_normals_kernel`, the bits of :func:`face_normals_numpy`):
+    the per-hole loops call it thousands of times on a few hundred faces.
+
     Parameters
     ----------
     V : (n, 3) float64
@@ -37,6 +40,17 @@ def face_normals(V, F, normalize=True):
     N : (m, 3) float64
         Zero rows for degenerate faces when normalised.
     """
+    V_arr, F_arr = np.asarray(V, dtype=np.float64), np.asarray(F)
+    if _kernel_shapes(V_arr, F_arr):
+        N, ok = face_normals_kernel(np.ascontiguousarray(V_arr), np.ascontiguousarray(F_arr, np.int64),
+                                    bool(normalize))
+        if ok:
+            return N
+    return face_normals_numpy(V_arr, F_arr, normalize)  # other shapes, and the IndexError of a bad index
+
+
+def face_normals_numpy(V, F, normalize=True):
+    """:func:`face_normals` in numpy (the reference of the compiled kernel)."""
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F)
     N = cross_rows(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
@@ -49,6 +63,11 @@ def face_normals(V, F, normalize=True):
     return out
 
 
+def _kernel_shapes(V, F):
+    """Whether the compiled kernels take V and F: (n, 3) floats and (m, 3) integers."""
+    return V.ndim == 2 and V.shape[1] == 3 and F.ndim == 2 and F.shape[1] == 3 and F.dtype.kind in "iu"
+
+
 def face_areas(V, F):
     """Triangle areas, (m,) float64."""
     return 0.5 * np.linalg.norm(face_normals(V, F, normalize=False), axis=1)
@@ -57,14 +76,26 @@ def face_areas(V, F):
 def vertex_normals(V, F, n_vertices=None):
     """Area-weighted vertex normals (sum of face cross products), unit length.
 
-    Vertices without faces get a zero normal.
+    Vertices without faces get a zero normal. Compiled
+    (:func:`._quality_kernels.vertex_normals_kernel`, the bits of :func:`vertex_normals_numpy`).
 
     Returns
     -------
     N : (n, 3) float64
     """
     n = len(V) if n_vertices is None else n_vertices
-    C = face_normals(V, F, normalize=False)
+    V_arr, F_arr = np.asarray(V, dtype=np.float64), np.asarray(F)
+    if _kernel_shapes(V_arr, F_arr):
+        N, ok = vertex_normals_kernel(np.ascontiguousarray(V_arr), np.ascontiguousarray(F_arr, np.int64), int(n))
+        if ok:
+            return N
+    return vertex_normals_numpy(V_arr, F_arr, n)
+
+
+def vertex_normals_numpy(V, F, n_vertices=None):
+    """:func:`vertex_normals` in numpy (the reference of the compiled kernel)."""
+    n = len(V) if n_vertices is None else n_vertices
+    C = face_normals_numpy(V, F, normalize=False)
     N = corner_sums(F, C, n)
     lengths = np.linalg.norm(N, axis=1)
     ok = lengths > 0

@@ -99,3 +99,36 @@ def test_compiled_quality_matches_the_numpy_reference_bit_for_bit():
 def test_quality_rejects_an_index_out_of_range():
     with pytest.raises(IndexError, match="out of bounds"):
         triangle_quality(EQUILATERAL, np.array([[0, 1, 3]]))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(3, 60), m=st.integers(1, 120), exponent=st.integers(-8, 8),
+       extra=st.integers(0, 3), poison=st.booleans())
+def test_compiled_normals_match_the_numpy_reference_bit_for_bit(seed, n, m, exponent, extra, poison):
+    from meshlab_holefill.geometry.quality import face_normals, face_normals_numpy, vertex_normals_numpy
+
+    rng = np.random.default_rng(seed)
+    V = rng.normal(size=(n, 3)) * 10.0 ** exponent + rng.normal(size=3) * 10.0 ** (exponent + 2)
+    F = rng.integers(0, n, (m, 3))
+    F[0, 1] = F[0, 0]  # a degenerate face: a zero normal
+    if poison:
+        V[rng.integers(0, n)] = np.nan
+    for normalize in (True, False):
+        got, want = face_normals(V, F, normalize), face_normals_numpy(V, F, normalize)
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+    wrapped = F - n * (rng.random(F.shape) < 0.3)  # negative indices count from the end, as numpy's
+    np.testing.assert_array_equal(face_normals(V, wrapped).view(np.int64), face_normals_numpy(V, wrapped).view(np.int64))
+    got, want = vertex_normals(V, F, n + extra), vertex_normals_numpy(V, F, n + extra)
+    assert got.shape == want.shape == (n + extra, 3)
+    np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+
+
+def test_normals_reject_an_index_out_of_range_and_of_no_face_are_zero():
+    from meshlab_holefill.geometry.quality import face_normals
+
+    with pytest.raises(IndexError, match="out of bounds"):
+        face_normals(EQUILATERAL, np.array([[0, 1, 3]]))
+    with pytest.raises(ValueError, match="negative"):
+        vertex_normals(EQUILATERAL, np.array([[0, 1, -1]]))
+    assert not vertex_normals(EQUILATERAL, np.zeros((0, 3), np.int64)).any()
+    np.testing.assert_array_equal(vertex_normals(EQUILATERAL, [[0, 1, 2]]), np.tile([0.0, 0.0, 1.0], (3, 1)))
