@@ -48,16 +48,16 @@ def split_obtuse_edges(V, F, n_fixed, max_angle=np.radians(120.0)):
     if len(obtuse) == 0:
         return V, F, 0
     E, f1, c1, f2, c2 = interior_edges(F, n)
-    # Half-edge of each interior edge in face f1 starts at corner c1: key the opposite corner.
-    opposite = {}
-    for i, (f, c, g, d) in enumerate(zip(f1.tolist(), c1.tolist(), f2.tolist(), c2.tolist())):
-        opposite[(f, (c + 2) % 3)] = i
-        opposite[(g, (d + 2) % 3)] = i
+    # Half-edge of each interior edge in face f1 starts at corner c1: the edge opposite corner
+    # (c1 + 2) % 3 of f1, and likewise in f2; -1 where the edge opposite a corner is a border edge.
+    opposite = np.full(3 * len(F), -1, np.int64)
+    opposite[3 * f1 + (c1 + 2) % 3] = np.arange(len(E))
+    opposite[3 * f2 + (c2 + 2) % 3] = np.arange(len(E))
     busy = np.zeros(len(F), bool)
     new_faces, splits = [], 0
     for f in obtuse[np.argsort(-ang.max(axis=1)[obtuse])].tolist():
-        i = opposite.get((f, int(np.argmax(ang[f]))))
-        if i is None or busy[f1[i]] or busy[f2[i]]:
+        i = int(opposite[3 * f + int(np.argmax(ang[f]))])
+        if i < 0 or busy[f1[i]] or busy[f2[i]]:
             continue
         a, b = E[i]
         c = F[f1[i], (c1[i] + 2) % 3]
