@@ -4,8 +4,6 @@ import os
 import subprocess
 import sys
 
-import pytest
-
 import meshlab_holefill
 
 PACKAGE_DIR = os.path.dirname(meshlab_holefill.__file__)

@@ -208,7 +208,7 @@ def swap_candidates(V, F, fixed, sphere):
     ok : (e,) bool       edges to swap before the ``allowed`` hook
     new_key : (e,) int64 min(c, d) * n + max(c, d)
     """
-    n, m = V.shape[0], F.shape[0]
+    n = V.shape[0]
     he, tw, start, half, tip, fine = _interior_edges(F, n)
     e = he.shape[0]
     abcd = np.empty((e, 4), np.int64)

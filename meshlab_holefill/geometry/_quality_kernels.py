@@ -16,7 +16,8 @@ from numba import njit
 
 from ._vector_kernels import norm3
 
-__all__ = ["face_cross", "face_quality", "triangle_quality_kernel", "face_normals_kernel", "vertex_normals_kernel"]
+__all__ = ["face_cross", "face_quality", "triangle_quality_kernel", "face_normals_kernel", "vertex_normals_kernel",
+           "unit_vertex_normals"]
 
 
 @njit(cache=True)
@@ -99,16 +100,22 @@ def face_normals_kernel(V, F, normalize):
 def vertex_normals_kernel(V, F, n):
     """(N, ok): :func:`quality.vertex_normals` for ``n`` vertices; ok is False when an index is
     negative or not below n and len(V) (numpy then raises, or gives more rows)."""
-    m = F.shape[0]
-    N = np.zeros((n, 3))
-    for f in range(m):
+    for f in range(F.shape[0]):
         for c in range(3):
             if F[f, c] < 0 or F[f, c] >= n or F[f, c] >= V.shape[0]:
-                return N, False
+                return np.zeros((n, 3)), False
+    return unit_vertex_normals(V, F, n), True
+
+
+@njit(cache=True)
+def unit_vertex_normals(V, F, n):
+    """:func:`quality.vertex_normals` bit for bit (valid indices below n): face cross products summed
+    at the corners in corner_sums' order (corner 0 of every face, then 1, then 2), unit length."""
+    m = F.shape[0]
+    N = np.zeros((n, 3))
     C = np.empty((m, 3))
     for f in range(m):
         C[f, 0], C[f, 1], C[f, 2] = face_cross(V, F, f)
-    # corner_sums' order: every face's corner 0, then corner 1, then corner 2
     for c in range(3):
         for f in range(m):
             v = F[f, c]
@@ -119,4 +126,4 @@ def vertex_normals_kernel(V, F, n):
         length = norm3((N[v, 0], N[v, 1], N[v, 2]))
         if length > 0:
             N[v, 0], N[v, 1], N[v, 2] = N[v, 0] / length, N[v, 1] / length, N[v, 2] / length
-    return N, True
+    return N

@@ -1,5 +1,5 @@
 import os
-import sys, glob, numpy as np, json
+import sys, glob, numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stages import holes_of
 from meshlab_holefill.core.holes import hole_context
@@ -14,7 +14,7 @@ for path in sorted(glob.glob(os.environ.get("HPDE_CASES", "/tmp/hpde/cases") + "
             p = cu.fill(ctx)
             cV, cF = compact_mesh(np.concatenate([ctx.points, p.vertices]), p.faces)
             d = round(1000 * hausdorff_one_way(cV, cF, gtV, gtF)["mean"] / diag, 3)
-        except Exception as e:
+        except Exception:
             d = None
         # flat: loop only (no interior) approximated by a fan to centroid
         out[name] = d

@@ -2,7 +2,6 @@
 import numpy as np
 import pymeshlab
 import pytest
-from hypothesis import given, settings, strategies as st
 
 import meshlab_holefill  # noqa: F401  (registers the filters)
 from meshlab_holefill.geometry.intersections import faces_intersecting

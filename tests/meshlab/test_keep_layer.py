@@ -1,6 +1,4 @@
 """After one of our filters the filled layer keeps the current layer's id and place."""
-import os
-
 import numpy as np
 import pymeshlab
 import pytest

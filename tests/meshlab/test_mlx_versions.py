@@ -3,7 +3,6 @@ import xml.etree.ElementTree as ET
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
-import pymeshlab
 import pytest
 
 import meshlab_holefill

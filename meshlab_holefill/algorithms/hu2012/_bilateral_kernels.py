@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...geometry._quality_kernels import face_cross, face_quality
-from ...geometry._vector_kernels import dot3, norm3, npmax
+from ...geometry._quality_kernels import face_cross, face_quality, unit_vertex_normals
+from ...geometry._vector_kernels import dot3, npmax
 
-__all__ = ["refuse_slivers", "ring_log_weights", "ring_step"]  # undo_moves, vertex_normals_kernel: helpers compiled into them
+__all__ = ["refuse_slivers", "ring_log_weights", "ring_step"]  # undo_moves: a helper compiled into them
 
 
 @njit(cache=True)
@@ -64,30 +64,6 @@ def refuse_slivers(V_old, V_new, F, moved, min_quality):
 
 
 @njit(cache=True)
-def vertex_normals_kernel(V, F, n):
-    """:func:`geometry.quality.vertex_normals` bit for bit: face cross products summed at the
-    corners in corner_sums' order (corner 0 of every face, then 1, then 2), unit length."""
-    N = np.zeros((n, 3))
-    m = F.shape[0]
-    C = np.empty((m, 3))
-    for f in range(m):
-        C[f, 0], C[f, 1], C[f, 2] = face_cross(V, F, f)
-    for c in range(3):
-        for f in range(m):
-            v = F[f, c]
-            N[v, 0] += C[f, 0]
-            N[v, 1] += C[f, 1]
-            N[v, 2] += C[f, 2]
-    for v in range(n):
-        length = norm3((N[v, 0], N[v, 1], N[v, 2]))
-        if length > 0:
-            N[v, 0] /= length
-            N[v, 1] /= length
-            N[v, 2] /= length
-    return N
-
-
-@njit(cache=True)
 def ring_log_weights(V, F, rows, cols, sc, ss):
     """One ring iteration of :func:`.bilateral_filter.bilateral_filter` up to its exponential.
 
@@ -96,7 +72,7 @@ def ring_log_weights(V, F, rows, cols, sc, ss):
     sorted; sc, ss per vertex), so that ``np.exp`` of the last gives the filter's weights.
     """
     n = V.shape[0]
-    N = vertex_normals_kernel(V, F, n)
+    N = unit_vertex_normals(V, F, n)
     s = rows.shape[0]
     h = np.empty(s)
     z = np.empty(s)

@@ -33,7 +33,7 @@ from meshlab_holefill.evaluation.metrics import corner_quality_bound
 from meshlab_holefill.core import examples
 from meshlab_holefill.core.patch import validate_patch
 
-from conftest import assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+from conftest import cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
 
 
 # ----------------------------------------------------------------------------- shapes

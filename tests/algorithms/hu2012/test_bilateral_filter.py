@@ -148,16 +148,16 @@ def test_ring_pairs_are_the_entries_of_the_one_ring_matrix():
 
 
 def test_compiled_ring_iterations_match_the_numpy_code_bit_for_bit():
-    from meshlab_holefill.algorithms.hu2012._bilateral_kernels import vertex_normals_kernel
-    from meshlab_holefill.geometry.quality import vertex_normals
+    from meshlab_holefill.geometry._quality_kernels import unit_vertex_normals
+    from meshlab_holefill.geometry.quality import vertex_normals_numpy
 
     rng = np.random.default_rng(11)
     for trial in range(40):
         V, F = grid(int(rng.integers(3, 9)), int(rng.integers(3, 9)))
         V = V + rng.normal(scale=10.0 ** rng.uniform(-3, -0.5), size=V.shape)
         F = F[rng.random(len(F)) < 0.9] if trial % 3 == 0 else F  # vertices without faces too
-        np.testing.assert_array_equal(vertex_normals_kernel(V, np.asarray(F, np.int64), len(V)).view(np.int64),
-                                      vertex_normals(V, F, len(V)).view(np.int64))
+        np.testing.assert_array_equal(unit_vertex_normals(V, np.asarray(F, np.int64), len(V)).view(np.int64),
+                                      vertex_normals_numpy(V, F, len(V)).view(np.int64))
         movable = rng.random(len(V)) < 0.7
         scale = 10.0 ** rng.uniform(-2, 0, len(V)) if trial % 2 else 0.3  # per-vertex or global widths
         guard = None if trial % 4 == 0 else float(rng.uniform(0.0, 0.6))

@@ -53,13 +53,12 @@ def test_pair_agreements_equal_the_numpy_agreement_bit_for_bit(poison):
         border = rng.normal(size=(k, 3))
         border /= np.linalg.norm(border, axis=1, keepdims=True)
         faces = np.stack([_faces(rng, n, k, s) for _ in range(4)])
-        for normals, given in ((border, border), (None, np.zeros((0, 3)))):
-            agreement, proper = pair_agreements(V, faces, given)
+        for normals, known in ((border, border), (None, np.zeros((0, 3)))):
+            agreement, proper = pair_agreements(V, faces, known)
             for t in range(2):
                 want_a, want_p = _pair_agreement(V, faces[2 * t], faces[2 * t + 1], normals)
                 np.testing.assert_array_equal(agreement[t], want_a)
                 np.testing.assert_array_equal(proper[t], want_p)
-
 
 
 @pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
@@ -77,9 +76,9 @@ def test_fold_swap_scores_are_the_agreements_of_the_folded_edges(poison):
         border = rng.normal(size=(k, 3))
         border /= np.linalg.norm(border, axis=1, keepdims=True)
         faces = np.stack([_faces(rng, n, k, s) for _ in range(4)])
-        for given in (border, np.zeros((0, 3))):
-            agreement, proper = pair_agreements(V, faces, given)
-            old, new = fold_swap_scores(V, *faces, given)
+        for known in (border, np.zeros((0, 3))):
+            agreement, proper = pair_agreements(V, faces, known)
+            old, new = fold_swap_scores(V, *faces, known)
             np.testing.assert_array_equal(old, agreement[0])
             np.testing.assert_array_equal(new, np.where((agreement[0] < 0.0) & proper[1], agreement[1], -np.inf))
 
