@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...geometry._quality_kernels import face_cross, face_quality
+from ...geometry._quality_kernels import face_cross, face_quality, unit_vertex_normals
 from ...geometry._vector_kernels import dot3, norm3, npmax
 from ._bilateral_kernels import undo_moves
 
@@ -58,16 +58,7 @@ def tangential_steps(V, F, movable):
         for v in range(n):
             for j in range(3):
                 target[v, j] += part[v, j]
-    # vertex_normals: the face cross products summed at the corners (corner_sums' order: every
-    # face's corner 0, then corner 1, then corner 2), divided by their norm where it is > 0.
-    normal = np.zeros((n, 3))
-    for c in range(3):
-        for f in range(m):
-            x = face_cross(V, F, f)
-            v = F[f, c]
-            normal[v, 0] += x[0]
-            normal[v, 1] += x[1]
-            normal[v, 2] += x[2]
+    normal = unit_vertex_normals(V, F, n)
     d = np.zeros((n, 3))
     ok = np.zeros(n, np.bool_)
     for v in range(n):
@@ -75,9 +66,6 @@ def tangential_steps(V, F, movable):
         if not ok[v]:
             continue
         nv = (normal[v, 0], normal[v, 1], normal[v, 2])
-        length = norm3(nv)
-        if length > 0:
-            nv = (nv[0] / length, nv[1] / length, nv[2] / length)
         t = (target[v, 0] / count[v] - V[v, 0], target[v, 1] / count[v] - V[v, 1], target[v, 2] / count[v] - V[v, 2])
         along = dot3(t, nv)
         d[v, 0], d[v, 1], d[v, 2] = t[0] - along * nv[0], t[1] - along * nv[1], t[2] - along * nv[2]
@@ -151,6 +139,21 @@ def _faces_with(F, v):
             out[count] = f
             count += 1
     return out[:count]
+
+
+@njit(cache=True)
+def _split_by_corner(F, faces, u):
+    """The faces of ``faces`` with corner u, and the others, each in the given order."""
+    with_u, without = np.empty(len(faces), np.int64), np.empty(len(faces), np.int64)
+    i = j = 0
+    for g in faces:
+        if F[g, 0] == u or F[g, 1] == u or F[g, 2] == u:
+            with_u[i] = g
+            i += 1
+        else:
+            without[j] = g
+            j += 1
+    return with_u[:i], without[:j]
 
 
 @njit(cache=True)
@@ -234,23 +237,10 @@ def best_collapse(V, F, q, order, movable, fixed_keys, base, max_quality):
             nbrs = _corners_but(F, ring, v, v)
             old_min = _nan_min(q[ring])
             for u in nbrs:
-                both_count = 0
-                for g in ring:
-                    if F[g, 0] == u or F[g, 1] == u or F[g, 2] == u:
-                        both_count += 1
-                both = np.empty(both_count, np.int64)
-                stay = np.empty(len(ring) - both_count, np.int64)
-                i = j = 0
-                for g in ring:
-                    if F[g, 0] == u or F[g, 1] == u or F[g, 2] == u:
-                        both[i] = g
-                        i += 1
-                    else:
-                        stay[j] = g
-                        j += 1
+                both, stay = _split_by_corner(F, ring, u)
                 opposite = _corners_but(F, both, u, v)
                 u_nbrs = _corners_but(F, _faces_with(F, u), u, u)
-                if not _same(_common(nbrs, u_nbrs), opposite) or both_count != 2:
+                if not _same(_common(nbrs, u_nbrs), opposite) or len(both) != 2:
                     continue
                 refused = False
                 for x in nbrs:
