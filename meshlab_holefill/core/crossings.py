@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit
 
 from ..geometry._broad_phase_kernels import boxes_meeting
-from ..geometry.intersections import faces_intersecting, intersecting_pairs
+from ..geometry.intersections import faces_intersecting, intersecting_pairs, intersecting_pairs_with_fixed
 from .holes import nonmanifold_edges
 from ..geometry.sets import isin_ints, positions_ints, unique_ints
 
@@ -170,7 +170,13 @@ def context_crossings(ctx, points, faces):
     X = np.concatenate([points, surrounding_points[k:]])
     context = np.where(surrounding_faces >= k, surrounding_faces + p, surrounding_faces)
     allF = np.concatenate([np.asarray(faces, np.int64), context])
-    return faces_intersecting(X, allF, np.arange(len(faces)), np.arange(len(allF)))
+    q = len(faces)
+    if not np.array_equal(points[:k], surrounding_points[:k]):  # a loop moved: the kept bounds are not its faces'
+        return faces_intersecting(X, allF, np.arange(q), np.arange(len(allF)))
+    patch = np.arange(q)
+    pairs = intersecting_pairs_with_fixed(X, allF, patch, ctx.surrounding_bounds, q, also=patch)
+    # faces_intersecting's answer: a pair of two patch faces is listed once, the smaller first.
+    return unique_ints(np.concatenate([pairs[:, 0], pairs[pairs[:, 1] < q, 1]]))
 
 
 def patch_box(points):

@@ -16,12 +16,14 @@ counter-clockwise, like the boundary of a counter-clockwise triangle.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
 from numba import njit
 
 from ..errors import HoleFillError
+from ..geometry.intersections import FixedFaces
 from ..geometry.quality import face_normals, vertex_normals
 from ..geometry.sets import positions_ints, setdiff_ints, unique_ints
 from ._boundary_loops import (BoundaryLoop, boundary_halfedges, boundary_loops, edge_face_counts, edge_summary,
@@ -166,6 +168,15 @@ class HoleContext:
             return self.vertices, self.faces
         return (np.concatenate([self.vertices, self.obstacle_vertices]),
                 np.concatenate([self.faces, self.obstacle_faces]))
+
+    @cached_property
+    def surrounding_bounds(self):
+        """:class:`meshlab_holefill.geometry.intersections.FixedFaces` of :meth:`surroundings`' faces.
+
+        Built on first use: a filter checks many patches of one hole against the same faces
+        (its crossing checks read the faces' bounds from here).
+        """
+        return FixedFaces(*self.surroundings())
 
     def ring_mask(self, max_depth):
         """Boolean mask of local vertices with 0 < depth <= max_depth."""

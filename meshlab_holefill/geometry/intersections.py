@@ -53,7 +53,7 @@ from .sets import isin_ints, unique_ints
 FOLD_ANGLE = 1e-3  # radians of opening below which edge-adjacent faces overlap
 _LOG4 = np.log(4)
 
-__all__ = ["intersecting_pairs", "faces_intersecting"]
+__all__ = ["intersecting_pairs", "faces_intersecting", "FixedFaces", "intersecting_pairs_with_fixed"]
 
 
 def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE, weld=True):
@@ -101,6 +101,75 @@ def intersecting_pairs(V, F, query, against, tol=None, *, fold_angle=FOLD_ANGLE,
         return empty
     if len(inside) < len(a):
         a, ba = a[inside], tuple(x[inside] for x in ba)
+    return _tested_pairs(V, F, q, a, bq, ba, tol, fold_angle, weld)
+
+
+class FixedFaces:
+    """The per-face bounds of a face set that many queries are tested against (a hole's surroundings).
+
+    :func:`intersecting_pairs_with_fixed` reads them instead of computing them for every query:
+    the boxes, centroids and radii of `_broad_phase_kernels.face_bounds`, and the box of them all,
+    the same numbers for faces with the same corner coordinates.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int
+    """
+
+    def __init__(self, V, F):
+        V = np.ascontiguousarray(V, dtype=np.float64)
+        F = np.ascontiguousarray(np.asarray(F, dtype=np.int64).reshape(-1, 3))
+        self.count = len(F)
+        self.bounds = broad.face_bounds(V, F, np.arange(len(F)))  # lo, hi, centroid (m, 3); radius (m,)
+        lo, hi = self.bounds[0], self.bounds[1]
+        if len(F):
+            box_lo, box_hi, _ = broad.common_box(lo[:1], hi[:1], lo, hi)
+            lo, hi = box_lo[None], box_hi[None]
+        self.box = (lo, hi)  # (1, 3) each; (0, 3) without faces
+
+
+def intersecting_pairs_with_fixed(V, F, query, fixed, start, also=None, *, fold_angle=FOLD_ANGLE, weld=True):
+    """:func:`intersecting_pairs` of `query` against `also` and the faces F[start:start + fixed.count].
+
+    Those faces are the ones :class:`FixedFaces` `fixed` was built from, in order and with the
+    same corner coordinates, so their bounds are not computed again: the answer is that of
+    ``intersecting_pairs(V, F, query, np.concatenate([also, np.arange(start, start + fixed.count)]))``
+    with the default tolerance, bit for bit.
+
+    Parameters
+    ----------
+    V, F, query, fold_angle, weld : as for :func:`intersecting_pairs`
+    fixed : FixedFaces
+    start : int
+    also : (b,) int, optional
+        More faces to test against, each below `start`.
+
+    Returns
+    -------
+    pairs : (p, 2) int64  as :func:`intersecting_pairs`
+    """
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(np.asarray(F, dtype=np.int64).reshape(-1, 3))
+    q = _sorted_unique(np.asarray(query, dtype=np.int64).ravel())
+    also = _sorted_unique(np.asarray([] if also is None else also, dtype=np.int64).ravel())
+    empty = np.empty((0, 2), np.int64)
+    if len(q) == 0 or len(also) + fixed.count == 0:
+        return empty
+    bq, b_also = broad.face_bounds(V, F, q), broad.face_bounds(V, F, also)
+    # the box of all `against` boxes: those of `also`, then the fixed faces' own box
+    tol = _default_tol(bq, (np.concatenate([b_also[0], fixed.box[0]]), np.concatenate([b_also[1], fixed.box[1]])))
+    inside_also = broad.boxes_meeting(bq[0], bq[1], b_also[0], b_also[1], tol)
+    inside_fixed = broad.boxes_meeting(bq[0], bq[1], fixed.bounds[0], fixed.bounds[1], tol)
+    if len(inside_also) + len(inside_fixed) == 0:
+        return empty
+    a = np.concatenate([also[inside_also], start + inside_fixed])
+    ba = tuple(np.concatenate([x[inside_also], y[inside_fixed]]) for x, y in zip(b_also, fixed.bounds))
+    return _tested_pairs(V, F, q, a, bq, ba, tol, fold_angle, weld)
+
+
+def _tested_pairs(V, F, q, a, bq, ba, tol, fold_angle, weld):
+    """The pairs of :func:`intersecting_pairs` from its sets q, a (the faces of `a` near `q` only) and their bounds."""
     i, j, in_q, in_a = _candidates(bq, ba, tol, q, a, len(F))
     if weld:
         canon = broad.weld_labels(V, F, np.concatenate([q, a]))

@@ -91,3 +91,49 @@ def test_a_patch_is_tested_against_exactly_the_faces_whose_box_meets_its_padded_
     corners = V[F]
     meets = np.all(corners.max(axis=1) >= lo - pad, axis=1) & np.all(corners.min(axis=1) <= hi + pad, axis=1)
     assert seen == [len(faces) + int(meets.sum())]
+
+
+def _context_crossings_as_the_whole_query(seed, obstacles):
+    """Patches pushed through the surroundings (and obstacles beyond the rings): context_crossings gives the faces
+    faces_intersecting finds on the patch and the surroundings joined, the surroundings' bounds built once.
+    Returns whether the patch crossed anything."""
+    from meshlab_holefill.core import examples
+    from meshlab_holefill.core.crossings import context_crossings
+    from meshlab_holefill.core.holes import hole_context, vertex_face_incidence
+    from meshlab_holefill.geometry.intersections import faces_intersecting
+    V, F, loop = examples.bowl_with_hole()
+    incidence = vertex_face_incidence(F, len(V))
+    near = np.arange(len(F)) if obstacles else None
+    ctx = hole_context(V, F, loop, incidence, rings=1, obstacles=near)
+    rng = np.random.default_rng(seed)
+    k = ctx.size
+    inner = ctx.points.mean(axis=0) + rng.normal(0.0, 0.3, (6, 3)) * ctx.mean_edge_length * [4, 4, 8]
+    points = np.concatenate([ctx.points, inner])
+    faces = np.concatenate([np.c_[np.arange(k), (np.arange(k) + 1) % k, k + np.arange(k) % 6],
+                            rng.integers(k, k + 6, (4, 3))])
+    S_points, S_faces = ctx.surroundings()
+    X = np.concatenate([points, S_points[k:]])
+    allF = np.concatenate([faces, np.where(S_faces >= k, S_faces + 6, S_faces)])
+    expected = faces_intersecting(X, allF, np.arange(len(faces)), np.arange(len(allF)))
+    assert np.array_equal(context_crossings(ctx, points, faces), expected)
+    first = ctx.surrounding_bounds
+    assert np.array_equal(context_crossings(ctx, points, faces), expected) and ctx.surrounding_bounds is first
+    assert first.count == len(S_faces)
+    # a loop moved away from the context's own: the faces are bounded again, the answer the same
+    moved = points.copy()
+    moved[0] += ctx.mean_edge_length
+    X[0] = moved[0]
+    assert np.array_equal(context_crossings(ctx, moved, faces),
+                          faces_intersecting(X, allF, np.arange(len(faces)), np.arange(len(allF))))
+    return len(expected) > 0
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), obstacles=st.booleans())
+def test_context_crossings_read_the_kept_bounds_and_answer_as_the_whole_query(seed, obstacles):
+    _context_crossings_as_the_whole_query(seed, obstacles)
+
+
+def test_context_crossings_of_patches_that_cross():
+    crossed = [_context_crossings_as_the_whole_query(seed, seed % 2 == 0) for seed in range(12)]
+    assert sum(crossed) >= 4  # the patches above do cross the surroundings

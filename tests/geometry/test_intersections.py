@@ -334,3 +334,42 @@ def test_weld_labels_join_exactly_the_equal_used_vertices_and_boxes_and_radius_r
         x = rng.integers(0, 30, int(rng.integers(0, 20)))
         x = np.unique(x) if t % 2 else x
         np.testing.assert_array_equal(_sorted_unique(x), np.unique(x))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 100_000), n_query=st.integers(1, 12), n_also=st.integers(0, 12),
+       weld=st.booleans(), far=st.sampled_from([0.0, 1e3, 1e7]))
+def test_queries_against_fixed_faces_give_the_pairs_of_the_plain_query(seed, n_query, n_also, weld, far):
+    # A patch (query), faces of its own tested too (also), then fixed faces whose bounds are built once:
+    # the answer is that of intersecting_pairs against both sets, bit for bit, shared vertices and all.
+    from meshlab_holefill.geometry.intersections import FixedFaces, intersecting_pairs_with_fixed
+    rng = np.random.default_rng(seed)
+    n_fixed = int(rng.integers(0, 30))
+    n = n_query + n_also + n_fixed
+    V = rng.uniform(0, 2, (n + 6, 3)) + far
+    V[-3:] = V[:3]  # coincident vertices, for the weld
+    F = rng.integers(0, len(V), (n, 3))
+    F[: n // 3, 0] = 0  # faces sharing a vertex
+    start = n_query + n_also
+    fixed = FixedFaces(V, F[start:])
+    also = np.arange(n_query, start) if n_also and rng.random() < 0.5 else np.arange(start)
+    got = intersecting_pairs_with_fixed(V, F, np.arange(n_query), fixed, start, also=also, weld=weld)
+    against = np.concatenate([also, np.arange(start, n)])
+    assert np.array_equal(got, intersecting_pairs(V, F, np.arange(n_query), against, weld=weld))
+    # the fixed faces' numbering within F is the caller's: the same bounds serve them anywhere after `also`
+    moved = np.concatenate([F[:start], np.zeros((5, 3), np.int64), F[start:]])
+    shifted = intersecting_pairs_with_fixed(V, moved, np.arange(n_query), fixed, start + 5, also=also, weld=weld)
+    expected = intersecting_pairs(V, moved, np.arange(n_query), np.concatenate([also, np.arange(start + 5, n + 5)]),
+                                  weld=weld)
+    assert np.array_equal(shifted, expected)
+
+
+def test_queries_against_no_fixed_faces_and_no_query():
+    from meshlab_holefill.geometry.intersections import FixedFaces, intersecting_pairs_with_fixed
+    V, F = soup([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0.2, 0.2, -1], [0.2, 0.2, 1], [0.3, 0.9, 0]])
+    none = FixedFaces(V, F[:0])
+    assert none.count == 0 and none.box[0].shape == (0, 3)
+    assert np.array_equal(intersecting_pairs_with_fixed(V, F, [0], none, 2, also=[1]), [[0, 1]])
+    assert intersecting_pairs_with_fixed(V, F, [0], none, 2).shape == (0, 2)
+    assert intersecting_pairs_with_fixed(V, F, [], FixedFaces(V, F[1:]), 1).shape == (0, 2)
+    assert np.array_equal(intersecting_pairs_with_fixed(V, F, [0], FixedFaces(V, F[1:]), 1), [[0, 1]])

@@ -5,11 +5,14 @@ not. :func:`crossing_faces` finds the patch faces that cross the hole's surround
 other (:class:`CrossingCounts` remembers the counts of one hole's patches), and
 :func:`repair_crossings` replaces a crossing patch by the best patch of another planar domain
 that crosses nothing, else clips the ears of the boundary vertices involved
-(:func:`clip_ears`) and fills the rest of the loop again.
+(:func:`clip_ears`) and fills the rest of the loop again. :class:`MadePatches` keeps what the
+repair makes for one hole, which the filter fills on two domains with the same other domains.
 """
 from __future__ import annotations
 
 import hashlib
+import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -19,7 +22,8 @@ from ...geometry.topology import edge_pair_set
 from .unfolded_triangulation import triangulate_and_embed
 from .linear_motion import linear_motion_is_simple
 
-__all__ = ["GOOD_QUALITY", "MAX_REPAIR_ROUNDS", "CrossingCounts", "crossing_faces", "clip_ears", "repair_crossings"]
+__all__ = ["GOOD_QUALITY", "MAX_REPAIR_ROUNDS", "CrossingCounts", "DomainPatch", "MadePatches", "crossing_faces",
+           "clip_ears", "repair_crossings"]
 
 MAX_REPAIR_ROUNDS = 4  # rounds of ear clipping when a patch crosses its surroundings
 GOOD_QUALITY = 0.3  # repair stops trying domains at a clean patch of this minimum quality (poor triangles are below it)
@@ -90,7 +94,7 @@ def clip_ears(ctx, Q, keep, ears, bad_vertices):
 
 
 def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangential=False, density="surrounding",
-                     record=None, bad=None):
+                     record=None, bad=None, made=None):
     """Repair (beyond the paper, option ``repair``): a patch that crosses nothing, best quality first.
 
     ``domains`` are planar polygons of the loop, the unfolding used first (its patch given as
@@ -112,6 +116,9 @@ def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangenti
     vertices, faces : the patch of the first domain
     energy, refinement, tangential, density, record : see :func:`triangulate_and_embed`
     bad : (h,) int64, optional  :func:`crossing_faces` of the first patch, when already known
+    made : MadePatches, optional
+        What was made for this hole before, with these options; the patches and ear clippings made
+        here are added to it.
 
     Returns
     -------
@@ -121,16 +128,19 @@ def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangenti
     method : str  unfolding name of the domain used
     relax : float or None  its development blend
     """
-    m = ctx.size
     if bad is None:
         bad = crossing_faces(ctx, vertices, faces)
     if len(bad) == 0:
         return 0, vertices, faces, 0, domains[0][1], domains[0][2]
+    if made is None:
+        made = MadePatches(energy, refinement, tangential, density)
+    record = [] if record is None else record
     patches = [(vertices, faces, bad)]
     clean = []
     for domain, name, relax in domains[1:]:
-        V, F = triangulate_and_embed(ctx, domain, np.arange(m), [], energy, refinement, tangential, density, record)
-        b = crossing_faces(ctx, V, F)
+        made_patch = made.patch(ctx, domain)
+        record.extend(made_patch.records)
+        V, F, b = made_patch.vertices.copy(), made_patch.faces.copy(), made_patch.crossings(ctx).copy()
         patches.append((V, F, b))
         if len(b) == 0:
             q = float(triangle_quality(np.concatenate([ctx.points, V]), F).min()) if len(F) else 0.0
@@ -144,23 +154,109 @@ def repair_crossings(ctx, domains, vertices, faces, energy, refinement, tangenti
     # Ear clipping is costly (up to MAX_REPAIR_ROUNDS fills each): the first domain and the
     # least relaxed development only.
     for (domain, name, relax), (vertices, faces, bad) in list(zip(domains, patches))[:2]:
-        keep, ears, n_clipped = np.arange(m), [], 0
-        for _ in range(MAX_REPAIR_ROUNDS):
-            if len(bad) == 0:
-                break
-            offending = np.unique(faces[bad][faces[bad] < m]).tolist()
-            keep, ears, clipped_now = clip_ears(ctx, domain, keep, ears, offending)
-            if clipped_now == 0:
-                break
-            n_clipped += clipped_now
-            vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement, tangential,
-                                                    density, record)
-            bad = crossing_faces(ctx, vertices, faces)
-        if best is None or len(bad) < best[0]:
-            best = (len(bad), vertices, faces, n_clipped, name, relax)
-        if len(bad) == 0:
+        n_bad, vertices, faces, n_clipped = made.clipped(ctx, domain, vertices, faces, bad, record)
+        if best is None or n_bad < best[0]:
+            best = (n_bad, vertices, faces, n_clipped, name, relax)
+        if n_bad == 0:
             break
     return best
+
+
+def _clipped_until_clear(ctx, domain, vertices, faces, bad, energy, refinement, tangential, density, record):
+    """Ears clipped at the crossing faces' boundary vertices and the rest filled again, round by round
+    (at most MAX_REPAIR_ROUNDS), from the whole loop's patch on ``domain``: (crossings, vertices, faces, clipped)."""
+    m = ctx.size
+    keep, ears, n_clipped = np.arange(m), [], 0
+    for _ in range(MAX_REPAIR_ROUNDS):
+        if len(bad) == 0:
+            break
+        offending = np.unique(faces[bad][faces[bad] < m]).tolist()
+        keep, ears, clipped_now = clip_ears(ctx, domain, keep, ears, offending)
+        if clipped_now == 0:
+            break
+        n_clipped += clipped_now
+        vertices, faces = triangulate_and_embed(ctx, domain, keep, ears, energy, refinement, tangential, density,
+                                                record)
+        bad = crossing_faces(ctx, vertices, faces)
+    return len(bad), vertices, faces, n_clipped
+
+
+@dataclass
+class DomainPatch:
+    """The whole loop's patch on one planar domain (:func:`triangulate_and_embed`), as :class:`MadePatches` keeps it."""
+
+    vertices: np.ndarray  # (s, 3) new vertices
+    faces: np.ndarray  # (t, 3) in Patch numbering
+    records: list  # the PlanarPatch triangulate_and_embed recorded for it
+    seconds: float  # what making it took
+    crossing: np.ndarray = None  # its crossing_faces, once asked for
+
+    def crossings(self, ctx):
+        """:func:`crossing_faces` of the patch, found once."""
+        if self.crossing is None:
+            self.crossing = crossing_faces(ctx, self.vertices, self.faces)
+        return self.crossing
+
+
+@dataclass
+class MadePatches:
+    """The crossing repair's work for one hole with one set of embedding options, each piece made once.
+
+    The filter's default domain choice fills the hole on the unfolding and on the development
+    (:func:`.domain_choice.smoothest_patch`), and the repair of either tries the same other
+    domains and clips ears in the same ones: the noisy cow's 250-edge hole of
+    ``scripts/unseen_holes.py`` (seed 5) embedded 24 of its 48 patches twice when filled again
+    with the mesh faces its first patch crossed. The whole loop's patch on a domain
+    (:meth:`patch`) and the ear clipping from it (:meth:`clipped`) are deterministic in the
+    domain, so each is made once; a caller gets copies and the same records.
+    """
+
+    energy: str
+    refinement: bool
+    tangential: bool
+    density: str
+    _patches: dict = field(default_factory=dict)
+    _clipped: dict = field(default_factory=dict)
+
+    @staticmethod
+    def _key(*arrays):
+        digest = hashlib.sha1()
+        for a in arrays:
+            a = np.ascontiguousarray(a)
+            digest.update(f"{a.dtype.str}{a.shape}".encode())
+            digest.update(a.tobytes())
+        return digest.digest()
+
+    def patch(self, ctx, domain, embed=None):
+        """The :class:`DomainPatch` of the whole loop on the planar polygon ``domain`` ((k, 2) float64).
+
+        ``embed`` is :func:`triangulate_and_embed` or a caller's name for it.
+        """
+        key = self._key(np.asarray(domain, np.float64))
+        if key not in self._patches:
+            embed = triangulate_and_embed if embed is None else embed
+            built, t0 = [], time.perf_counter()
+            vertices, faces = embed(ctx, domain, np.arange(ctx.size), [], self.energy, self.refinement,
+                                    self.tangential, self.density, built)
+            self._patches[key] = DomainPatch(vertices, faces, built, time.perf_counter() - t0)
+        return self._patches[key]
+
+    def clipped(self, ctx, domain, vertices, faces, bad, record):
+        """:func:`_clipped_until_clear` from the patch (vertices, faces) on ``domain`` with crossing faces ``bad``.
+
+        Returns (crossings, vertices, faces, clipped) and extends ``record`` with the PlanarPatch
+        records of the fills, as a first run does.
+        """
+        key = self._key(np.asarray(domain, np.float64), np.asarray(vertices, np.float64),
+                        np.asarray(faces, np.int64))
+        if key not in self._clipped:
+            built = []
+            result = _clipped_until_clear(ctx, domain, vertices, faces, bad, self.energy, self.refinement,
+                                          self.tangential, self.density, built)
+            self._clipped[key] = (result, built)
+        (n_bad, vertices, faces, n_clipped), built = self._clipped[key]
+        record.extend(built)
+        return n_bad, vertices.copy(), faces.copy(), n_clipped
 
 
 class CrossingCounts:

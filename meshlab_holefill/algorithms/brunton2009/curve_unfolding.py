@@ -67,7 +67,7 @@ from ...core.holes import hole_context
 from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...core.parameters import ParamSpec
-from .crossing_repair import CrossingCounts, crossing_faces, repair_crossings
+from .crossing_repair import CrossingCounts, MadePatches, crossing_faces, repair_crossings
 from .embedding import embed_patch
 from .domain_choice import development_is_candidate, smoothest_patch
 from .planar_domains import PlanarDomains, development_domain
@@ -321,15 +321,17 @@ def _least_bend_patches(ctx, energy, tangential):
 
 def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,
                 repair, swaps, tangential, seed, area_rows, max_domain_area, density, slivers, lengths, domain,
-                filled=None, developed=None):
+                filled=None, developed=None, made=None):
     """The steps of :func:`fill` with its parameters, without its last fallback.
 
     ``filled`` maps (planar domain, its kind, its blend) to the patch made on it: everything after
     the unfolding depends on these alone, so a domain met again reuses that patch with its own
     unfolding figures. ``developed`` holds the loop's developments made so far
-    (:class:`.planar_domains.PlanarDomains`' ``shared``), for the other domain's fill.
+    (:class:`.planar_domains.PlanarDomains`' ``shared``), for the other domain's fill, and ``made``
+    the patches made on planar domains and their crossing repair (:class:`.crossing_repair.MadePatches`),
+    which the other domain's fill meets again.
     """
-    params = {name: value for name, value in locals().items() if name not in ("ctx", "filled", "developed")}
+    params = {name: value for name, value in locals().items() if name not in ("ctx", "filled", "developed", "made")}
     P = ctx.points
     m = ctx.size
     rng = np.random.default_rng(seed)
@@ -338,13 +340,14 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
     t0 = time.perf_counter()
     gaps = boundary_gap_angles(ctx.vertices, ctx.faces, m) if m > 3 else None
     developed = {} if developed is None else developed
+    made = MadePatches(energy, refinement, tangential, density) if made is None else made
     planar_domains = PlanarDomains(P, gaps, epsilon, repair and fallback and m > 3, max_domain_area, developed)
     unfolding_only = domain == "smoothest" and m > 3 and not development_is_candidate(gaps)
     if domain == "smoothest" and m > 3 and not unfolding_only and development_domain(planar_domains)[0] is not None:
         # Where the annealing gives up, the unfolding is the development: that patch is made once.
         filled = {}
         return smoothest_patch(ctx, lambda choice: _fill_steps(ctx, **dict(params, domain=choice), filled=filled,
-                                                               developed=developed))
+                                                               developed=developed, made=made))
     Q, unfold_info = _planar_domain(P, rng, planar_domains, domain, fallback, k=k, temperature=temperature,
                                     epsilon=epsilon, max_restarts=max_restarts, sa_steps=sa_steps,
                                     step_bound=step_bound, lengths=lengths)
@@ -363,17 +366,18 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
         return Patch(vertices=done.vertices.copy(), faces=done.faces.copy(),
                      info={**done.info, **unfolding_info, "unfolding_seconds": time.perf_counter() - t0})
     t1 = time.perf_counter()
-    records = []  # planar triangulations of the patches built, for the resampling
-    vertices, faces = triangulate_and_embed(ctx, Q, np.arange(m), [], energy, refinement, tangential, density,
-                                            records)
+    # The patch may have been made for the other domain's crossing repair: its seconds are those it took then.
+    first = made.patch(ctx, Q, embed=triangulate_and_embed)
+    records = list(first.records)  # planar triangulations of the patches built, for the resampling
+    vertices, faces = first.vertices.copy(), first.faces.copy()
     t2 = time.perf_counter()
     n_bad, clipped = 0, 0
     if repair:
-        bad = crossing_faces(ctx, vertices, faces)
+        bad = first.crossings(ctx).copy()
         if len(bad):  # the other domains are only built for a patch that crosses the mesh
             domains = planar_domains.all(Q, method)
         n_bad, vertices, faces, clipped, method, used = repair_crossings(
-            ctx, domains, vertices, faces, energy, refinement, tangential, density, records, bad=bad)
+            ctx, domains, vertices, faces, energy, refinement, tangential, density, records, bad=bad, made=made)
         if method == "development":
             relax = used
     counts = CrossingCounts(ctx)
@@ -390,7 +394,7 @@ def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bo
         "ears_clipped": clipped,
         "crossing_faces": int(n_bad),
         "unfolding_seconds": t1 - t0,
-        "embedding_seconds": t2 - t1,
+        "embedding_seconds": first.seconds,
         "repair_seconds": t3 - t2,
         **finishing,
     }

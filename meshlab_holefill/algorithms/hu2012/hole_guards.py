@@ -14,7 +14,7 @@ import numpy as np
 
 from ...geometry.flips import fixed_edge_keys, relax_edges
 from ...geometry.sets import unique_ints
-from ...geometry.intersections import intersecting_pairs
+from ...geometry.intersections import intersecting_pairs, intersecting_pairs_with_fixed
 from ...geometry.quality import cross_rows
 from ._relax_kernels import SETTLED, STOPPED, relax_rounds
 from ._sector_kernels import sector_contains, swaps_in_sectors
@@ -156,7 +156,7 @@ def patch_crossings(ctx, patch_points, patch_faces, faces=None):
     allF = np.concatenate([local, surrounding_faces])
     # The two face sets are disjoint, so every pair has its tested face first: faces_intersecting's
     # answer, without its membership tests for pairs listed the other way round.
-    pairs = intersecting_pairs(X, allF, np.arange(len(local)), np.arange(len(local), len(allF)))
+    pairs = intersecting_pairs_with_fixed(X, allF, np.arange(len(local)), ctx.surrounding_bounds, len(local))
     return unique_ints(pairs[:, 0])
 
 

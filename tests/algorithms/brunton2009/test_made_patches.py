@@ -1,0 +1,106 @@
+"""The curve-unfolding filter's work kept for one hole: each piece made once, the same numbers each time."""
+import numpy as np
+import pytest
+
+from meshlab_holefill.algorithms.brunton2009 import crossing_repair, embedding
+from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
+from meshlab_holefill.algorithms.brunton2009.planar_domains import PlanarDomains
+from meshlab_holefill.algorithms.brunton2009.unfolding import unfold_loop
+from meshlab_holefill.core.holes import hole_context
+from meshlab_holefill.geometry.development import boundary_gap_angles
+
+
+@pytest.fixture(scope="module")
+def folded_border(bunny_loops):
+    """bunny10k_textured's 22-edge hole: a border face folds over it, so the unfolding's patch crosses the mesh."""
+    V, F, loops = bunny_loops
+    ctx = hole_context(V, F, loops[1], rings=cu.RINGS)
+    first, _ = unfold_loop(ctx.points, np.random.default_rng(0))
+    gaps = boundary_gap_angles(ctx.vertices, ctx.faces, ctx.size)
+    domains = PlanarDomains(ctx.points, gaps, 1e-5, True, 6.0).all(first, "annealing")
+    return ctx, domains
+
+
+def _embeds(monkeypatch):
+    calls = []
+    embed = crossing_repair.triangulate_and_embed
+    monkeypatch.setattr(crossing_repair, "triangulate_and_embed", lambda *a, **kw: calls.append(1) or embed(*a, **kw))
+    return calls
+
+
+@pytest.mark.parametrize("clean_domains", [True, False])
+def test_a_repair_made_before_gives_the_same_patch_and_records_without_embedding_again(folded_border, monkeypatch,
+                                                                                       clean_domains):
+    ctx, domains = folded_border
+    # Without the other domains, the repair clips ears: both pieces of MadePatches are met.
+    domains = domains if clean_domains else domains[:2]
+    made = crossing_repair.MadePatches("area", True, True, "surrounding")
+    start = made.patch(ctx, domains[0][0])
+    assert len(start.crossings(ctx)) > 0
+
+    def repaired(made):
+        records = []
+        out = crossing_repair.repair_crossings(ctx, domains, start.vertices.copy(), start.faces.copy(), "area", True,
+                                               True, "surrounding", records, made=made)
+        return out, records
+
+    fresh, fresh_records = repaired(None)
+    calls = _embeds(monkeypatch)
+    first, first_records = repaired(made)
+    made_calls = len(calls)
+    again, again_records = repaired(made)
+    assert len(calls) == made_calls > 0  # the second repair embeds nothing
+    for out in (first, again):
+        assert out[0] == fresh[0] and out[3:] == fresh[3:]
+        assert np.array_equal(out[1], fresh[1]) and np.array_equal(out[2], fresh[2])
+    for records in (first_records, again_records):
+        assert [r.faces.tobytes() for r in records] == [r.faces.tobytes() for r in fresh_records]
+        assert [r.points.tobytes() for r in records] == [r.points.tobytes() for r in fresh_records]
+    if not clean_domains:
+        assert fresh[3] > 0  # ears were clipped
+    # the caller's copies: changing them leaves what is kept
+    again[1][:] = 0.0
+    assert np.array_equal(repaired(made)[0][1], fresh[1])
+
+
+def test_the_default_domain_choice_embeds_no_domain_twice(folded_border, monkeypatch):
+    ctx, _ = folded_border
+    patch = cu.fill(ctx)
+    seen = []
+    embed = crossing_repair.triangulate_and_embed
+
+    def recorded(ctx, Q, keep, ears, *args, **kwargs):
+        seen.append((np.ascontiguousarray(Q).tobytes(), np.asarray(keep).tobytes(), repr(ears), args[:4]))
+        return embed(ctx, Q, keep, ears, *args, **kwargs)
+
+    monkeypatch.setattr(crossing_repair, "triangulate_and_embed", recorded)
+    monkeypatch.setattr(cu, "triangulate_and_embed", recorded)
+    again = cu.fill(ctx)
+    assert len(seen) == len(set(seen)) > 1
+    assert np.array_equal(again.vertices, patch.vertices) and np.array_equal(again.faces, patch.faces)
+
+
+def test_a_least_squares_mesh_solved_before_is_the_same_and_the_kept_ones_stay_within_their_bytes(monkeypatch):
+    from meshlab_holefill.core import examples
+    V, F, loop = examples.bowl_with_hole()
+    ctx = hole_context(V, F, loop, rings=cu.RINGS)
+    k = ctx.size
+    X = np.concatenate([ctx.vertices, np.zeros((3, 3))])
+    centre = len(ctx.vertices) + np.arange(3)
+    joint = np.concatenate([ctx.faces, np.c_[np.arange(k), (np.arange(k) + 1) % k, centre[np.arange(k) % 3]],
+                            [centre]])
+    free = np.arange(len(X)) >= len(ctx.vertices)
+    embedding._RECENT_SOLVES.clear()
+    solved = embedding.minimise_area_energy(X, joint, free)
+    kept = embedding.minimise_area_energy(X, joint, free)
+    assert np.array_equal(kept, solved) and kept is not solved
+    kept[free] = 1.0  # the caller's copy
+    assert np.array_equal(embedding.minimise_area_energy(X, joint, free), solved)
+    moved = X.copy()
+    moved[0] += 0.1  # a loop vertex moved: another system
+    assert not np.array_equal(embedding.minimise_area_energy(moved, joint, free), solved)
+    monkeypatch.setattr(embedding, "RECENT_SOLVES_BYTES", solved[free].nbytes)
+    moved[1] += 0.1  # one more system kept: the oldest give way
+    embedding.minimise_area_energy(moved, joint, free)
+    assert sum(rows.nbytes for rows in embedding._RECENT_SOLVES.values()) <= solved[free].nbytes
+    assert len(embedding._RECENT_SOLVES) == 1
