@@ -62,7 +62,10 @@ def best_splits(P, border_normals, forbidden, banned):
                 continue
             best_bend, best_area = np.inf, np.inf
             for m in range(i + 1, j):
-                if bend[i, m] == np.inf or bend[m, j] == np.inf:
+                inner = max(bend[i, m], bend[m, j])
+                # the sides' own bends already exceed the best: this split loses whatever its triangle
+                # (the cheap test first; inf, no triangulation of a side, is one of them)
+                if inner > best_bend or inner == np.inf:
                     continue
                 if len(banned) and _is_banned(banned, (i * k + m) * k + j):
                     continue
@@ -71,7 +74,7 @@ def best_splits(P, border_normals, forbidden, banned):
                     continue
                 left = _bend(n0, n1, n2, border_normals[i] if m == i + 1 else normal[i, m])
                 right = _bend(n0, n1, n2, border_normals[m] if j == m + 1 else normal[m, j])
-                worst = max(max(bend[i, m], bend[m, j]), max(left, right))
+                worst = max(inner, max(left, right))
                 if i == 0 and j == k - 1:  # the closing loop edge (k - 1, 0)
                     worst = max(worst, _bend(n0, n1, n2, border_normals[k - 1]))
                 total = area[i, m] + area[m, j] + a
