@@ -25,15 +25,13 @@ tangential part of U vanishes, the distribution E_AREA would give.
 """
 from __future__ import annotations
 
-import hashlib
-from collections import OrderedDict
-
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ...errors import HoleFillError
 from ._embedding_kernels import area_normal_equations
+from .recent_solves import RecentSolves
 from .tangential_relaxation import tangential_relaxation
 from .umbrella import symmetric_lu, umbrella_operator
 
@@ -153,10 +151,10 @@ def minimise_area_energy(X, F, free):
     X = np.array(X, np.float64)
     free = np.asarray(free, bool)
     F = np.ascontiguousarray(F, np.int64)
-    key = _solve_key(X, F, free)
-    if key in _RECENT_SOLVES:
-        _RECENT_SOLVES.move_to_end(key)
-        X[free] = _RECENT_SOLVES[key]
+    key = AREA_SOLVES.key(X, F, free)
+    kept = AREA_SOLVES.get(key)
+    if kept is not None:
+        X[free] = kept
         return X
     ok, indptr, indices, data, rhs = area_normal_equations(F, free, X)
     if not ok:
@@ -171,28 +169,17 @@ def minimise_area_energy(X, F, free):
             X[fi] = spla.splu(M + 1e-12 * sp.identity(len(fi), format="csc")).solve(rhs)
         if not np.all(np.isfinite(X[fi])):
             raise HoleFillError("embedding energy solve produced non-finite positions")
-    _RECENT_SOLVES[key] = X[free]
-    while sum(rows.nbytes for rows in _RECENT_SOLVES.values()) > RECENT_SOLVES_BYTES:
-        _RECENT_SOLVES.popitem(last=False)
+    AREA_SOLVES.put(key, X[free])
     return X
 
 
-#: Bytes of least-squares meshes kept by :func:`minimise_area_energy`: the last ones solved, by
-#: the content of their input. A fill embeds the same triangulation again without the tangential
-#: relaxation that follows the solve, and the pipeline fills a hole once more, after the other
-#: holes when they are filled in one process, where its patch crossed faces beyond its rings: the
-#: noisy cow of ``scripts/unseen_holes.py`` (seed 5) solved 20 of its 87 systems twice, its
-#: 250-edge hole 2.03 -> 1.85 s. 32 MB holds those 87 solutions twelve times over.
-RECENT_SOLVES_BYTES = 1 << 25
-_RECENT_SOLVES = OrderedDict()  # digest of (X, F, free) -> the solved free rows
-
-
-def _solve_key(X, F, free):
-    digest = hashlib.sha1()
-    for a in (X, F, free):
-        digest.update(f"{a.dtype.str}{a.shape}".encode())
-        digest.update(np.ascontiguousarray(a).tobytes())
-    return digest.digest()
+#: Least-squares meshes kept by :func:`minimise_area_energy`, by the content of their input. A fill
+#: embeds the same triangulation again without the tangential relaxation that follows the solve,
+#: and the pipeline fills a hole once more, after the other holes when they are filled in one
+#: process, where its patch crossed faces beyond its rings: the noisy cow of
+#: ``scripts/unseen_holes.py`` (seed 5) solved 20 of its 87 systems twice. 32 MB holds those 87
+#: solutions twelve times over.
+AREA_SOLVES = RecentSolves(1 << 25)
 
 
 def embed_patch(ctx, n_interior, F, energy="fairing", boundary=None, extra_faces=None, tangential=False):

@@ -11,6 +11,7 @@ import scipy.sparse as sp
 
 from ...geometry.quality import corner_sums, cross_rows
 from ._tangential_kernels import face_cross, faces_touching, frame_pairs, free_frames, free_umbrella, rows_times
+from .recent_solves import RecentSolves
 from .umbrella import symmetric_lu, umbrella_operator
 
 __all__ = ["vertex_normals", "tangent_frames", "tangential_system", "tangential_relaxation"]
@@ -77,9 +78,26 @@ def tangential_relaxation(X, F, free):
     X = np.array(X, np.float64)
     F = np.asarray(F, np.int64)
     free = np.asarray(free, np.int64)
-    s = len(free)
-    if s == 0:
+    if len(free) == 0:
         return X
+    key = TANGENTIAL_STEPS.key(X, F, free)
+    kept = TANGENTIAL_STEPS.get(key)
+    if kept is None:
+        kept = _relaxed(X, F, free)[free]
+        TANGENTIAL_STEPS.put(key, kept)
+    X[free] = kept
+    return X
+
+
+#: Relaxations kept by :func:`tangential_relaxation`, by the content of their input: as
+#: :data:`.embedding.AREA_SOLVES`, the noisy cow's 250-edge hole (seed 5) relaxed 15 of its 112
+#: patches twice, 0.13 of 0.69 s.
+TANGENTIAL_STEPS = RecentSolves(1 << 25)
+
+
+def _relaxed(X, F, free):
+    """:func:`tangential_relaxation` of X (a copy, float64) on F (int64) with ``free`` (s,) int64, s > 0."""
+    s = len(free)
     # The free vertices' rows of U and their normals only see the faces around them: built on
     # those faces they are the same numbers (the same edges, degrees and sums, in the same order).
     star = faces_touching(np.ascontiguousarray(F), free, len(X))

@@ -3,8 +3,10 @@ import numpy as np
 import pytest
 
 from meshlab_holefill.algorithms.brunton2009 import crossing_repair, embedding
+from meshlab_holefill.algorithms.brunton2009 import tangential_relaxation as relaxation
 from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
 from meshlab_holefill.algorithms.brunton2009.planar_domains import PlanarDomains
+from meshlab_holefill.algorithms.brunton2009.recent_solves import RecentSolves
 from meshlab_holefill.algorithms.brunton2009.unfolding import unfold_loop
 from meshlab_holefill.core.holes import hole_context
 from meshlab_holefill.geometry.development import boundary_gap_angles
@@ -80,7 +82,8 @@ def test_the_default_domain_choice_embeds_no_domain_twice(folded_border, monkeyp
     assert np.array_equal(again.vertices, patch.vertices) and np.array_equal(again.faces, patch.faces)
 
 
-def test_a_least_squares_mesh_solved_before_is_the_same_and_the_kept_ones_stay_within_their_bytes(monkeypatch):
+def _bowl_joint():
+    """The bowl example's hole joined to a three-vertex patch: positions, faces, free mask."""
     from meshlab_holefill.core import examples
     V, F, loop = examples.bowl_with_hole()
     ctx = hole_context(V, F, loop, rings=cu.RINGS)
@@ -89,9 +92,14 @@ def test_a_least_squares_mesh_solved_before_is_the_same_and_the_kept_ones_stay_w
     centre = len(ctx.vertices) + np.arange(3)
     joint = np.concatenate([ctx.faces, np.c_[np.arange(k), (np.arange(k) + 1) % k, centre[np.arange(k) % 3]],
                             [centre]])
-    free = np.arange(len(X)) >= len(ctx.vertices)
-    embedding._RECENT_SOLVES.clear()
+    return X, joint, np.arange(len(X)) >= len(ctx.vertices)
+
+
+def test_a_least_squares_mesh_solved_before_is_the_same_array_and_a_changed_system_is_solved_again():
+    X, joint, free = _bowl_joint()
+    embedding.AREA_SOLVES.clear()
     solved = embedding.minimise_area_energy(X, joint, free)
+    assert len(embedding.AREA_SOLVES) == 1
     kept = embedding.minimise_area_energy(X, joint, free)
     assert np.array_equal(kept, solved) and kept is not solved
     kept[free] = 1.0  # the caller's copy
@@ -99,8 +107,34 @@ def test_a_least_squares_mesh_solved_before_is_the_same_and_the_kept_ones_stay_w
     moved = X.copy()
     moved[0] += 0.1  # a loop vertex moved: another system
     assert not np.array_equal(embedding.minimise_area_energy(moved, joint, free), solved)
-    monkeypatch.setattr(embedding, "RECENT_SOLVES_BYTES", solved[free].nbytes)
-    moved[1] += 0.1  # one more system kept: the oldest give way
-    embedding.minimise_area_energy(moved, joint, free)
-    assert sum(rows.nbytes for rows in embedding._RECENT_SOLVES.values()) <= solved[free].nbytes
-    assert len(embedding._RECENT_SOLVES) == 1
+    assert len(embedding.AREA_SOLVES) == 2
+
+
+def test_a_tangential_relaxation_made_before_is_the_same_array():
+    X, joint, free = _bowl_joint()
+    X = embedding.minimise_area_energy(X, joint, free)
+    index = np.flatnonzero(free)
+    relaxation.TANGENTIAL_STEPS.clear()
+    fresh = relaxation._relaxed(X.copy(), joint, index)
+    first = relaxation.tangential_relaxation(X, joint, index)
+    again = relaxation.tangential_relaxation(X, joint, index)
+    assert np.array_equal(first, fresh) and np.array_equal(again, fresh) and len(relaxation.TANGENTIAL_STEPS) == 1
+    assert not np.array_equal(fresh[free], X[free])  # it moved them
+    assert np.array_equal(again[~free], X[~free])
+
+
+def test_recent_solves_keep_copies_of_the_latest_results_within_their_bytes():
+    recent = RecentSolves(3 * 80)
+    keys = [recent.key(np.arange(i), np.float64(i)) for i in range(5)]
+    assert len(set(keys)) == 5 and recent.key(np.arange(3), np.float64(3)) == keys[3]
+    assert recent.key(np.arange(3, dtype=np.int32)) != recent.key(np.arange(3, dtype=np.int64))
+    for i, key in enumerate(keys[:3]):
+        recent.put(key, np.full(10, float(i)))
+    assert len(recent) == 3 and recent.nbytes == 240
+    got = recent.get(keys[0])  # now the most recent
+    got[:] = -1.0
+    assert np.array_equal(recent.get(keys[0]), np.zeros(10))
+    recent.put(keys[3], np.full(10, 3.0))  # the least recently used goes: keys[1]
+    assert recent.get(keys[1]) is None and recent.get(keys[0]) is not None and len(recent) == 3
+    recent.put(keys[4], np.zeros(40))  # larger than all: everything else goes, and it too
+    assert len(recent) == 0 and recent.get(keys[4]) is None

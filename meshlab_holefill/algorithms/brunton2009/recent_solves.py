@@ -1,0 +1,62 @@
+"""The last results of a costly pure function of arrays, kept by the content of its arguments.
+
+A curve-unfolding fill solves the same sparse system more than once for one hole (see
+:data:`.embedding.AREA_SOLVES`): the answer kept from the first time is the same array, bit for bit.
+"""
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+
+import numpy as np
+
+__all__ = ["RecentSolves"]
+
+
+class RecentSolves:
+    """Results (arrays) by the content of their inputs, the most recent ones within ``max_bytes``.
+
+    Parameters
+    ----------
+    max_bytes : int
+        Bytes of results kept; the least recently used go first.
+    """
+
+    def __init__(self, max_bytes):
+        self.max_bytes = int(max_bytes)
+        self._kept = OrderedDict()  # digest -> result
+
+    def __len__(self):
+        return len(self._kept)
+
+    @property
+    def nbytes(self):
+        return sum(result.nbytes for result in self._kept.values())
+
+    def clear(self):
+        self._kept.clear()
+
+    @staticmethod
+    def key(*arrays):
+        """A digest of the arrays' dtypes, shapes and bytes."""
+        digest = hashlib.sha1()
+        for a in arrays:
+            a = np.ascontiguousarray(a)
+            digest.update(f"{a.dtype.str}{a.shape}".encode())
+            digest.update(a.tobytes())
+        return digest.digest()
+
+    def get(self, key):
+        """The result kept for ``key`` (a copy), or None."""
+        result = self._kept.get(key)
+        if result is None:
+            return None
+        self._kept.move_to_end(key)
+        return result.copy()
+
+    def put(self, key, result):
+        """Keep a copy of ``result`` for ``key``, then forget the oldest results beyond ``max_bytes``."""
+        self._kept[key] = np.array(result)
+        self._kept.move_to_end(key)
+        while self._kept and self.nbytes > self.max_bytes:
+            self._kept.popitem(last=False)
