@@ -25,16 +25,14 @@ class RecentSolves:
     def __init__(self, max_bytes):
         self.max_bytes = int(max_bytes)
         self._kept = OrderedDict()  # digest -> result
+        self.nbytes = 0  # of the results kept
 
     def __len__(self):
         return len(self._kept)
 
-    @property
-    def nbytes(self):
-        return sum(result.nbytes for result in self._kept.values())
-
     def clear(self):
         self._kept.clear()
+        self.nbytes = 0
 
     @staticmethod
     def key(*arrays):
@@ -56,7 +54,9 @@ class RecentSolves:
 
     def put(self, key, result):
         """Keep a copy of ``result`` for ``key``, then forget the oldest results beyond ``max_bytes``."""
+        if key in self._kept:
+            self.nbytes -= self._kept.pop(key).nbytes
         self._kept[key] = np.array(result)
-        self._kept.move_to_end(key)
+        self.nbytes += self._kept[key].nbytes
         while self._kept and self.nbytes > self.max_bytes:
-            self._kept.popitem(last=False)
+            self.nbytes -= self._kept.popitem(last=False)[1].nbytes

@@ -138,3 +138,13 @@ def test_recent_solves_keep_copies_of_the_latest_results_within_their_bytes():
     assert recent.get(keys[1]) is None and recent.get(keys[0]) is not None and len(recent) == 3
     recent.put(keys[4], np.zeros(40))  # larger than all: everything else goes, and it too
     assert len(recent) == 0 and recent.get(keys[4]) is None
+
+
+def test_recent_solves_count_a_result_put_again_once():
+    recent = RecentSolves(1000)
+    key = recent.key(np.arange(3))
+    recent.put(key, np.zeros(10))
+    recent.put(key, np.ones(20))
+    assert len(recent) == 1 and recent.nbytes == 160 and np.array_equal(recent.get(key), np.ones(20))
+    recent.clear()
+    assert len(recent) == 0 and recent.nbytes == 0
