@@ -31,7 +31,7 @@ def corner_quality_bound(V, F, loop, max_fan=12):
 
     Returns
     -------
-    float in (0, 1]; 1.0 when the loop has no convex corner.
+    float in [0, 1]; 1.0 when the loop has no convex corner, 0.0 when a border edge has no length.
     """
     loop = np.asarray(loop, np.int64)
     at_loop = np.isin(F, loop)
@@ -44,11 +44,16 @@ def corner_quality_bound(V, F, loop, max_fan=12):
     P = V[loop]
     to_prev, to_next = np.roll(P, 1, axis=0) - P, np.roll(P, -1, axis=0) - P
     convex = angle_sum[loop] > np.pi
+    lengths = np.linalg.norm(to_next, axis=1)
+    if not np.all(lengths > 0.0):
+        # A border edge of no length (coincident vertices, as marching cubes leaves them): the
+        # patch's triangle on it is degenerate, whatever the patch.
+        return 0.0
     if not convex.any():
         return 1.0
     theta = _angle_between(to_prev, to_next)[convex]
-    la, lb = np.linalg.norm(to_prev, axis=1)[convex], np.linalg.norm(to_next, axis=1)[convex]
-    ratio = np.maximum(la, lb) / np.maximum(np.minimum(la, lb), 1e-300)
+    la, lb = np.roll(lengths, 1)[convex], lengths[convex]
+    ratio = np.maximum(la, lb) / np.minimum(la, lb)
     k = np.arange(1, max_fan + 1)[:, None]
     best = fan_triangle_quality(theta[None, :] / k, ratio[None, :] ** (1.0 / k)).max(axis=0)
     return float(min(1.0, best.min()))

@@ -1,6 +1,8 @@
 """evaluation.metrics: distances, quality, normals, creases, mesh checks and the corner quality bound, on cases with known answers."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pymeshlab
 import pytest
@@ -269,3 +271,16 @@ def test_short_edge_beside_a_long_one_at_a_sharp_corner_lowers_the_bound():
     assert bound == pytest.approx(0.146, abs=0.002)
     assert bound < _iso_quality(np.radians(29.8))
 
+
+
+def test_a_border_edge_of_no_length_bounds_the_quality_at_zero_without_warnings():
+    # Marching cubes leaves coincident vertices: a loop edge between two of them forces a degenerate triangle.
+    V, F = grid(10)
+    centre = V[F].mean(axis=1)
+    F = F[~np.all(np.abs(centre[:, :2] - 5.0) < 2.0, axis=1)]
+    hole = [lp for lp in boundary_loops(F) if len(lp) == 16][0].vertices
+    V = V.copy()
+    V[hole[1]] = V[hole[2]]  # a corner's neighbour moved onto the next loop vertex
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert corner_quality_bound(V, F, hole) == 0.0
