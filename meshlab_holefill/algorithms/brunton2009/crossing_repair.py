@@ -10,7 +10,6 @@ repair makes for one hole, which the filter fills on two domains with the same o
 """
 from __future__ import annotations
 
-import hashlib
 import time
 from dataclasses import dataclass, field
 
@@ -21,6 +20,7 @@ from ...geometry.quality import triangle_quality
 from ...geometry.topology import edge_pair_set
 from .unfolded_triangulation import triangulate_and_embed
 from .linear_motion import linear_motion_is_simple
+from .recent_solves import content_key
 
 __all__ = ["GOOD_QUALITY", "MAX_REPAIR_ROUNDS", "CrossingCounts", "DomainPatch", "MadePatches", "crossing_faces",
            "clip_ears", "repair_crossings"]
@@ -218,21 +218,12 @@ class MadePatches:
     _patches: dict = field(default_factory=dict)
     _clipped: dict = field(default_factory=dict)
 
-    @staticmethod
-    def _key(*arrays):
-        digest = hashlib.sha1()
-        for a in arrays:
-            a = np.ascontiguousarray(a)
-            digest.update(f"{a.dtype.str}{a.shape}".encode())
-            digest.update(a.tobytes())
-        return digest.digest()
-
     def patch(self, ctx, domain, embed=None):
         """The :class:`DomainPatch` of the whole loop on the planar polygon ``domain`` ((k, 2) float64).
 
         ``embed`` is :func:`triangulate_and_embed` or a caller's name for it.
         """
-        key = self._key(np.asarray(domain, np.float64))
+        key = content_key(np.asarray(domain, np.float64))
         if key not in self._patches:
             embed = triangulate_and_embed if embed is None else embed
             built, t0 = [], time.perf_counter()
@@ -247,8 +238,8 @@ class MadePatches:
         Returns (crossings, vertices, faces, clipped) and extends ``record`` with the PlanarPatch
         records of the fills, as a first run does.
         """
-        key = self._key(np.asarray(domain, np.float64), np.asarray(vertices, np.float64),
-                        np.asarray(faces, np.int64))
+        key = content_key(np.asarray(domain, np.float64), np.asarray(vertices, np.float64),
+                          np.asarray(faces, np.int64))
         if key not in self._clipped:
             built = []
             result = _clipped_until_clear(ctx, domain, vertices, faces, bad, self.energy, self.refinement,
@@ -272,11 +263,7 @@ class CrossingCounts:
 
     @staticmethod
     def _key(vertices, faces):
-        digest = hashlib.sha1()
-        for a in (np.asarray(vertices, np.float64), np.asarray(faces, np.int64)):
-            digest.update(repr(a.shape).encode())
-            digest.update(np.ascontiguousarray(a).tobytes())
-        return digest.digest()
+        return content_key(np.asarray(vertices, np.float64), np.asarray(faces, np.int64))
 
     def remember(self, vertices, faces, count):
         self._counts[self._key(vertices, faces)] = int(count)

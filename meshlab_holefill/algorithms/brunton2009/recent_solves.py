@@ -10,7 +10,17 @@ from collections import OrderedDict
 
 import numpy as np
 
-__all__ = ["RecentSolves"]
+__all__ = ["RecentSolves", "content_key"]
+
+
+def content_key(*arrays):
+    """A digest of the arrays' dtypes, shapes and bytes: equal exactly for equal arrays."""
+    digest = hashlib.sha1()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        digest.update(f"{a.dtype.str}{a.shape}".encode())
+        digest.update(a.tobytes())
+    return digest.digest()
 
 
 class RecentSolves:
@@ -34,15 +44,7 @@ class RecentSolves:
         self._kept.clear()
         self.nbytes = 0
 
-    @staticmethod
-    def key(*arrays):
-        """A digest of the arrays' dtypes, shapes and bytes."""
-        digest = hashlib.sha1()
-        for a in arrays:
-            a = np.ascontiguousarray(a)
-            digest.update(f"{a.dtype.str}{a.shape}".encode())
-            digest.update(a.tobytes())
-        return digest.digest()
+    key = staticmethod(content_key)
 
     def get(self, key):
         """The result kept for ``key`` (a copy), or None."""
