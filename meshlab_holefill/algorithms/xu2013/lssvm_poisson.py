@@ -23,7 +23,7 @@ truth (mean patch-to-ground-truth distance, per mille of the bounding-box diagon
 boundary's Laplacian rows in the Poisson system): ``layers`` 1 / 2 / 3 gives 2.02 / 2.13 /
 2.15 over all holes (medium 1.98 / 2.43 / 2.59, large 2.02 / 2.19 / 2.20, creased 3.88 /
 3.96 / 3.95, small 0.137 / 0.139 / 0.142), so k = 1 (lower or equal in every class).
-``poisson_iterations`` 2 gives 2.17 (creased 3.88 -> 4.25), so one solve, except on a curved
+``poisson_iterations`` 2 gives 2.17 (creased 3.88 -> 4.25), so one solve, except on the loop's
 development (:func:`.poisson_reconstruction.poisson_solves`).
 """
 from __future__ import annotations
@@ -48,7 +48,7 @@ from .border_split import split_long_boundary_edges
 from .laplacian_regression import (NormalFrameRegressor, fit_laplacian_regressors, training_rows, training_set,
                                    vertex_edge_scale)
 from .poisson_patch import initial_patches, normalized_cotangent_laplacian
-from .poisson_reconstruction import CURVED_DEVELOPMENT, poisson_solves, reposition
+from .poisson_reconstruction import poisson_solves, reposition
 
 __all__ = ["fill", "PARAMS", "RINGS", "PREPARE", "prepare_boundary", "WARM_UP", "warm_up"]
 
@@ -90,9 +90,8 @@ PARAMS = [
     ParamSpec("poisson_iterations", "int", 1,
               "Poisson solves (Sec. 3.4): the patch's cotangent Laplacian depends on the positions, so further "
               "solves use the previous result's weights. A patch built on the loop's development (the fallback "
-              f"where the 3D front leaves the hole) whose loop encloses more than {CURVED_DEVELOPMENT} rad of "
-              "Gaussian curvature also gets a second, kept if its patch meets the surrounding surface with the "
-              "smaller bend: its first solve's weights are the development's.",
+              "where the 3D front leaves the hole) also gets a second, kept if its patch meets the surrounding "
+              "surface with the smaller bend: its first solve's weights are the development's.",
               minimum=1, maximum=50),
     ParamSpec("poisson_boundary", "enum", "laplacian",
               "Boundary condition of the Poisson equation (Sec. 2.3): 'laplacian' (the hole boundary is fixed and "
@@ -176,22 +175,22 @@ def _one_blas_thread(fill_function):
     return wrapped
 
 
-def _less_bent(ctx, curved, asked):
+def _less_bent(ctx, added, asked):
     """The repositioned patch, of two, that bends less against the surrounding surface at the border.
 
-    ``curved`` has the solves :func:`.poisson_reconstruction.poisson_solves` added, ``asked`` those
+    ``added`` has the solves :func:`.poisson_reconstruction.poisson_solves` added, ``asked`` those
     the filter was asked for; each is (X, F, info), X None when the patch was not clear of the mesh.
-    The smaller :func:`core.border_bend.border_bend` wins, a tie going to ``curved``;
-    ``info["curved_solve_kept"]`` says which was kept.
+    The smaller :func:`core.border_bend.border_bend` wins, a tie going to ``added``;
+    ``info["added_solve_kept"]`` says which was kept.
     """
     k = ctx.size
-    kept = curved
-    if curved[0] is not None and asked[0] is not None:
-        if border_bend(ctx, asked[0][k:], asked[1]) < border_bend(ctx, curved[0][k:], curved[1]):
+    kept = added
+    if added[0] is not None and asked[0] is not None:
+        if border_bend(ctx, asked[0][k:], asked[1]) < border_bend(ctx, added[0][k:], added[1]):
             kept = asked
-    elif curved[0] is None:
+    elif added[0] is None:
         kept = asked
-    kept[2]["curved_solve_kept"] = kept is curved
+    kept[2]["added_solve_kept"] = kept is added
     return kept
 
 
