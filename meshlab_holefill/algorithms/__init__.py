@@ -5,7 +5,7 @@ Each subpackage holds every step of its paper, its options beyond the paper, and
 ``PARAMS`` (its own ParamSpecs, after :data:`~meshlab_holefill.core.pipeline.COMMON_PARAMS`),
 ``RINGS`` (rings of surrounding mesh its HoleContext needs) and optionally ``PREPARE`` (a
 border refinement run before any hole is filled) and ``WARM_UP`` (loads its compiled kernels
-before holes are filled in forked workers). Algorithms are pure numpy/scipy: they may
+before holes are filled in forked workers, and drops what it kept from an earlier run). Algorithms are pure numpy/scipy: they may
 import ``errors``, ``geometry`` and ``core``, never ``meshlab`` or ``evaluation``.
 
 ========================  =====================================  ===================================

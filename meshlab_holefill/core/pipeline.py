@@ -142,7 +142,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     warm_up : callable, optional
         The algorithm module's ``WARM_UP``: loads its compiled kernels, called once before the
         holes are filled, so that forked workers inherit them instead of each loading them
-        within its first hole's time.
+        within its first hole's time; it also drops what the algorithm kept from an earlier run.
     seconds_per_edge : float, optional
         The algorithm module's ``SECONDS_PER_EDGE``: its fill time per boundary edge with the
         defaults, from which ``workers=0`` judges whether forking workers pays

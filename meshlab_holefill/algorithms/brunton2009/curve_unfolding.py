@@ -68,13 +68,14 @@ from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...core.parameters import ParamSpec
 from .crossing_repair import CrossingCounts, MadePatches, crossing_faces, repair_crossings
-from .embedding import embed_patch
+from .embedding import AREA_SOLVES, embed_patch
 from .domain_choice import development_is_candidate, smoothest_patch
 from .planar_domains import PlanarDomains, development_domain
 from .quality_swaps import improve_by_swaps
 from .slivers import repair_slivers
 from .unfolded_triangulation import DENSITIES, resample_patch, surrounding_edge_length, triangulate_and_embed
 from .annealing import anneal_loop
+from .tangential_relaxation import TANGENTIAL_STEPS
 from .unfolding import unfold_loop
 
 __all__ = ["fill", "PARAMS", "RINGS", "WARM_UP", "warm_up"]
@@ -466,23 +467,28 @@ _WARM = []  # set once the compiled kernels are loaded in this process
 
 
 def warm_up():
-    """Load the compiled kernels a fill calls now: a small hole filled, a small loop annealed.
+    """Load the compiled kernels a fill calls now: a small hole filled, a small loop annealed; and
+    forget the systems an earlier run solved.
 
     The kernels (the annealing's moves, the segment distances, the triangle intersection tests)
     are compiled on first use and cached on disk; loading them takes a few tenths of a second
     per process. Called before holes are filled in forked worker processes, it lets the workers
-    inherit them instead of each loading them within its first hole's time.
+    inherit them instead of each loading them within its first hole's time. The pipeline calls
+    it before every run: the least-squares meshes and tangential relaxations kept by content
+    (:data:`.embedding.AREA_SOLVES`, :data:`.tangential_relaxation.TANGENTIAL_STEPS`) serve the
+    fills of one run, so a run filling the same mesh again does the same work.
     """
-    if _WARM:
-        return
-    V, F, loop = examples.bowl_with_hole()
-    fill(hole_context(V, F, loop, rings=RINGS))
-    t = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
-    ring = np.stack([np.cos(t), np.sin(t), 0.3 * np.cos(2.0 * t)], axis=1)
-    for step_bound in ("global", "local"):
-        anneal_loop(ring, np.random.default_rng(0), eps=1e-6, sa_steps=24, step_bound=step_bound,
-                    stop_when_simple=False)
-    _WARM.append(True)
+    if not _WARM:
+        V, F, loop = examples.bowl_with_hole()
+        fill(hole_context(V, F, loop, rings=RINGS))
+        t = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+        ring = np.stack([np.cos(t), np.sin(t), 0.3 * np.cos(2.0 * t)], axis=1)
+        for step_bound in ("global", "local"):
+            anneal_loop(ring, np.random.default_rng(0), eps=1e-6, sa_steps=24, step_bound=step_bound,
+                        stop_when_simple=False)
+        _WARM.append(True)
+    AREA_SOLVES.clear()
+    TANGENTIAL_STEPS.clear()
 
 
 WARM_UP = warm_up  # loads the compiled kernels before holes are filled in forked workers
