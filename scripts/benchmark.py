@@ -19,12 +19,15 @@ bunny subdivided to about 50k, 200k, 800k and 3M faces, per-hole seconds against
 largest size the min-angle filter and MeshLab's Close Holes run ``--scaling-repeats`` times,
 alternating, and the ratio of their median whole runs is reported.
 ``--papers`` adds the "papers vs. ours" table (Brunton, Hu, Xu, Xie & Zou Table 1).
+``--against bench_out/suite/results.csv`` sets the suite beside an earlier run (read before this run
+overwrites it): per filter and hole class, holes closed, distance and removed crease error then and now.
 ``--update-readme`` replaces the README's Results section with this run's summary.
 Each section is a module of ``benchmark_sections`` (cases, scaling, papers, speed, refusals, batch,
 compile_cost); this script runs the ones asked for and offers their functions under its own name.
 
     .venv/bin/python scripts/benchmark.py [--filters a,b] [--out bench_out] [--seed 0] [--cases bunny.obj,sphere]
                                           [--scaling] [--papers] [--refusals] [--compile-cost] [--update-readme]
+                                          [--against bench_out/suite/results.csv]
 """
 from __future__ import annotations
 
@@ -35,6 +38,7 @@ import sys
 import time
 
 from meshlab_holefill.evaluation.comparison import BASELINE, parse_fillers, run_comparison
+from meshlab_holefill.evaluation.report.against import against_table, read_results_csv
 from meshlab_holefill.evaluation.report.tables import markdown_table, summary_blocks, to_markdown
 from meshlab_holefill.evaluation.report.write import write_report
 
@@ -96,7 +100,18 @@ def main(argv=None):
     ap.add_argument("--refusals", action="store_true",
                     help="also the time each filter takes to refuse a loop that outlines its whole mesh")
     ap.add_argument("--batch-files", type=int, default=24, help="files in the batch throughput run (default 24)")
+    ap.add_argument("--against", metavar="RESULTS_CSV",
+                    help="also set the suite beside an earlier run's results.csv (e.g. bench_out/suite/results.csv, "
+                         "read before this run overwrites it): holes closed, distance and removed crease error, "
+                         "filler by filler and class by class")
     args = ap.parse_args(argv)
+    earlier = None
+    if args.against:
+        if args.no_suite:
+            ap.error("--against compares the suite: drop --no-suite")
+        if not os.path.isfile(args.against):
+            ap.error(f"--against: no file '{args.against}'")
+        earlier = read_results_csv(args.against)
     command = ".venv/bin/python scripts/benchmark.py " + " ".join(argv if argv is not None else sys.argv[1:])
     command = command.strip()
     fillers = parse_fillers(args.filters or None, args.refinehole)
@@ -116,6 +131,11 @@ def main(argv=None):
                 + ", ".join(f"{c['case']} ({len(c['holes'])} {c['kind']})" for c in result.cases)
                 + f". Full report: `{suite_dir}/report.md` (tables, charts, a picture of every hole).\n\n"
                 + to_markdown(summary_blocks(result)))
+        if earlier is not None:
+            text += ("\n\n**Against an earlier run** (`" + args.against + "`; a hole is the same hole when its case, "
+                     "number and boundary edges agree; each metric's mean over the holes both runs closed, the crease "
+                     "error over those with a removed crease):\n\n" + markdown_table(*against_table(earlier, result.holes))
+                     + "\n")
         speed = speed_table(result)
         if speed is not None:
             text += ("\n\n**Speed against CGAL** (the filters' own per-hole seconds on the cut holes that both they and "
