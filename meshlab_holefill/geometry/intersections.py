@@ -156,7 +156,8 @@ def intersecting_pairs_with_fixed(V, F, query, fixed, start, also=None, *, fold_
     empty = np.empty((0, 2), np.int64)
     if len(q) == 0 or len(also) + fixed.count == 0:
         return empty
-    bq, b_also = broad.face_bounds(V, F, q), broad.face_bounds(V, F, also)
+    bq = broad.face_bounds(V, F, q)
+    b_also = bq if np.array_equal(also, q) else broad.face_bounds(V, F, also)  # a patch also against itself
     # the box of all `against` boxes: those of `also`, then the fixed faces' own box
     tol = _default_tol(bq, (np.concatenate([b_also[0], fixed.box[0]]), np.concatenate([b_also[1], fixed.box[1]])))
     inside_also = broad.boxes_meeting(bq[0], bq[1], b_also[0], b_also[1], tol)

@@ -151,25 +151,24 @@ def minimise_area_energy(X, F, free):
     X = np.array(X, np.float64)
     free = np.asarray(free, bool)
     F = np.ascontiguousarray(F, np.int64)
-    key = AREA_SOLVES.key(X, F, free)
-    kept = AREA_SOLVES.get(key)
-    if kept is not None:
-        X[free] = kept
-        return X
+    X[free] = AREA_SOLVES.computed(AREA_SOLVES.key(X, F, free), lambda: _least_squares_mesh(X.copy(), F, free)[free])
+    return X
+
+
+def _least_squares_mesh(X, F, free):
+    """:func:`minimise_area_energy` without the kept solves; X (float64) gets its free rows solved."""
     ok, indptr, indices, data, rhs = area_normal_equations(F, free, X)
     if not ok:
-        X = minimise_embedding_energy(X, energy_rows(F, len(X), free, 1, anchors=True), free)
-    else:
-        fi = np.flatnonzero(free)
-        M = sp.csc_matrix((data, indices, indptr.astype(np.int32)), shape=(len(fi), len(fi)))
-        try:
-            X[fi] = symmetric_lu(M).solve(rhs)
-        except RuntimeError:
-            # Singular (interior not connected to the boundary): as minimise_embedding_energy.
-            X[fi] = spla.splu(M + 1e-12 * sp.identity(len(fi), format="csc")).solve(rhs)
-        if not np.all(np.isfinite(X[fi])):
-            raise HoleFillError("embedding energy solve produced non-finite positions")
-    AREA_SOLVES.put(key, X[free])
+        return minimise_embedding_energy(X, energy_rows(F, len(X), free, 1, anchors=True), free)
+    fi = np.flatnonzero(free)
+    M = sp.csc_matrix((data, indices, indptr.astype(np.int32)), shape=(len(fi), len(fi)))
+    try:
+        X[fi] = symmetric_lu(M).solve(rhs)
+    except RuntimeError:
+        # Singular (interior not connected to the boundary): as minimise_embedding_energy.
+        X[fi] = spla.splu(M + 1e-12 * sp.identity(len(fi), format="csc")).solve(rhs)
+    if not np.all(np.isfinite(X[fi])):
+        raise HoleFillError("embedding energy solve produced non-finite positions")
     return X
 
 

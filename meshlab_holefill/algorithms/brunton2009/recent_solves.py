@@ -54,6 +54,14 @@ class RecentSolves:
         self._kept.move_to_end(key)
         return result.copy()
 
+    def computed(self, key, compute):
+        """The result kept for ``key``, else ``compute()``, kept; a copy either way."""
+        result = self.get(key)
+        if result is None:
+            result = compute()
+            self.put(key, result)
+        return result
+
     def put(self, key, result):
         """Keep a copy of ``result`` for ``key``, then forget the oldest results beyond ``max_bytes``."""
         if key in self._kept:

@@ -80,12 +80,7 @@ def tangential_relaxation(X, F, free):
     free = np.asarray(free, np.int64)
     if len(free) == 0:
         return X
-    key = TANGENTIAL_STEPS.key(X, F, free)
-    kept = TANGENTIAL_STEPS.get(key)
-    if kept is None:
-        kept = _relaxed(X, F, free)[free]
-        TANGENTIAL_STEPS.put(key, kept)
-    X[free] = kept
+    X[free] = TANGENTIAL_STEPS.computed(TANGENTIAL_STEPS.key(X, F, free), lambda: _relaxed(X, F, free)[free])
     return X
 
 

@@ -20,8 +20,7 @@ __all__ = ["read_results_csv", "against_table", "AGAINST_METRICS"]
 AGAINST_METRICS = (("dist_patch_to_gt_mean_permille", "patch→GT mean ‰", "{:.3f}"),
                    ("crease_error_mean_deg", "removed crease error °", "{:.1f}"))
 
-_KEYS = ("case", "filler", "hole", "size_class", "boundary_edges", "closed", "ground_truth") + tuple(
-    key for key, _, _ in AGAINST_METRICS)
+_REQUIRED = ("case", "filler", "hole", "size_class", "boundary_edges", "closed", "ground_truth")
 
 
 def read_results_csv(path):
@@ -44,7 +43,7 @@ def read_results_csv(path):
     """
     with open(path, newline="") as fh:
         reader = csv.DictReader(fh)
-        missing = [key for key in _KEYS[:7] if key not in (reader.fieldnames or ())]
+        missing = [key for key in _REQUIRED if key not in (reader.fieldnames or ())]
         if missing:
             raise ValueError(f"'{path}' is not a results.csv of a comparison: no column {', '.join(missing)}")
         rows = []
@@ -53,13 +52,18 @@ def read_results_csv(path):
                    "hole": int(raw["hole"]), "boundary_edges": int(raw["boundary_edges"]),
                    "closed": raw["closed"] == "True", "ground_truth": raw["ground_truth"] == "True"}
             for key, _, _ in AGAINST_METRICS:
-                try:
-                    row[key] = float(raw.get(key) or "nan")
-                except ValueError:  # "None"
-                    row[key] = None
-                row[key] = row[key] if row[key] is not None and np.isfinite(row[key]) else None
+                row[key] = _number(raw.get(key))
             rows.append(row)
     return rows
+
+
+def _number(text):
+    """A csv cell as a finite float, None for an empty, "None" or non-finite cell."""
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        return None
+    return value if np.isfinite(value) else None
 
 
 def _hole(row):
@@ -115,8 +119,8 @@ def against_table(previous, current):
             cells = [f"`{short_label(filler)}`", f"{size_class} ({len(both)})",
                      f"{sum(a['closed'] for a, _ in both)} → {sum(b['closed'] for _, b in both)}"]
             for key, _, fmt in AGAINST_METRICS:
-                measured = [(_value(a, key), _value(b, key)) for a, b in closed_both
-                            if _value(a, key) is not None and _value(b, key) is not None]
+                values = [(_value(a, key), _value(b, key)) for a, b in closed_both]
+                measured = [(x, y) for x, y in values if x is not None and y is not None]
                 cells.append(_pair(_mean([a for a, _ in measured]), _mean([b for _, b in measured]), fmt))
             rows.append(cells)
     return header, rows
