@@ -9,14 +9,16 @@ from hypothesis import strategies as st
 from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
 from meshlab_holefill.algorithms.brunton2009 import crossing_repair
 from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
+from meshlab_holefill.algorithms.brunton2009 import slivers
 from meshlab_holefill.algorithms.brunton2009.slivers import repair_slivers
 from meshlab_holefill.geometry.flips import folds
 from meshlab_holefill.core.holes import boundary_loops, hole_context
 from meshlab_holefill.core.patch import validate_patch
+from meshlab_holefill.evaluation.cut_holes import cut_holes
 from meshlab_holefill.evaluation.metrics import corner_quality_bound
 from meshlab_holefill.geometry.quality import edge_lengths, triangle_quality
 
-from conftest import cut_disks, mesh_arrays
+from conftest import cut_disks, mesh_arrays, sample
 
 
 def _sphere(subdiv=4):
@@ -146,3 +148,71 @@ def test_repair_slivers_leaves_a_good_patch_alone():
     patch = cu.fill(ctx)
     V2, F2, rounds = repair_slivers(ctx, patch.vertices, patch.faces, lambda W, G: 0, floor=0.05)
     assert rounds == 0 and V2 is patch.vertices and F2 is patch.faces
+
+
+@pytest.fixture(scope="module")
+def folded_tail_hole():
+    """airplane.obj Loop-subdivided once, its 296-edge hole over the tail (cut_holes seed 1): the patch
+    folds near the tail, and a sliver sits on a border edge there."""
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("airplane.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=1, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    _, holes = cut_holes(V, F, sizes=("irregular", "irregular", "large"), seed=1, strict=False)
+    removed = np.zeros(len(F), bool)
+    removed[np.concatenate([h.face_indices for h in holes])] = True
+    F_cut = F[~removed]
+    loop = max(boundary_loops(F_cut), key=len)
+    assert len(loop) == 296
+    ctx = hole_context(V, F_cut, loop, rings=cu.RINGS)
+    return ctx, cu.fill(ctx, slivers=False)
+
+
+def test_repair_slivers_withdraws_the_moves_that_cross_the_mesh(folded_tail_hole, monkeypatch):
+    ctx, patch = folded_tail_hole
+    X = np.concatenate([ctx.points, patch.vertices])
+    assert triangle_quality(X, patch.faces).min() < 0.1
+    assert len(crossing_repair.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+
+    def count(W, G):
+        return len(crossing_repair.crossing_faces(ctx, W, G))
+
+    V2, F2, rounds = repair_slivers(ctx, patch.vertices, patch.faces, count)
+    Z = np.concatenate([ctx.points, V2])
+    assert rounds > 0 and triangle_quality(Z, F2).min() >= 0.3
+    assert count(V2, F2) == 0
+    validate_patch(type(patch)(vertices=V2, faces=F2), ctx.points, ctx.forbidden_edges)
+    # Without the withdrawals every round crosses the mesh there and the sliver stays.
+    monkeypatch.setattr(slivers, "WITHDRAWALS", 0)
+    V3, F3, rounds = repair_slivers(ctx, patch.vertices, patch.faces, count)
+    assert rounds == 0 and triangle_quality(np.concatenate([ctx.points, V3]), F3).min() < 0.1
+
+
+def test_withdrawn_moves_are_those_that_started_within_an_edge_of_a_crossing_face():
+    crossing = np.array([[0, 1, 2]])
+    V_new = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    V = np.array([[0.5, 0.5, 0.5], [2.2, 0, 0], [3.0, 3.0, 0], [0.0, 0.0, -1.4]])
+    # longest edge sqrt(2): within it of a corner are the first and last vertices only
+    assert slivers._withdrawn_near(V, V_new, crossing).tolist() == [True, True, False, True]
+
+
+def test_a_sampled_patch_that_crosses_the_mesh_is_embedded_again():
+    # cow.obj Loop-subdivided twice, its 308-edge hole of cut_holes seed 2: the patch embedded on its
+    # planar domain folds (190 faces crossing the mesh) until the swaps' solves unfold it, and the
+    # patch sampled from it at the surrounding density inherits the fold.
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("cow.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    _, holes = cut_holes(V, F, sizes=("irregular", "irregular", "large"), seed=2, strict=False)
+    removed = np.zeros(len(F), bool)
+    removed[np.concatenate([h.face_indices for h in holes])] = True
+    F_cut = F[~removed]
+    loop = max(boundary_loops(F_cut), key=len)
+    assert len(loop) == 308
+    ctx, patch, X, ratio = _fill(V, F_cut, loop)
+    assert patch.info["resampled"] == "embedded"
+    assert len(crossing_repair.crossing_faces(ctx, patch.vertices, patch.faces)) == 0
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    assert ratio > 0.8  # the unsampled patch's is 0.52
+    assert triangle_quality(X, patch.faces).min() >= min(0.1, corner_quality_bound(V, F_cut, loop.vertices))
