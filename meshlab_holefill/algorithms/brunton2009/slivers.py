@@ -94,7 +94,7 @@ def repair_slivers(ctx, vertices, faces, count_crossings, floor=SLIVER_FLOOR, ro
         region = vertices_near(G, len(V), qv < floor, rings)
         region[:k] = False
         made = _round_clear_of_mesh(ctx, V, G, region, start_crossings)
-        if made is None or (len(made[1]) == len(G) and np.array_equal(made[0], V) and np.array_equal(made[1], G)):
+        if made is None or (np.array_equal(made[0], V) and np.array_equal(made[1], G)):
             break  # no round clear of the mesh, or one that changes nothing (the next would be the same)
         V, G = made
         m = float(triangle_quality(V, G).min())
