@@ -150,19 +150,25 @@ def test_repair_slivers_leaves_a_good_patch_alone():
     assert rounds == 0 and V2 is patch.vertices and F2 is patch.faces
 
 
+def _largest_cut_hole(name, subdivisions, seed):
+    """A pymeshlab sample Loop-subdivided, with the holes ``scripts/large_holes.py`` cuts for ``seed``:
+    (V, the faces left, the longest boundary loop)."""
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample(name))
+    ms.meshing_surface_subdivision_loop(iterations=subdivisions, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    _, holes = cut_holes(V, F, sizes=("irregular", "irregular", "large"), seed=seed, strict=False)
+    removed = np.zeros(len(F), bool)
+    removed[np.concatenate([h.face_indices for h in holes])] = True
+    F_cut = F[~removed]
+    return V, F_cut, max(boundary_loops(F_cut), key=len)
+
+
 @pytest.fixture(scope="module")
 def folded_tail_hole():
     """airplane.obj Loop-subdivided once, its 296-edge hole over the tail (cut_holes seed 1): the patch
     folds near the tail, and a sliver sits on a border edge there."""
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(sample("airplane.obj"))
-    ms.meshing_surface_subdivision_loop(iterations=1, threshold=pymeshlab.PercentageValue(0))
-    V, F = mesh_arrays(ms)
-    _, holes = cut_holes(V, F, sizes=("irregular", "irregular", "large"), seed=1, strict=False)
-    removed = np.zeros(len(F), bool)
-    removed[np.concatenate([h.face_indices for h in holes])] = True
-    F_cut = F[~removed]
-    loop = max(boundary_loops(F_cut), key=len)
+    V, F_cut, loop = _largest_cut_hole("airplane.obj", 1, seed=1)
     assert len(loop) == 296
     ctx = hole_context(V, F_cut, loop, rings=cu.RINGS)
     return ctx, cu.fill(ctx, slivers=False)
@@ -200,15 +206,7 @@ def test_a_sampled_patch_that_crosses_the_mesh_is_embedded_again():
     # cow.obj Loop-subdivided twice, its 308-edge hole of cut_holes seed 2: the patch embedded on its
     # planar domain folds (190 faces crossing the mesh) until the swaps' solves unfold it, and the
     # patch sampled from it at the surrounding density inherits the fold.
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(sample("cow.obj"))
-    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
-    V, F = mesh_arrays(ms)
-    _, holes = cut_holes(V, F, sizes=("irregular", "irregular", "large"), seed=2, strict=False)
-    removed = np.zeros(len(F), bool)
-    removed[np.concatenate([h.face_indices for h in holes])] = True
-    F_cut = F[~removed]
-    loop = max(boundary_loops(F_cut), key=len)
+    V, F_cut, loop = _largest_cut_hole("cow.obj", 2, seed=2)
     assert len(loop) == 308
     ctx, patch, X, ratio = _fill(V, F_cut, loop)
     assert patch.info["resampled"] == "embedded"
