@@ -469,11 +469,10 @@ def _finished(ctx, vertices, faces, n_bad, records, counts, *, energy, refinemen
             sampled_faces = resampled_patch[1]
             embedded = embed_patch(ctx, len(resampled_patch[0]), sampled_faces, energy=energy, tangential=tangential)
             if counts(embedded, sampled_faces) <= (n_bad or 0):
-                vertices, faces = embedded, sampled_faces
-                if swaps:
-                    vertices, faces, _ = improve_by_swaps(ctx, vertices, faces, energy, tangential=tangential,
-                                                          count_crossings=counts)
-                resampled = "embedded"
+                vertices, faces, resampled = embedded, sampled_faces, "embedded"
+    if resampled == "embedded" and swaps:
+        vertices, faces, _ = improve_by_swaps(ctx, vertices, faces, energy, tangential=tangential,
+                                              count_crossings=counts)
     t5 = time.perf_counter()
     sliver_rounds = 0
     if slivers:
