@@ -174,7 +174,8 @@ def main(argv=None):
                  + markdown_table(*scaling_table(rows)) + "\n")
     if args.workers:
         text += ("\n**Holes on all cores** (face000.ply, each filter in one process, its kernels loaded first, "
-                 "`workers=1` and `workers=2` alternating three times, medians; 'MeshSet': the filter's whole run "
+                 "each count run once untimed, then `workers=1` and `workers=2` alternating five times, medians; "
+                 "'MeshSet': the filter's whole run "
                  "on a MeshSet; 'arrays': the same fill on the scan's arrays through `meshlab_holefill.fill_holes`, "
                  "without pymeshlab's serial transfer of the mesh and of the new layer):\n\n"
                  + markdown_table(*workers_speedup()) + "\n")

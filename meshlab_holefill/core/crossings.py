@@ -9,13 +9,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..errors import HoleFillError
 from ..geometry._broad_phase_kernels import boxes_meeting
 from ..geometry.intersections import faces_intersecting, intersecting_pairs, intersecting_pairs_with_fixed
-from .holes import nonmanifold_edges
+from .holes import hole_context, nonmanifold_edges
 from ..geometry.sets import isin_ints, positions_ints, unique_ints
 
 __all__ = ["clashing_patches", "context_crossings", "crossing_patches", "face_boxes_near", "load_crossing_kernels", "patch_box",
-           "patch_intersections", "withdraw"]
+           "patch_intersections", "surroundings_crossing_themselves", "withdraw"]
 
 
 def face_boxes_near(V, F, boxes):
@@ -283,3 +284,30 @@ def _faces_on_new_edges(n, F, F2, loop_vertices):
     on_loop[loop_vertices] = 1
     hits = on_loop[F[:, 0]] + on_loop[F[:, 1]] + on_loop[F[:, 2]]
     return np.concatenate([np.flatnonzero(hits >= 2), np.arange(len(F), len(F2))])
+
+
+def surroundings_crossing_themselves(V, F, loop, incidence, rings=2):
+    """Faces within ``rings`` rings of a hole's border that already cross another face of those rings.
+
+    A noisy scan can fold its own surface next to a hole (normal noise of about an edge
+    length turns triangles over). No patch may cross those faces, and near such folds a
+    patch that meets the whole border can seldom avoid them: the count tells the user why a
+    hole failed.
+
+    Parameters
+    ----------
+    V : (n, 3) float64, F : (m, 3) int
+    loop : BoundaryLoop
+    incidence : scipy.sparse.csr_matrix  :func:`.holes.vertex_face_incidence` of F
+    rings : int
+
+    Returns
+    -------
+    int  the number of such faces (0 where the rings cannot be built)
+    """
+    try:
+        ctx = hole_context(V, F, loop, incidence, rings=rings)
+    except (HoleFillError, ValueError):
+        return 0
+    every = np.arange(len(ctx.faces))
+    return len(faces_intersecting(ctx.vertices, ctx.faces, every, every))

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
 from .crossings import (clashing_patches, context_crossings, crossing_patches, face_boxes_near, load_crossing_kernels,
-                        patch_box, patch_intersections)
+                        patch_box, patch_intersections, surroundings_crossing_themselves)
 from .face_grid import face_grid
 from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .kernel_cache import refresh_kernel_cache_once
@@ -184,6 +184,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
         for i in undo:
             base[2][i] = dict(report[i], split_boundary_edges=0)
         todo = [i for i in todo if i not in undo]
+    _explain_folded_surroundings(base[0].V, base[0].F, base[1], report, incidence)
     n_new_faces = len(F2) - len(F)
     if n_new_faces:
         vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops, [len(p.vertices) for p in patches])
@@ -511,6 +512,22 @@ def _explain_outlines(V, F, crossing, report, incidence):
         if ratio is not None:
             report[i]["reason"] += (f"; the loop outlines its whole component (encloses {ratio:.0%} of its area): "
                                     "an island of the mesh, not a hole")
+
+
+#: Rings of faces around a failed hole searched for faces that already cross each other.
+RINGS_SEEN = 2
+
+
+def _explain_folded_surroundings(V, F, loops, report, incidence):
+    """Say so when the mesh beside a failed hole already crosses itself: no patch may cross those faces."""
+    for entry in report:
+        if entry.get("status") != "failed" or incidence is None:
+            continue
+        count = surroundings_crossing_themselves(V, F, loops[entry["hole"]], incidence, RINGS_SEEN)
+        if count:
+            entry["reason"] += (f"; the mesh beside this hole already crosses itself ({count} faces within "
+                                f"{RINGS_SEEN} rings of its border cross other faces; Select Self Intersecting "
+                                "Faces shows them)")
 
 
 def _json_safe(info):

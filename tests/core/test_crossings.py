@@ -1,8 +1,17 @@
-"""core.crossings: the candidate faces near patches, found in one pass."""
+"""core.crossings: the candidate faces near patches, found in one pass; folds of the mesh beside a hole."""
+import os
+
 import numpy as np
+import pymeshlab
+import pytest
 from hypothesis import given, settings, strategies as st
 
-from meshlab_holefill.core.crossings import face_boxes_near
+from meshlab_holefill.array_api import fill_holes
+from meshlab_holefill.core import examples
+from meshlab_holefill.core.crossings import face_boxes_near, surroundings_crossing_themselves
+from meshlab_holefill.core.holes import hole_context, vertex_face_incidence
+from meshlab_holefill.evaluation.cut_holes import cut_holes
+from meshlab_holefill.evaluation.noisy import normal_noise
 
 
 @settings(max_examples=40, deadline=None)
@@ -137,3 +146,40 @@ def test_context_crossings_read_the_kept_bounds_and_answer_as_the_whole_query(se
 def test_context_crossings_of_patches_that_cross():
     crossed = [_context_crossings_as_the_whole_query(seed, seed % 2 == 0) for seed in range(12)]
     assert sum(crossed) >= 4  # the patches above do cross the surroundings
+
+
+def _jittered_bowl(seed, far_from_loop=0.0):
+    """The example bowl with a hole, its vertices jittered by half an edge (those beyond ``far_from_loop`` of the loop's centre)."""
+    V, F, loop = examples.bowl_with_hole(n=21)
+    edge = 2.0 / 20
+    moved = np.linalg.norm(V[:, :2], axis=1) > far_from_loop
+    W = V.copy()
+    W[moved] += np.random.default_rng(seed).normal(0.0, 0.5 * edge, (int(moved.sum()), 3))
+    return V, W, F, loop
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_surroundings_crossing_themselves_counts_the_folds_beside_a_hole(seed):
+    V, W, F, loop = _jittered_bowl(seed)
+    incidence = vertex_face_incidence(F, len(V))
+    assert surroundings_crossing_themselves(V, F, loop, incidence) == 0
+    ring_faces = len(hole_context(W, F, loop, incidence, rings=2).faces)
+    assert 0 < surroundings_crossing_themselves(W, F, loop, incidence) <= ring_faces
+    # Folds more than two rings away are not the hole's: jitter only beyond them.
+    _, far, _, _ = _jittered_bowl(seed, far_from_loop=0.45 + 4 * 2.0 / 20)
+    assert surroundings_crossing_themselves(far, F, loop, incidence) == 0
+
+
+def test_a_hole_that_fails_beside_a_folded_surface_says_so():
+    """A noisy scan (cow.obj Loop-subdivided twice, 0.3 mean edges of normal noise) whose 69-edge hole's rings fold over
+    themselves: every patch crosses them, and the reason names the folds; the hole beside clean rings closes."""
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes", "cow.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    V = normal_noise(ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix(), 0.3, seed=9)
+    F, _ = cut_holes(V, ms.current_mesh().face_matrix().astype(np.int64), seed=9, strict=False)
+    _, _, result = fill_holes(V, F, "min_angle_bilateral", maxholesize=70, workers=1)
+    tried = {h["boundary_edges"]: h for h in result["holes"] if h["status"] != "skipped"}
+    assert tried[22]["status"] == "closed"
+    assert tried[69]["status"] == "failed"
+    assert "the mesh beside this hole already crosses itself (7 faces within 2 rings" in tried[69]["reason"]
