@@ -7,12 +7,12 @@ from meshlab_holefill.geometry.flips import relax_edges
 from meshlab_holefill.geometry.quality import triangle_quality
 
 from conftest import sphere_with_holes
-from hu2012_cases import _first_hole_context
+from hu2012_cases import first_hole_context
 
 
 def test_fairing_option_brings_a_sphere_hole_closer_to_the_sphere():
     V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.6)
-    ctx = _first_hole_context(V, F)
+    ctx = first_hole_context(V, F)
     flat = fill(ctx)
     faired = fill(ctx, fairing="thinplate")
     err = lambda p: np.abs(np.linalg.norm(p.vertices, axis=1) - 1).mean()
@@ -23,7 +23,7 @@ def test_faired_patch_is_relaxed_again():
     # Fairing (option) lifts the refined patch onto the sphere; Sec. III.C's relaxation is then
     # run again, so no interior edge of the result fails the (unfolded) test any more.
     V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.6)
-    ctx = _first_hole_context(V, F)
+    ctx = first_hole_context(V, F)
     k = ctx.size
     patch = fill(ctx, fairing="thinplate", iterations=0)
     X = patch.all_points(ctx.points)
@@ -39,7 +39,7 @@ def test_bilateral_step_pulls_a_flat_cap_inward_and_fairing_with_smoothing_beats
     # (nearly flat) patch further inside the sphere; the options fairing=thinplate with
     # iterations=0 and smoothing lie closer to the sphere than the plain minimum-angle fill.
     V, F, _ = sphere_with_holes(subdiv=5, centers=[(0, 0, 1)], radius=0.35)
-    ctx = _first_hole_context(V, F)
+    ctx = first_hole_context(V, F)
     refined, filtered = fill(ctx, iterations=0), fill(ctx)
     assert np.array_equal(refined.faces, filtered.faces)
     r = lambda p: np.linalg.norm(p.vertices, axis=1)

@@ -10,13 +10,13 @@ from meshlab_holefill.core.patch import validate_patch
 from meshlab_holefill.geometry.quality import triangle_quality
 
 from conftest import assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
-from hu2012_cases import _first_hole_context
+from hu2012_cases import first_hole_context
 
 
 def test_fill_of_a_planar_hole_stays_planar_and_matches_density():
     V, F = grid(20, 20)
     _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.25)
-    ctx = _first_hole_context(V, F)
+    ctx = first_hole_context(V, F)
     patch = fill(ctx)
     validate_patch(patch, ctx.points, ctx.forbidden_edges)
     assert np.abs(patch.vertices[:, 2]).max() < 1e-12
@@ -30,7 +30,7 @@ def test_fill_of_a_planar_hole_stays_planar_and_matches_density():
 
 def test_fill_is_deterministic():
     V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.4)
-    ctx = _first_hole_context(V, F)
+    ctx = first_hole_context(V, F)
     a, b = fill(ctx), fill(ctx)
     assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
 

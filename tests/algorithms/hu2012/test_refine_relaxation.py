@@ -13,14 +13,14 @@ from meshlab_holefill.geometry.flips import relax_edges
 from meshlab_holefill.geometry.quality import triangle_quality
 
 from conftest import cut_disks, grid, mesh_arrays, sample
-from hu2012_cases import _first_hole_context
+from hu2012_cases import first_hole_context
 
 
 def _triangulated_disk_hole():
     """A round hole in a flat grid, its context, its minimum-angle triangulation and loop edges."""
     V, F = grid(20, 20)
     _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.3)
-    ctx = _first_hole_context(V, F)
+    ctx = first_hole_context(V, F)
     k = ctx.size
     tri = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges)
     loop = np.stack([np.arange(k), (np.arange(k) + 1) % k], axis=1)

@@ -10,7 +10,7 @@ from meshlab_holefill.core.patch import validate_patch
 from meshlab_holefill.geometry.quality import triangle_quality
 
 from conftest import random_planar_patch, sphere_with_holes
-from hu2012_cases import _first_hole_context
+from hu2012_cases import first_hole_context
 
 
 def test_tangential_smoothing_lifts_a_vertex_off_a_border_edge_and_keeps_the_plane():
@@ -47,7 +47,7 @@ def test_smoothing_is_off_by_default_and_leaves_the_default_patch_alone():
     assert next(p for p in PARAMS if p.name == "smoothing").default == 0
     assert inspect.signature(fill).parameters["smoothing"].default == 0
     V, F, _ = sphere_with_holes(subdiv=4, centers=[(0, 0, 1)], radius=0.4)
-    ctx = _first_hole_context(V, F)
+    ctx = first_hole_context(V, F)
     a, b = fill(ctx), fill(ctx, smoothing=0)
     assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
 

@@ -7,7 +7,7 @@ from meshlab_holefill.core.patch import HoleFillError, Patch, validate_patch
 from meshlab_holefill.geometry.quality import triangle_quality
 
 from conftest import cut_disks, grid
-from xu2013_cases import _fold_case, context_of, sphere_hole
+from xu2013_cases import context_of, fold_case, sphere_hole
 
 
 def test_normalised_cotangent_laplacian_rows():
@@ -136,7 +136,7 @@ def test_swaps_do_not_cut_off_a_worse_ear():
 def test_sliver_repair_leaves_good_patches_alone():
     from meshlab_holefill.algorithms.xu2013.poisson_patch import repair_slivers
 
-    X, F, T, ctx = _fold_case()
+    X, F, T, ctx = fold_case()
     fixed = np.arange(len(X)) < ctx.size
     Y, G, kept = repair_slivers(X, F, fixed, ctx, floor=0.3)
     assert triangle_quality(X, F).min() >= 0.3

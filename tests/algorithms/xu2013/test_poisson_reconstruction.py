@@ -13,7 +13,7 @@ from meshlab_holefill.core.holes import boundary_loops, hole_context
 from meshlab_holefill.geometry.quality import triangle_quality
 
 from conftest import cut_disks, grid, mesh_arrays, sample
-from xu2013_cases import UP, _fold_case, context_of, sphere_hole
+from xu2013_cases import UP, context_of, fold_case, sphere_hole
 
 
 def test_poisson_solve_with_zero_laplacian_is_the_membrane():
@@ -52,7 +52,7 @@ def test_poisson_solve_folded_across_one_edge_is_kept_when_a_swap_unfolds_it():
     # instead of being discarded. The right-hand side is set so that the solve lands exactly on T.
     from meshlab_holefill.geometry.flips import folds
 
-    X, F, T, ctx = _fold_case()
+    X, F, T, ctx = fold_case()
     free = np.arange(len(X)) >= ctx.size
     rhs = np.asarray(normalized_cotangent_laplacian(X, F) @ T)[free]
     regressors = [lambda x, d=d: rhs[:, d] for d in range(3)]

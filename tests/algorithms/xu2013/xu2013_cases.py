@@ -32,7 +32,7 @@ def surface_area(V, F):
     return float(face_areas(V, F).sum())
 
 
-def _fold_case():
+def fold_case():
     """Planar patch (8 boundary vertices, 3 inner) and a solve target moving inner vertex 10 past edge (3, 8).
 
     Returns X (initial patch), F (its Delaunay faces), T (the target: triangle (3, 8, 10) turned
