@@ -58,15 +58,24 @@ def assign_patches(F_new, loop_vertex_sets):
     Returns
     -------
     list of (q_i,) int64 arrays: positions in F_new of the faces of each hole's patch
+
+    Each edge-connected component of the new faces goes to the hole of which it uses the most
+    boundary vertices: two holes can share a vertex (a pinched border), which the patch of
+    either touches.
     """
     q = len(F_new)
     if q == 0:
         return [np.zeros(0, np.int64) for _ in loop_vertex_sets]
+    F_new = np.asarray(F_new, np.int64)
     n_comp, label = connected_components(face_adjacency(F_new), directed=False)
-    owner = np.full(n_comp, -1)
+    owner, most = np.full(n_comp, -1), np.zeros(n_comp, np.int64)
+    corner_label = np.repeat(label, 3)  # (3 q,): the component of each face corner
     for h, verts in enumerate(loop_vertex_sets):
-        touching = np.isin(F_new, verts).any(axis=1)
-        owner[np.unique(label[touching])] = h
+        on_loop = np.isin(F_new.ravel(), verts)
+        pairs = np.unique(np.stack([corner_label[on_loop], F_new.ravel()[on_loop]], axis=1), axis=0)  # (component, vertex)
+        used = np.bincount(pairs[:, 0], minlength=n_comp) if len(pairs) else np.zeros(n_comp, np.int64)
+        better = used > most
+        owner[better], most[better] = h, used[better]
     return [np.flatnonzero(owner[label] == h) for h in range(len(loop_vertex_sets))]
 
 

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from meshlab_holefill.core.holes import boundary_loops
 from meshlab_holefill.evaluation.comparison import MeshCase, prepare_case
-from meshlab_holefill.evaluation.metrics import (border_dihedrals, closest_faces, closest_point_on_triangles,
+from meshlab_holefill.evaluation.metrics import (assign_patches, border_dihedrals, closest_faces, closest_point_on_triangles,
                                                  corner_quality_bound, fan_triangle_quality, hausdorff_one_way,
                                                  hole_metrics, mesh_checks, sample_surface)
 from meshlab_holefill.geometry.quality import triangle_quality
@@ -284,3 +284,22 @@ def test_a_border_edge_of_no_length_bounds_the_quality_at_zero_without_warnings(
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert corner_quality_bound(V, F, hole) == 0.0
+
+
+@pytest.mark.parametrize("order", [(0, 1), (1, 0)])
+def test_patches_of_two_holes_that_share_a_vertex_go_each_to_its_own_hole(order):
+    """Two square holes of a grid touching at one corner (a pinched border): the fan of each
+    touches the shared vertex, and each goes to the hole whose loop it closes, listed either way."""
+    V, F = unit_grid(6, 6)  # 36 vertices, row-major, 50 faces
+    at = lambda i, j: 6 * j + i  # noqa: E731
+    quads = [(1, 1), (2, 2)]  # cells sharing the vertex at (2, 2)
+    cell = lambda i, j: {at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)}  # noqa: E731
+    inside = np.array([any(set(f) <= cell(*q) for q in quads) for f in F])
+    loops = [np.array(sorted(cell(*q))) for q in quads]
+    fans = [np.array([[a, b, c], [a, c, d]]) for a, b, c, d in
+            ([at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)] for i, j in quads)]
+    assert inside.sum() == 4 and set(loops[0]) & set(loops[1]) == {at(2, 2)}
+    F_new = np.concatenate([fans[k] for k in order])
+    patches = assign_patches(F_new, loops)
+    for k, position in zip(order, (0, 1)):
+        np.testing.assert_array_equal(patches[k], 2 * position + np.arange(2))
