@@ -179,7 +179,8 @@ def hole_metrics(V0, F0, V1, patch_faces, loop_vertices, border, ground_truth=No
     if ground_truth is not None:
         gV, gF = ground_truth
         gt_angles = border_dihedrals(gV, F0, border[0], border[1], gF)
-        metrics["gt_border_dihedral_mean_deg"] = float(np.nanmean(gt_angles))
+        metrics["gt_border_dihedral_mean_deg"] = (float(np.nanmean(gt_angles)) if np.isfinite(gt_angles).any()
+                                                  else None)
         both = np.isfinite(angles) & np.isfinite(gt_angles)
         metrics["border_dihedral_excess_deg"] = float(np.mean(np.abs(angles[both] - gt_angles[both]))) if both.any() else None
         centroids = V1[patch_faces].mean(axis=1)

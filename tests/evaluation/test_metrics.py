@@ -303,3 +303,23 @@ def test_patches_of_two_holes_that_share_a_vertex_go_each_to_its_own_hole(order)
     patches = assign_patches(F_new, loops)
     for k, position in zip(order, (0, 1)):
         np.testing.assert_array_equal(patches[k], 2 * position + np.arange(2))
+
+
+def test_a_ground_truth_that_meets_no_border_edge_has_no_border_dihedral_and_warns_nothing():
+    """The removed surface given apart from the border (lifted off the plane, its own vertices): no
+    border dihedral of it exists, so its mean is None rather than numpy's mean of an empty slice."""
+    V, F = grid()
+    removed = np.linalg.norm(V[F].mean(axis=1)[:, :2] - 12.0, axis=1) < 5.0
+    case, hole = _hole_setup(V, F, removed)
+    gV, gF = hole.ground_truth
+    apart = np.vstack([gV, gV[gF.ravel()] + [0.0, 0.0, 1.0]])
+    gF_apart = len(gV) + np.arange(gF.size).reshape(-1, 3)
+    centre = case.V0[hole.loop].mean(axis=0)
+    k = len(hole.loop)
+    patch = np.stack([np.full(k, len(case.V0)), hole.loop, hole.loop[np.r_[1:k, 0]]], axis=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        metrics, _ = hole_metrics(case.V0, case.F0, np.vstack([case.V0, centre]), patch, hole.loop, hole.border,
+                                  (apart, gF_apart), case.diag)
+    assert metrics["gt_border_dihedral_mean_deg"] is None and metrics["border_dihedral_excess_deg"] is None
+    assert metrics["dist_patch_to_gt_mean"] > 0.5  # the lifted copy is one unit above the patch
