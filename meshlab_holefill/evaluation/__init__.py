@@ -9,6 +9,7 @@ the command line (``cli``); nothing below it imports it. Modules:
 - :mod:`.analytic`: the sphere and torus meshed, their exact distance and area;
 - :mod:`.creased`: CAD-like meshes with holes a crease runs through, and interpenetrating parts;
 - :mod:`.noisy`: scan-like noise along the normals, for cases with jagged hole borders;
+- :mod:`.virtual_scan`: range scans of closed meshes, their unseen surface as holes;
 - :mod:`.anchors`: third-party fillers (CGAL's Liepa fill, MeshFix), optional, run like ours;
 - :mod:`.mesh_cases`: the cases (meshes and their holes with ground truth, prepared once);
 - :mod:`.fillers`: the contestants (our filters, the anchors, MeshLab's Close Holes) and their parsing;
@@ -20,4 +21,5 @@ the command line (``cli``); nothing below it imports it. Modules:
 - :mod:`.papers`: the papers' own experiments (Xie and Zou's sphere).
 """
 
-__all__ = ["analytic", "anchors", "compare", "comparison", "creased", "cut_holes", "fillers", "isolation", "mesh_cases", "metrics", "noisy", "papers", "reference_targets", "report"]
+__all__ = ["analytic", "anchors", "compare", "comparison", "creased", "cut_holes", "fillers", "isolation", "mesh_cases", "metrics", "noisy", "papers", "reference_targets", "report",
+           "virtual_scan"]

@@ -53,29 +53,32 @@ def assign_patches(F_new, loop_vertex_sets):
     Parameters
     ----------
     F_new : (q, 3) int  new faces (global indices)
-    loop_vertex_sets : list of (k_i,) int  boundary vertices of each hole
+    loop_vertex_sets : list of (k_i,) int  boundary vertices of each hole, in loop order
 
     Returns
     -------
     list of (q_i,) int64 arrays: positions in F_new of the faces of each hole's patch
 
-    Each edge-connected component of the new faces goes to the hole of which it uses the most
-    boundary vertices: two holes can share a vertex (a pinched border), which the patch of
-    either touches.
+    Each edge-connected component of the new faces goes to the hole of which it holds the most
+    border edges (consecutive loop vertices): holes can share vertices (a pinched border, or two
+    holes a face apart), which the patch of either touches, but each border edge is one hole's.
     """
     q = len(F_new)
     if q == 0:
         return [np.zeros(0, np.int64) for _ in loop_vertex_sets]
     F_new = np.asarray(F_new, np.int64)
     n_comp, label = connected_components(face_adjacency(F_new), directed=False)
+    edges = np.sort(np.stack([F_new, np.roll(F_new, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)  # (3 q, 2)
+    size = int(max(F_new.max(), max((int(np.max(v)) for v in loop_vertex_sets if len(v)), default=0))) + 1
+    keys, edge_label = edges[:, 0] * size + edges[:, 1], np.repeat(label, 3)
     owner, most = np.full(n_comp, -1), np.zeros(n_comp, np.int64)
-    corner_label = np.repeat(label, 3)  # (3 q,): the component of each face corner
     for h, verts in enumerate(loop_vertex_sets):
-        on_loop = np.isin(F_new.ravel(), verts)
-        pairs = np.unique(np.stack([corner_label[on_loop], F_new.ravel()[on_loop]], axis=1), axis=0)  # (component, vertex)
-        used = np.bincount(pairs[:, 0], minlength=n_comp) if len(pairs) else np.zeros(n_comp, np.int64)
-        better = used > most
-        owner[better], most[better] = h, used[better]
+        verts = np.asarray(verts, np.int64)
+        loop_edges = np.sort(np.stack([verts, np.roll(verts, -1)], axis=1), axis=1)  # (k, 2)
+        held = np.isin(keys, loop_edges[:, 0] * size + loop_edges[:, 1])
+        count = np.bincount(edge_label[held], minlength=n_comp)
+        better = count > most
+        owner[better], most[better] = h, count[better]
     return [np.flatnonzero(owner[label] == h) for h in range(len(loop_vertex_sets))]
 
 

@@ -11,6 +11,7 @@ from meshlab_holefill.evaluation.comparison import MeshCase
 from meshlab_holefill.evaluation.creased import CREASED_CASES, creased_case
 from meshlab_holefill.evaluation.cut_holes import cut_holes
 from meshlab_holefill.evaluation.noisy import normal_noise
+from meshlab_holefill.evaluation.virtual_scan import virtual_scan_case
 from meshlab_holefill.meshlab.mesh_files import load_mesh, mesh_arrays
 
 
@@ -26,6 +27,7 @@ NOISY = ["cow_noisy"]
 NOISE_SIGMA = 0.3  # mean edge lengths
 CASES = CLOSED + NATURAL + CREASED + REAL_SIZE + NOISY
 REAL_SIZE_HOLES = ("irregular", "large", "irregular")  # targets 250, 150, 250 boundary edges
+SCAN_NOISE = 0.15  # mean edge lengths: the noisy one of the virtual scans
 
 def load_case(name):
     """The suite's meshes as MeshCase (analytic distance functions for the sphere and torus)."""
@@ -75,3 +77,22 @@ def noisy_case(seed=0):
     removed = np.zeros(len(F), bool)
     removed[np.concatenate([h.face_indices for h in holes])] = True
     return MeshCase("cow_noisy", V, F, removed=removed, given_class="noisy")
+
+
+def _subdivided(sample, iterations):
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(os.path.join(SAMPLES, sample))
+    ms.meshing_surface_subdivision_loop(iterations=iterations, threshold=pymeshlab.PercentageValue(0))
+    return mesh_arrays(ms)
+
+
+def scan_cases(seed=1):
+    """Two virtual range scans (:func:`virtual_scan_case`) from a direction drawn with ``seed``.
+
+    The bunny Loop-subdivided once (about 212k faces), clean, and cow.obj Loop-subdivided twice
+    (about 93k faces) with scanner noise (``SCAN_NOISE``): their holes are what the scanner did
+    not see inside the seen sheet (occlusion shadows, grazing strips; often pinched).
+    """
+    direction = np.random.default_rng(seed).normal(size=3)
+    return [virtual_scan_case("bunny_scan", *_subdivided("bunny.obj", 1), direction),
+            virtual_scan_case("cow_scan_noisy", *_subdivided("cow.obj", 2), direction, noise=SCAN_NOISE, seed=seed)]
