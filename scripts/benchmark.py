@@ -173,7 +173,7 @@ def main(argv=None):
                  "bunny Loop-subdivided once; reference for `min_angle_bilateral`: whole run under 1.5 s):\n\n"
                  + markdown_table(*scaling_table(rows)) + "\n")
     if args.workers:
-        text += ("\n**Holes on all cores** (face000.ply, each filter in one process, its kernels loaded first, "
+        text += ("\n**Holes on all cores** (face000.ply, each filter in a fresh process, its kernels loaded first, "
                  "each count run once untimed, then `workers=1` and `workers=2` alternating five times, medians; "
                  "'MeshSet': the filter's whole run "
                  "on a MeshSet; 'arrays': the same fill on the scan's arrays through `meshlab_holefill.fill_holes`, "

@@ -1,6 +1,8 @@
 """Speed against CGAL's Liepa fill: in the suite's run, one core each, and holes on all cores."""
 from __future__ import annotations
 
+import concurrent.futures
+import multiprocessing
 import os
 import time
 
@@ -104,38 +106,18 @@ def workers_speedup(filters=("meshing_close_holes_min_angle_bilateral", "meshing
 
     Two runs per count: the MeshSet filter's whole run, and the same fill on the scan's arrays
     (:func:`meshlab_holefill.array_api.fill_holes`), which leaves out the serial transfer of the
-    mesh into and out of pymeshlab and its new layer. Each filter's kernels are loaded first
-    (their one-time cost is in ``--compile-cost``) and each count runs once untimed (the first
-    fork of a process and the first fill at a count touch memory the later runs find ready);
-    the worker counts then alternate ``repeats`` times and the medians are reported.
+    mesh into and out of pymeshlab and its new layer. Each filter runs in a fresh process, as a
+    script filling one scan would (the benchmark's own process holds the suite's meshes, which
+    every fork would copy the page tables of); its kernels are loaded first (their one-time cost
+    is in ``--compile-cost``) and each count runs once untimed (the first fork of a process and
+    the first fill at a count touch memory the later runs find ready); the worker counts then
+    alternate ``repeats`` times and the medians are reported.
     """
-    from meshlab_holefill.array_api import fill_holes
-
     rows = []
+    spawn = multiprocessing.get_context("spawn")
     for name in filters:
-        load_filter_kernels(name)
-        ms = pymeshlab.MeshSet()
-        ms.load_new_mesh(mesh)
-        V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
-        for workers in counts:
-            fill_holes(V, F, name, workers=workers)
-        seconds, results, closed = {(c, api): [] for c in counts for api in (False, True)}, [], None
-        for _ in range(repeats):
-            for workers in counts:
-                ms = pymeshlab.MeshSet()
-                ms.load_new_mesh(mesh)
-                t = time.perf_counter()
-                res = getattr(ms, name)(workers=workers)
-                seconds[workers, False].append(time.perf_counter() - t)
-                m = ms.current_mesh()
-                results.append((m.vertex_matrix(), m.face_matrix()))
-                closed = res["closed_holes"]
-                t = time.perf_counter()
-                V2, F2, _ = fill_holes(V, F, name, workers=workers)
-                seconds[workers, True].append(time.perf_counter() - t)
-                results.append((V2, F2))
-        # every count and both doors (MeshSet, arrays) give the first run's mesh
-        same = all(np.array_equal(a, b) for other in results[1:] for a, b in zip(results[0], other))
+        with concurrent.futures.ProcessPoolExecutor(max_workers=1, mp_context=spawn) as fresh:
+            seconds, same, closed = fresh.submit(_timed_counts, name, mesh, counts, repeats).result()
         row = [f"`{short_label(name)}`", str(closed)]
         for api in (False, True):
             medians = [float(np.median(seconds[c, api])) for c in counts]
@@ -145,3 +127,36 @@ def workers_speedup(filters=("meshing_close_holes_min_angle_bilateral", "meshing
     header = (["filter", "holes closed"] + [f"MeshSet {h}" for h in per_count] + ["MeshSet speed-up"]
               + [f"arrays {h}" for h in per_count] + ["arrays speed-up", "same result"])
     return header, rows
+
+
+def _timed_counts(name, mesh, counts, repeats):
+    """:func:`workers_speedup`'s runs of one filter, in this (fresh) process: (seconds, same result, holes closed).
+
+    ``seconds`` maps (count, arrays door) to the run times.
+    """
+    from meshlab_holefill.array_api import fill_holes
+
+    load_filter_kernels(name)
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(mesh)
+    V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    for workers in counts:
+        fill_holes(V, F, name, workers=workers)
+    seconds, results, closed = {(c, api): [] for c in counts for api in (False, True)}, [], None
+    for _ in range(repeats):
+        for workers in counts:
+            ms = pymeshlab.MeshSet()
+            ms.load_new_mesh(mesh)
+            t = time.perf_counter()
+            res = getattr(ms, name)(workers=workers)
+            seconds[workers, False].append(time.perf_counter() - t)
+            m = ms.current_mesh()
+            results.append((m.vertex_matrix(), m.face_matrix()))
+            closed = res["closed_holes"]
+            t = time.perf_counter()
+            V2, F2, _ = fill_holes(V, F, name, workers=workers)
+            seconds[workers, True].append(time.perf_counter() - t)
+            results.append((V2, F2))
+    # every count and both doors (MeshSet, arrays) give the first run's mesh
+    same = all(np.array_equal(a, b) for other in results[1:] for a, b in zip(results[0], other))
+    return seconds, same, closed
