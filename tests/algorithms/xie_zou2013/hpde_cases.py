@@ -4,6 +4,7 @@ import os
 
 import numpy as np
 import pymeshlab
+import pytest
 
 from meshlab_holefill.algorithms.xie_zou2013 import differential_evolution as hpde
 from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, prediction as hpde_prediction
@@ -112,3 +113,15 @@ def _cyclic(face):
     f = [int(x) for x in face]
     i = f.index(min(f))
     return tuple(f[i:] + f[:i])
+
+
+@pytest.fixture(scope="module")
+def sphere_hole():
+    """:func:`sphere_hole_case`, built once per test module."""
+    return sphere_hole_case()
+
+
+@pytest.fixture(scope="module")
+def cube_edge_hole():
+    """:func:`cube_edge_hole_case`, built once per test module."""
+    return cube_edge_hole_case()

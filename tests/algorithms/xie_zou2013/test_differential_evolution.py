@@ -12,22 +12,14 @@ from meshlab_holefill.algorithms.xie_zou2013 import prediction as hpde_predictio
 from meshlab_holefill.geometry.quality import triangle_quality
 
 from conftest import assert_filled_cleanly
-from hpde_cases import SAMPLES, check_patch, context, cube_edge_hole_case, cut, grid_cube, grid_plane, sphere_hole_case, sphere_mesh
+import hpde_cases
+from hpde_cases import SAMPLES, check_patch, context, cut, grid_cube, grid_plane, sphere_mesh
+
+cube_edge_hole = hpde_cases.cube_edge_hole  # the shared module-scoped fixtures
+sphere_hole = hpde_cases.sphere_hole
 
 
 FILTER = "meshing_close_holes_differential_evolution"
-
-
-# ----------------------------------------------------------------------------- fixtures
-
-@pytest.fixture(scope="module")
-def sphere_hole():
-    return sphere_hole_case()
-
-
-@pytest.fixture(scope="module")
-def cube_edge_hole():
-    return cube_edge_hole_case()
 
 
 # ----------------------------------------------------------------- whole filter

@@ -7,19 +7,11 @@ import pytest
 
 from meshlab_holefill.algorithms.xie_zou2013 import sections as hpde_sections
 
-from hpde_cases import context, cube_edge_hole_case, cut, grid_plane, sphere_hole_case
+import hpde_cases
+from hpde_cases import context, cut, grid_plane
 
-
-# ----------------------------------------------------------------------------- fixtures
-
-@pytest.fixture(scope="module")
-def sphere_hole():
-    return sphere_hole_case()
-
-
-@pytest.fixture(scope="module")
-def cube_edge_hole():
-    return cube_edge_hole_case()
+cube_edge_hole = hpde_cases.cube_edge_hole  # the shared module-scoped fixtures
+sphere_hole = hpde_cases.sphere_hole
 
 
 # ----------------------------------------------------------------- step 2: Sec. 4.2

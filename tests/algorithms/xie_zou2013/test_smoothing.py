@@ -7,14 +7,10 @@ from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, triangu
 from meshlab_holefill.geometry.quality import corner_angles, face_areas
 from meshlab_holefill.core.patch import Patch, validate_patch
 
-from hpde_cases import check_patch, context, cut, _cyclic, grid_plane, sphere_hole_case, sphere_mesh
+import hpde_cases
+from hpde_cases import check_patch, context, cut, _cyclic, grid_plane, sphere_mesh
 
-
-# ----------------------------------------------------------------------------- fixtures
-
-@pytest.fixture(scope="module")
-def sphere_hole():
-    return sphere_hole_case()
+sphere_hole = hpde_cases.sphere_hole  # the shared module-scoped fixture
 
 
 # ----------------------------------------------------------------- step 7: Sec. 4.7

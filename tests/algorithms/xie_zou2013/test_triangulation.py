@@ -8,19 +8,11 @@ from meshlab_holefill.algorithms.xie_zou2013 import folds as hpde_folds, triangu
 from meshlab_holefill.core.holes import boundary_loops, hole_context
 from meshlab_holefill.core.patch import validate_patch
 
-from hpde_cases import check_patch, context, cube_edge_hole_case, sphere_hole_case
+import hpde_cases
+from hpde_cases import check_patch, context
 
-
-# ----------------------------------------------------------------------------- fixtures
-
-@pytest.fixture(scope="module")
-def sphere_hole():
-    return sphere_hole_case()
-
-
-@pytest.fixture(scope="module")
-def cube_edge_hole():
-    return cube_edge_hole_case()
+cube_edge_hole = hpde_cases.cube_edge_hole  # the shared module-scoped fixtures
+sphere_hole = hpde_cases.sphere_hole
 
 
 # ----------------------------------------------------------------- step 6: Sec. 4.6
