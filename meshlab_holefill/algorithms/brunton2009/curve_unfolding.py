@@ -225,9 +225,9 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         sliver repair (:func:`.slivers.repair_slivers`). With ``repair`` and ``tangential``, a patch
         still crossing the mesh or itself is replaced by the patch made without the tangential
         relaxation when that one crosses nothing (``info['fallback']``), and with ``fallback`` then by
-        a patch embedded on the loop's least-bend triangulation (:func:`_least_bend_patches`, for
-        jagged borders whose faces tilt every way): the relaxation can leave a
-        fold the energy's own placement does not make (a 308-edge hole of cow.obj Loop-subdivided
+        a patch embedded on the loop's least-bend triangulation, or last that triangulation refined
+        and not embedded (:func:`_least_bend_patches`, for jagged borders whose faces tilt every way).
+        The relaxation can leave a fold the energy's own placement does not make (a 308-edge hole of cow.obj Loop-subdivided
         twice, ``scripts/large_holes.py``, on one of our machines: 146 faces of the patch crossing it, none
         without; whether it folds there hangs on the processor's last bits).
     seed : int
@@ -284,11 +284,11 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
             return plain
     if fallback:
         energy = "area_interior" if energy == "area" and area_rows == "interior" else energy
-        for vertices, faces in _least_bend_patches(ctx, energy, tangential):
+        for name, vertices, faces in _least_bend_patches(ctx, energy, tangential):
             if not len(crossing_faces(ctx, vertices, faces)):
                 vertices, faces = _improved(ctx, vertices, faces, energy, swaps, tangential, slivers)
                 return Patch(vertices=vertices, faces=faces, info=dict(patch.info, crossing_faces=0,
-                                                                       fallback="least bend"))
+                                                                       fallback=name))
     return patch
 
 
@@ -309,15 +309,22 @@ def _least_bend_patches(ctx, energy, tangential):
 
     For a jagged border (a noisy scan) whose faces tilt every way, where every planar domain's
     patch folds onto them (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`).
+    Last, the refined triangulations as they are, not embedded: the energy's smooth surface can
+    bulge into a part beside the hole that the triangulations stay clear of (a range scan's
+    80-edge occlusion hole next to a fold, ``scripts/unseen_holes.py --groups scan``).
 
     Yields
     ------
-    (vertices (p, 3) float64, faces (q, 3) int64)  as a Patch holds them
+    (name, vertices (p, 3) float64, faces (q, 3) int64)  the fallback's name, and the patch as a Patch holds it
     """
     fixed = boundary_edges_and_chords(ctx.size, ctx.forbidden_edges)
+    refined = []
     for triangles in least_bend_triangulations(ctx):
         X, faces, _, _ = refine_patch(ctx.points, triangles, ctx.edge_scale, fixed_edges=fixed)
-        yield embed_patch(ctx, len(X) - ctx.size, faces, energy, tangential=tangential), faces
+        refined.append((X[ctx.size:], faces))
+        yield "least bend", embed_patch(ctx, len(X) - ctx.size, faces, energy, tangential=tangential), faces
+    for vertices, faces in refined:
+        yield "least bend, not embedded", vertices, faces
 
 
 def _fill_steps(ctx, *, k, temperature, epsilon, max_restarts, sa_steps, step_bound, energy, refinement, fallback,

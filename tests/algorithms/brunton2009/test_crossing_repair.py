@@ -1,6 +1,8 @@
-"""Curve unfolding: the repair of patches that cross the mesh (other domains, clipped ears)."""
+"""Curve unfolding: the repair of patches that cross the mesh (other domains, clipped ears, least-bend fallbacks)."""
+import os
 
 import numpy as np
+import pymeshlab
 
 from meshlab_holefill.algorithms.brunton2009 import curve_unfolding as cu
 from meshlab_holefill.algorithms.brunton2009 import crossing_repair
@@ -10,6 +12,10 @@ from meshlab_holefill.geometry.quality import triangle_quality
 from meshlab_holefill.core.holes import boundary_loops, hole_context
 from meshlab_holefill.evaluation.metrics import corner_quality_bound
 from meshlab_holefill.core.patch import validate_patch
+from meshlab_holefill.array_api import fill_holes
+from meshlab_holefill.evaluation.mesh_cases import prepare_case
+from meshlab_holefill.evaluation.metrics import mesh_checks
+from meshlab_holefill.evaluation.virtual_scan import virtual_scan_case
 
 from conftest import grid
 from brunton_cases import flat_disk_hole
@@ -99,3 +105,25 @@ def test_clip_ears_never_uses_a_chord_the_mesh_already_has():
     assert 0 in [e[1] for e in ears] and clipped == 8
     keep, ears, clipped = crossing_repair.clip_ears(walled, ctx.points[:, :2], np.arange(20), [], list(range(20)))
     assert clipped == 7 and 0 in keep.tolist() and all(e[1] != 0 for e in ears)
+
+
+def test_a_hole_whose_embedded_patches_all_cross_a_fold_closes_on_its_least_bend_triangulation():
+    """A noisy range scan's 80-edge occlusion hole beside a fold of the cow: every embedded patch (the
+    domains', then the least-bend triangulations') crosses the fold, which the triangulations
+    themselves stay clear of; the last fallback takes a refined triangulation as it is."""
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(os.path.join(os.path.dirname(pymeshlab.__file__), "tests", "sample_meshes", "cow.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    V, F = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    direction = np.random.default_rng(1).normal(size=3)
+    case = prepare_case(virtual_scan_case("cow scan", V, F, direction, noise=0.15, seed=1))
+    (hole,) = [h for h in case.holes if h.index == 8]
+    assert hole.boundary_edges == 80
+    selected = np.zeros(len(case.F0), bool)
+    selected[hole.border[1]] = True  # the faces on its border: only this hole is filled
+    V2, F2, result = fill_holes(case.V0, case.F0, "curve_unfolding", selected_faces=selected, selected=True,
+                                workers=1)
+    entry = result["holes"][8]
+    assert entry["status"] == "closed" and entry["fallback"] == "least bend, not embedded"
+    assert mesh_checks(case.V0, case.F0, V2, F2)["intersecting_new_faces"] == 0
+    assert triangle_quality(V2, F2[len(case.F0):]).min() > 0.1
