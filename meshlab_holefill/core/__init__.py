@@ -7,6 +7,7 @@ Imports ``errors`` and ``geometry`` only (no pymeshlab). Modules:
 - ``parameters``: :class:`ParamSpec`, :func:`resolve_params`, :class:`Percentage`.
 - ``attributes``: :class:`MeshArrays`, attributes of new elements and of refined borders.
 - ``crossings``: patches against the mesh near them, against each other, at shared vertices.
+- ``failure_reasons``: what a failed hole's reason adds about the mesh (an island's outline, folds beside it).
 - ``least_bend``: the loop's least-bend triangulations, the filters' shared fallback for jagged borders.
 - ``blas_threads``: one OpenBLAS thread inside a block (LS-SVM's fills, the processes ``parallel`` forks).
 - ``parallel``: holes filled by this process and forked children at once, with a time limit per hole.

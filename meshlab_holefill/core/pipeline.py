@@ -19,12 +19,13 @@ from dataclasses import dataclass
 
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
 from .crossings import (clashing_patches, context_crossings, crossing_patches, face_boxes_near, load_crossing_kernels,
-                        patch_box, patch_intersections, surroundings_crossing_themselves)
+                        patch_box, patch_intersections)
 from .face_grid import face_grid
 from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .kernel_cache import refresh_kernel_cache_once
 from .holes import boundary_loops, edge_summary, hole_context, vertex_face_incidence
-from .outlines import hole_measures, loop_class, outline_ratio, outlines_one_face
+from .failure_reasons import explain_folded_surroundings, explain_outlines
+from .outlines import hole_measures, loop_class, outlines_one_face
 from .parameters import ParamSpec, Percentage
 from .patch import load_validation_kernel, merge_patches
 
@@ -184,7 +185,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
         for i in undo:
             base[2][i] = dict(report[i], split_boundary_edges=0)
         todo = [i for i in todo if i not in undo]
-    _explain_folded_surroundings(base[0].V, base[0].F, base[1], report, incidence)
+    explain_folded_surroundings(base[0].V, base[0].F, base[1], report, incidence)
     n_new_faces = len(F2) - len(F)
     if n_new_faces:
         vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops, [len(p.vertices) for p in patches])
@@ -401,7 +402,7 @@ def _closed_patches(V, F, filled, checked, loops, report, incidence, selfinterse
         patches.append(patch)
         closed_ids.append(i)
     if crossing:
-        _explain_outlines(V, F, crossing, report, incidence)
+        explain_outlines(V, F, crossing, report, incidence)
     V2, F2 = merge_patches(V, F, done_loops, patches)
     # Patches checked one by one can still meet one another: withdraw the later ones.
     checks = ([crossing_patches] if selfintersection else []) + [clashing_patches]
@@ -497,37 +498,6 @@ def _refill_clear_of_mesh(V, F, loop, incidence, rings, index, fill, fill_kwargs
     except FILL_ERRORS:
         pass
     return patch, crossed, seconds + time.perf_counter() - t0
-
-
-def _explain_outlines(V, F, crossing, report, incidence):
-    """Say so when a rejected loop is the outline of a whole island rather than a hole.
-
-    Range scans hold small fragments whose only border is their outline; capping it lays a
-    second sheet over the fragment, which the intersection check rightly refuses. The
-    reason then tells the user it is not a hole (outlines.outline_ratio: grown from the loop,
-    where labelling the whole mesh took 0.06 s of serial time on face000.ply).
-    """
-    for i, loop in crossing:
-        ratio = outline_ratio(V, F, loop, incidence)
-        if ratio is not None:
-            report[i]["reason"] += (f"; the loop outlines its whole component (encloses {ratio:.0%} of its area): "
-                                    "an island of the mesh, not a hole")
-
-
-#: Rings of faces around a failed hole searched for faces that already cross each other.
-RINGS_SEEN = 2
-
-
-def _explain_folded_surroundings(V, F, loops, report, incidence):
-    """Say so when the mesh beside a failed hole already crosses itself: no patch may cross those faces."""
-    for entry in report:
-        if entry.get("status") != "failed" or incidence is None:
-            continue
-        count = surroundings_crossing_themselves(V, F, loops[entry["hole"]], incidence, RINGS_SEEN)
-        if count:
-            entry["reason"] += (f"; the mesh beside this hole already crosses itself ({count} faces within "
-                                f"{RINGS_SEEN} rings of its border cross other faces; Select Self Intersecting "
-                                "Faces shows them)")
 
 
 def _json_safe(info):
