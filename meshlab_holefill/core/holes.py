@@ -125,6 +125,10 @@ class HoleContext:
         numbering of ``vertices`` followed by ``obstacle_vertices``; empty unless
         :func:`hole_context` was given ``obstacles``. Only the crossing checks see them
         (:meth:`surroundings`): normals, scales and the rings stay those of the rings.
+    crossings_allowed : bool
+        The filter runs with ``selfintersection=False``: an algorithm whose every patch crosses the
+        surroundings returns one rather than failing the hole (MeshLab's Close Holes closes such a
+        hole too when its check is off).
     """
 
     loop: np.ndarray
@@ -143,6 +147,7 @@ class HoleContext:
     extra: dict = field(default_factory=dict)
     obstacle_vertices: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     obstacle_faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))
+    crossings_allowed: bool = False
 
     @property
     def size(self):

@@ -300,6 +300,7 @@ def _fill_holes(base, todo, params, fill, fill_kwargs, rings, prepare, fills, se
             ctx = hole_context(V, F, loops[i], incidence, rings=rings, index=i)
         except FILL_ERRORS as exc:
             return None, reason_of(exc), time.perf_counter() - t0, None
+        ctx.crossings_allowed = not params["selfintersection"]
         context_seconds = time.perf_counter() - t0
         outcome, seconds = fill_one(fill, ctx, fill_kwargs, params["timelimit"])
         key, crossed, seconds = _context_key(ctx), None, context_seconds + seconds

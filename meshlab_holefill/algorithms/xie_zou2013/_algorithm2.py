@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import functools
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -98,6 +98,9 @@ class _Hole:
     mesh_normals: np.ndarray  # (k, 3) normals of the border faces
     smoothing: SmoothingOptions
     optimisation: OptimisationOptions
+    # With ``ctx.crossings_allowed``: the first attempt whose patch was refused only for crossing
+    # the surroundings, as (attempt's name, _CleanLayout), the hole's patch if nothing else is.
+    crossing: list = field(default_factory=list)
 
     @functools.cached_property
     def development(self):
@@ -203,6 +206,13 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
     patch = loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info)
     if patch is not None:
         return patch
+    if hole.crossing:  # crossings allowed: the first attempt refused only for crossing
+        name, clean = hole.crossing[0]
+        segmented, layout = name.startswith("segmented"), name.rsplit(", ", 1)[1]
+        info = _attempt_info(ctx, predictions[segmented], base, seg, segmented, layout, clean, None,
+                             boundary_seconds=t1 - t0, prediction_seconds=prediction_seconds)
+        info["crossing_surroundings"] = True
+        return _returned(Patch(vertices=clean.V[k:], faces=clean.F, info=info), clean.record, reasons, record)
     raise HoleFillError("; ".join(reasons))
 
 
@@ -315,6 +325,15 @@ def attempt_order(base, normals, seg, I_c):
     return attempts
 
 
+def _closes_the_loop(ctx, V, F):
+    """Whether (V, F) is a valid patch of the hole (:func:`validate_patch`), crossings aside."""
+    try:
+        validate_patch(Patch(vertices=V[ctx.size:], faces=F), ctx.points, ctx.forbidden_edges)
+    except HoleFillError:
+        return False
+    return True
+
+
 def _layout_patch(hole, layout, result, name):
     """Steps 6-7 for one attempt, leaving out prediction points on folds for up to OUTLIER_ROUNDS rounds.
 
@@ -344,6 +363,9 @@ def _layout_patch(hole, layout, result, name):
         crossing = stats.pop("crossing", None)  # known when the quality pass changed the patch
         if stats["folds_left"] == 0 and (folds.intersects_surroundings(ctx, V, F) if crossing is None
                                          else crossing):
+            if ctx.crossings_allowed and not hole.crossing and _closes_the_loop(ctx, V, F):
+                hole.crossing.append((name, _CleanLayout(V, F, stats, tri_stats.get("edge_cleared", 0),
+                                                         int(excluded.sum()), attempt_record, t4 - t3, t5 - t4)))
             return None, f"{name}: patch crosses the surrounding mesh"
         if stats["folds_left"] == 0:
             try:

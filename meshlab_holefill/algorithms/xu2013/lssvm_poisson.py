@@ -273,7 +273,7 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
         elif samples:
             regressors = fit_laplacian_regressors(samples_X, samples_delta, gamma, kernel_width, model_selection)
     t1 = time.perf_counter()
-    failures = []
+    failures, crossing = [], None
     for X0, F0, stats, layout in initial_patches(ctx, merge_factor, failures):
         t2 = time.perf_counter()
         solves = poisson_solves(stats, poisson_iterations)
@@ -285,11 +285,22 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
         t3 = time.perf_counter()
         if X is None:
             failures.append(f"{stats['domain']} patch: intersects the surrounding mesh")
+            if crossing is None and "crossing_patch" in pinfo:  # crossings allowed: the first such patch
+                crossing = (*pinfo.pop("crossing_patch"), stats, pinfo, (t1 - t0, t2 - t1, t3 - t2))
             continue
-        info = {f"afm_{key}": value for key, value in stats.items()}
-        info.update(training_samples=samples, **pinfo, lssvm_seconds=t1 - t0,
-                    initial_patch_seconds=t2 - t1, poisson_seconds=t3 - t2, fallbacks=len(failures))
-        if failures:
-            info["fallback_reasons"] = "; ".join(failures)
-        return Patch(vertices=X[k:], faces=F, info=info)
+        return _patch(k, X, F, stats, pinfo, samples, (t1 - t0, t2 - t1, t3 - t2), failures)
+    if crossing is not None:
+        patch = _patch(k, *crossing[:4], samples, crossing[4], failures)
+        patch.info["crossing_surroundings"] = True
+        return patch
     raise HoleFillError("; ".join(failures) or "no initial patch")
+
+
+def _patch(k, X, F, stats, pinfo, samples, seconds, failures):
+    """The filled hole's Patch with :func:`fill`'s info: the initial patch's counts, the solve's, the seconds."""
+    info = {f"afm_{key}": value for key, value in stats.items()}
+    info.update(training_samples=samples, **pinfo, lssvm_seconds=seconds[0], initial_patch_seconds=seconds[1],
+                poisson_seconds=seconds[2], fallbacks=len(failures))
+    if failures:
+        info["fallback_reasons"] = "; ".join(failures)
+    return Patch(vertices=X[k:], faces=F, info=info)

@@ -300,7 +300,8 @@ def reposition(ctx, X, F, regressors, iterations, relax, poisson_boundary="lapla
     -------
     X : (n, 3) float64 or None (not even the initial patch is clear of the mesh)
     F : (q, 3) int64
-    info : dict  Poisson counts, ``swaps``, ``poisson_damping`` (1 = the full solve)
+    info : dict  Poisson counts, ``swaps``, ``poisson_damping`` (1 = the full solve); where X is None and
+        ``ctx.crossings_allowed``, ``crossing_patch``: (X, F) of the full solve, which crosses the mesh
     """
     k = ctx.size
     X_front, F_front = X, F
@@ -332,4 +333,6 @@ def reposition(ctx, X, F, regressors, iterations, relax, poisson_boundary="lapla
         if not len(context_hits(Y, F_front, ctx)):
             info["poisson_damping"] = t
             return Y, F_front, info
+    if ctx.crossings_allowed:
+        info["crossing_patch"] = (X, F)
     return None, F_front, info
