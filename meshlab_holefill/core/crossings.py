@@ -15,8 +15,8 @@ from ..geometry.intersections import faces_intersecting, intersecting_pairs, int
 from .holes import hole_context, nonmanifold_edges
 from ..geometry.sets import isin_ints, positions_ints, unique_ints
 
-__all__ = ["clashing_patches", "context_crossings", "crossing_patches", "face_boxes_near", "load_crossing_kernels", "patch_box",
-           "patch_intersections", "surroundings_crossing_themselves", "withdraw"]
+__all__ = ["clashing_patches", "context_crossings", "crossing_patches", "face_boxes_near", "load_crossing_kernels",
+           "patch_box", "patch_intersections", "surroundings_crossing_themselves", "withdraw"]
 
 
 def face_boxes_near(V, F, boxes):

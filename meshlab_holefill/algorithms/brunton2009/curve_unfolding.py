@@ -227,9 +227,9 @@ def fill(ctx, k=0.9, temperature=0.5, epsilon=1e-5, max_restarts=100, sa_steps=5
         relaxation when that one crosses nothing (``info['fallback']``), and with ``fallback`` then by
         a patch embedded on the loop's least-bend triangulation, or last that triangulation refined
         and not embedded (:func:`_least_bend_patches`, for jagged borders whose faces tilt every way).
-        The relaxation can leave a fold the energy's own placement does not make (a 308-edge hole of cow.obj Loop-subdivided
-        twice, ``scripts/large_holes.py``, on one of our machines: 146 faces of the patch crossing it, none
-        without; whether it folds there hangs on the processor's last bits).
+        The relaxation can leave a fold the energy's own placement does not make (a 308-edge hole of
+        cow.obj Loop-subdivided twice, ``scripts/large_holes.py``, on one of our machines: 146 faces of
+        the patch crossing it, none without; whether it folds there hangs on the processor's last bits).
     seed : int
         Seed of the annealing.
     area_rows : {'mesh', 'interior'}
