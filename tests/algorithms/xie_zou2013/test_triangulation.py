@@ -33,10 +33,7 @@ def test_unfolding_two_planes_is_isometric(cube_edge_hole):
 
 def test_triangulation_keeps_every_loop_edge_and_detects_fold_overs(sphere_hole):
     _, _, _, ctx = sphere_hole
-    e = hpde_sections.ring_edge_length(ctx)
-    base = hpde_sections.base_points(ctx.points, e)
-    normals = hpde_sections.base_point_normals(ctx.loop_normals, base)
-    seg = hpde_sections.segment_boundary(base, normals, np.pi / 2)
+    e, base, normals, seg = hpde_algorithm2.boundary_step(ctx, 90.0)  # step 2 with the paper's A_c
     result = hpde_prediction.predict_points(ctx, base, normals, None, np.pi / 15, e,
                                  dict(N_factor=3, F=0.8, CR=0.05, generations=10, seed=0))
     V, F, ids = hpde_mesh.triangulate_layout(ctx, base, normals, seg, "plane", result, e, np.zeros(len(result[0]), bool))
