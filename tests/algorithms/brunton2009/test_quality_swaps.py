@@ -8,7 +8,9 @@ from meshlab_holefill.algorithms.brunton2009 import quality_swaps
 from meshlab_holefill.algorithms.brunton2009 import unfolded_triangulation as tri
 from meshlab_holefill.algorithms.brunton2009.embedding import embed_patch
 from meshlab_holefill.geometry.quality import triangle_quality
-from meshlab_holefill.core.patch import validate_patch
+from meshlab_holefill.core import examples
+from meshlab_holefill.core.holes import hole_context
+from meshlab_holefill.core.patch import Patch, validate_patch
 
 from brunton_cases import flat_disk_hole
 
@@ -49,5 +51,21 @@ def test_improve_by_swaps_undoes_a_bad_swap_and_keeps_the_energy_solved():
     assert np.abs(out_vertices[:, 2]).max() < 1e-12  # flat context, flat patch
     # The kept vertices minimise E_AREA on the kept connectivity, not on the one they came from.
     assert np.allclose(out_vertices, embed_patch(ctx, s, out_faces, energy="area"), atol=1e-12)
-    # No new vertex, nothing to swap.
-    assert quality_swaps.improve_by_swaps(ctx, np.zeros((0, 3)), bad_faces, "area")[2] == 0
+
+
+def test_a_patch_of_loop_vertices_only_is_swapped_too():
+    """A small hole's patch may have no new vertex (a range scan's 8-edge hole: a fan of slivers from the
+    domain's triangulation); the swaps alone lift it, and no energy is solved."""
+    V, F, loop = examples.bowl_with_hole(n=21)  # a round hole of 36 edges in a bowl
+    ctx = hole_context(V, F, loop, rings=2)
+    k = ctx.size
+    apex = min(set(range(k)) - set(ctx.forbidden_edges.ravel().tolist()))  # joined to no vertex by a mesh edge
+    order = np.roll(np.arange(k), -apex)
+    fan = np.stack([np.full(k - 2, apex), order[1:-1], order[2:]], axis=1)  # every triangle from the apex
+    validate_patch(Patch(np.zeros((0, 3)), fan), ctx.points, ctx.forbidden_edges)
+    q0 = triangle_quality(ctx.points, fan)
+    vertices, faces, swaps = quality_swaps.improve_by_swaps(ctx, np.zeros((0, 3)), fan, "area")
+    q1 = triangle_quality(ctx.points, faces)
+    assert len(vertices) == 0 and swaps > 0 and q1.min() > q0.min() + 0.1
+    validate_patch(Patch(vertices, faces), ctx.points, ctx.forbidden_edges)
+    assert len(crossing_repair.crossing_faces(ctx, vertices, faces)) == 0
