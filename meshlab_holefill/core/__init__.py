@@ -11,6 +11,7 @@ Imports ``errors`` and ``geometry`` only (no pymeshlab). Modules:
 - ``least_bend``: the loop's least-bend triangulations, the filters' shared fallback for jagged borders.
 - ``blas_threads``: one OpenBLAS thread inside a block (LS-SVM's fills, the processes ``parallel`` forks).
 - ``parallel``: holes filled by this process and forked children at once, with a time limit per hole.
+- ``content_key``: a digest of arrays' contents, the key of work kept for the same input.
 - ``kernel_cache``: numba's on-disk kernels dropped when the package's kernel sources change.
 - ``pipeline``: :func:`fill_mesh_holes`, what every filter does around its algorithm.
 """

@@ -9,7 +9,6 @@ originals, attributes carried over, and the per-hole report. The MeshSet filters
 """
 from __future__ import annotations
 
-import hashlib
 import logging
 import time
 
@@ -17,6 +16,7 @@ import numpy as np
 
 from dataclasses import dataclass
 
+from .content_key import content_key
 from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
 from .crossings import (clashing_patches, context_crossings, crossing_patches, face_boxes_near, load_crossing_kernels,
                         patch_box, patch_intersections)
@@ -252,13 +252,8 @@ def _context_key(ctx):
     The algorithms read only the HoleContext's local arrays (normals, scales and the rest
     derive from these), and they are deterministic, so an equal key means an equal outcome.
     """
-    digest = hashlib.sha1()
-    for a in (ctx.vertices, ctx.faces, ctx.border_faces, ctx.forbidden_edges, ctx.depth):
-        a = np.ascontiguousarray(a)
-        digest.update(repr((a.dtype.str, a.shape)).encode())
-        digest.update(a.tobytes())
-    digest.update(bytes([bool(ctx.pinched)]))
-    return digest.digest()
+    return content_key(ctx.vertices, ctx.faces, ctx.border_faces, ctx.forbidden_edges, ctx.depth,
+                       np.array([bool(ctx.pinched)]))
 
 
 # Building a face grid takes about as long as 9 scans of the faces for one patch box (measured at

@@ -17,10 +17,10 @@ import numpy as np
 
 from ...core.crossings import context_crossings
 from ...geometry.quality import triangle_quality
+from ...core.content_key import content_key
 from ...geometry.topology import edge_pair_set
 from .unfolded_triangulation import triangulate_and_embed
 from .linear_motion import linear_motion_is_simple
-from .recent_solves import content_key
 
 __all__ = ["GOOD_QUALITY", "MAX_REPAIR_ROUNDS", "CrossingCounts", "DomainPatch", "MadePatches", "crossing_faces",
            "clip_ears", "repair_crossings"]

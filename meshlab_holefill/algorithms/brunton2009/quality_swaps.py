@@ -81,12 +81,12 @@ def improve_by_swaps(ctx, vertices, faces, energy, rounds=MAX_SWAP_ROUNDS, cross
         if swapped == 0:
             break
         total += swapped
-        if s == 0:  # a patch of loop vertices only: the swaps alone change it
-            interior = X[ctx.size:]
-        elif resolve:
+        if s and resolve:
             interior = embed_patch(ctx, s, F, energy=energy, tangential=tangential)
-        else:
-            interior = relax_patch(ctx, X[ctx.size:], F) if tangential else X[ctx.size:]
+        elif s and tangential:
+            interior = relax_patch(ctx, X[ctx.size:], F)
+        else:  # kept in place; a patch of loop vertices only is changed by the swaps alone
+            interior = X[ctx.size:]
         X = np.concatenate([ctx.points, interior])
         sc = score(X, F)
         if sc > start:

@@ -5,22 +5,13 @@ A curve-unfolding fill solves the same sparse system more than once for one hole
 """
 from __future__ import annotations
 
-import hashlib
 from collections import OrderedDict
 
 import numpy as np
 
-__all__ = ["RecentSolves", "content_key"]
+from ...core.content_key import content_key
 
-
-def content_key(*arrays):
-    """A digest of the arrays' dtypes, shapes and bytes: equal exactly for equal arrays."""
-    digest = hashlib.sha1()
-    for a in arrays:
-        a = np.ascontiguousarray(a)
-        digest.update(f"{a.dtype.str}{a.shape}".encode())
-        digest.update(a.tobytes())
-    return digest.digest()
+__all__ = ["RecentSolves"]
 
 
 class RecentSolves:

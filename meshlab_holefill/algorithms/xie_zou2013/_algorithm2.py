@@ -325,15 +325,6 @@ def attempt_order(base, normals, seg, I_c):
     return attempts
 
 
-def _closes_the_loop(ctx, V, F):
-    """Whether (V, F) is a valid patch of the hole (:func:`validate_patch`), crossings aside."""
-    try:
-        validate_patch(Patch(vertices=V[ctx.size:], faces=F), ctx.points, ctx.forbidden_edges)
-    except HoleFillError:
-        return False
-    return True
-
-
 def _layout_patch(hole, layout, result, name):
     """Steps 6-7 for one attempt, leaving out prediction points on folds for up to OUTLIER_ROUNDS rounds.
 
@@ -361,19 +352,22 @@ def _layout_patch(hole, layout, result, name):
         except HoleFillError as exc:
             return None, f"{name}: {exc}"
         crossing = stats.pop("crossing", None)  # known when the quality pass changed the patch
-        if stats["folds_left"] == 0 and (folds.intersects_surroundings(ctx, V, F) if crossing is None
-                                         else crossing):
-            if ctx.crossings_allowed and not hole.crossing and _closes_the_loop(ctx, V, F):
-                hole.crossing.append((name, _CleanLayout(V, F, stats, tri_stats.get("edge_cleared", 0),
-                                                         int(excluded.sum()), attempt_record, t4 - t3, t5 - t4)))
-            return None, f"{name}: patch crosses the surrounding mesh"
         if stats["folds_left"] == 0:
+            crosses = folds.intersects_surroundings(ctx, V, F) if crossing is None else crossing
+            # A crossing patch is refused; with crossings allowed, the first valid one is kept for last.
+            kept_for_last = crosses and ctx.crossings_allowed and not hole.crossing
+            if crosses and not kept_for_last:
+                return None, f"{name}: patch crosses the surrounding mesh"
             try:
                 validate_patch(Patch(vertices=V[ctx.size:], faces=F), ctx.points, ctx.forbidden_edges)
             except HoleFillError as exc:  # not a disc closing the loop once: the next attempt may be
-                return None, f"{name}: {exc}"
-            return _CleanLayout(V, F, stats, tri_stats.get("edge_cleared", 0), int(excluded.sum()), attempt_record,
-                                t4 - t3, t5 - t4), None
+                return None, f"{name}: patch crosses the surrounding mesh" if crosses else f"{name}: {exc}"
+            clean = _CleanLayout(V, F, stats, tri_stats.get("edge_cleared", 0), int(excluded.sum()), attempt_record,
+                                 t4 - t3, t5 - t4)
+            if crosses:
+                hole.crossing.append((name, clean))
+                return None, f"{name}: patch crosses the surrounding mesh"
+            return clean, None
         if len(bad_ids) == 0:
             return None, f"{name}: fold-over after smoothing and mesh optimisation"
         excluded[bad_ids] = True

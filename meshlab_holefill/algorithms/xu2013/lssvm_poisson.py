@@ -282,15 +282,16 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
             X, F, pinfo = _less_bent(ctx, (X, F, pinfo),
                                      reposition(ctx, X0, F0, regressors, poisson_iterations, relax, poisson_boundary,
                                                 layout))
-        t3 = time.perf_counter()
+        seconds = (t1 - t0, t2 - t1, time.perf_counter() - t2)
         if X is None:
             failures.append(f"{stats['domain']} patch: intersects the surrounding mesh")
             if crossing is None and "crossing_patch" in pinfo:  # crossings allowed: the first such patch
-                crossing = (*pinfo.pop("crossing_patch"), stats, pinfo, (t1 - t0, t2 - t1, t3 - t2))
+                crossing = (*pinfo.pop("crossing_patch"), stats, pinfo, seconds)
             continue
-        return _patch(k, X, F, stats, pinfo, samples, (t1 - t0, t2 - t1, t3 - t2), failures)
+        return _patch(k, X, F, stats, pinfo, samples, seconds, failures)
     if crossing is not None:
-        patch = _patch(k, *crossing[:4], samples, crossing[4], failures)
+        X, F, stats, pinfo, seconds = crossing
+        patch = _patch(k, X, F, stats, pinfo, samples, seconds, failures)
         patch.info["crossing_surroundings"] = True
         return patch
     raise HoleFillError("; ".join(failures) or "no initial patch")
