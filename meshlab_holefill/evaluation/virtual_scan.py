@@ -30,6 +30,8 @@ _SAMPLES = np.array([[0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8], [0.5, 0.
 def _image_frame(direction):
     """Unit view direction d and two unit vectors e1, e2 spanning the image plane."""
     d = np.asarray(direction, np.float64)
+    if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.linalg.norm(d) > 0.0:
+        raise ValueError(f"the scanner's direction must be a finite, non-zero 3-vector, got {direction!r}")
     d = d / np.linalg.norm(d)
     helper = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     e1 = np.cross(d, helper)
@@ -47,6 +49,11 @@ def visible_faces(V, F, direction, pixel, grazing_degrees=GRAZING_DEGREES):
     pixel : float  side of the depth image's pixels, in mesh units (about a mean edge)
     grazing_degrees : float  faces turned further than this from the scanner are not seen
 
+    Raises
+    ------
+    ValueError
+        A zero or non-finite direction, a pixel that is not a positive length, a mesh without faces.
+
     Returns
     -------
     (m,) bool
@@ -55,6 +62,10 @@ def visible_faces(V, F, direction, pixel, grazing_degrees=GRAZING_DEGREES):
     """
     V = np.asarray(V, np.float64)
     F = np.asarray(F, np.int64)
+    if not (np.isfinite(pixel) and pixel > 0.0):
+        raise ValueError(f"the depth image's pixel must be a positive length, got {pixel!r}")
+    if len(F) == 0:
+        raise ValueError("the mesh has no faces to scan")
     d, e1, e2 = _image_frame(direction)
     image = V @ np.stack([e1, e2], axis=1)  # (n, 2)
     image = (image - image.min(axis=0)) / pixel
@@ -111,6 +122,8 @@ def virtual_scan_case(name, V, F, direction, noise=0.0, seed=0, min_faces=6, max
     """
     V = np.asarray(V, np.float64)
     F = np.asarray(F, np.int64)
+    if len(F) == 0:
+        raise ValueError(f"mesh '{name}' has no faces to scan")
     if noise:
         V = normal_noise(V, F, noise, seed=seed)
     edge = float(np.linalg.norm(V[F[:, 1]] - V[F[:, 0]], axis=1).mean())

@@ -81,3 +81,18 @@ def test_the_shadow_of_a_noisy_scan_closes_without_crossing_the_mesh():
     assert checks["intersecting_new_faces"] == 0 and checks["nonmanifold_edges"] == 0
     statuses = {h["hole"]: h["status"] for h in result["holes"]}
     assert [statuses[h.index] for h in prepared.holes] == ["closed"] * len(prepared.holes)
+
+
+@pytest.mark.parametrize("direction, pixel, match", [((0.0, 0.0, 0.0), 0.1, "non-zero 3-vector"),
+                                                      ((np.nan, 0.0, 1.0), 0.1, "non-zero 3-vector"),
+                                                      ((0.0, 1.0), 0.1, "non-zero 3-vector"),
+                                                      ((0.0, 0.0, 1.0), 0.0, "positive length")])
+def test_a_bad_direction_or_pixel_is_refused_by_name(direction, pixel, match):
+    V, F = analytic_mesh("sphere")
+    with pytest.raises(ValueError, match=match):
+        visible_faces(V, F, direction, pixel)
+
+
+def test_a_mesh_without_faces_is_refused_by_name():
+    with pytest.raises(ValueError, match="no faces"):
+        virtual_scan_case("empty", np.zeros((3, 3)), np.zeros((0, 3), np.int64), (0.0, 0.0, 1.0))
