@@ -102,6 +102,25 @@ def test_the_min_angle_filter_closes_a_jagged_loop_from_the_least_bend_triangula
     assert_filled_cleanly(V, F, V2, F2)
 
 
+def test_the_min_angle_filter_skips_a_hole_plane_start_that_crosses_more_than_its_own():
+    """The benchmark's cow_noisy 307-edge hole: the paper's triangulation has 6 faces crossing the mesh, the hole
+    plane's 62, so the hole plane is not tried (its patches crossed too) and the least-bend one closes the hole."""
+    from meshlab_holefill.algorithms.hu2012 import min_angle_bilateral
+    from meshlab_holefill.algorithms.hu2012.crossing_test import crossing_faces
+    from meshlab_holefill.algorithms.hu2012.min_angle_triangulation import (hole_plane_triangulation,
+                                                                            min_angle_triangulation)
+
+    V, F = noisy_cow(0)
+    loop = max(boundary_loops(F), key=len)
+    ctx = hole_context(V, F, loop, rings=min_angle_bilateral.RINGS)
+    own = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges)
+    plane = hole_plane_triangulation(ctx.points, ctx.forbidden_edges)
+    assert 0 < crossing_faces(ctx, ctx.points, own) < crossing_faces(ctx, ctx.points, plane)
+    assert min_angle_bilateral._hole_plane_start(ctx, own) is None
+    patch = min_angle_bilateral.fill(ctx)
+    assert patch.info["fallback"] == "least bend"
+
+
 def test_hpde_closes_every_hole_of_another_noisy_cut():
     """Seed 2's 165-edge hole: the first layout's chords join loop vertices that the mesh joins, two of them in
     one triangle, and the patch must still be a disc (it had a non-manifold edge there)."""

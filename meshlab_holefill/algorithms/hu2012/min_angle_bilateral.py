@@ -44,7 +44,6 @@ the benchmark met); the same with alpha=1.55: 0.22 / 2.10 / 4.71, 0.862, 0; Mesh
 """
 from __future__ import annotations
 
-import functools
 import itertools
 import time
 
@@ -62,7 +61,7 @@ from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
 from .tangential_smoothing import tangential_smoothing
 from .min_angle_triangulation import hole_plane_triangulation, min_angle_triangulation
-from .crossing_test import crosses
+from .crossing_test import crosses, crossing_faces
 
 __all__ = ["fill", "FAIRED_OPTIONS", "PARAMS", "RINGS", "WARM_UP", "warm_up", "relaxation_guard"]
 
@@ -401,7 +400,8 @@ def _fallback_patch(ctx, F0, same, options):
     A large, strongly curved hole: the flat minimum-angle surface and the filter's moves along
     the normals keep crossing the mesh, where a faired patch bends away from it; so the faired
     option set is tried first from ``F0``. Where ``F0`` folds already (a cut across walls standing
-    on the hole's plane), the steps are tried from the hole plane's triangulation. Last, a jagged
+    on the hole's plane), the steps are tried from the hole plane's triangulation, if it crosses
+    less than ``F0`` (:func:`_hole_plane_start`). Last, a jagged
     border, whose faces tilt every way so that the ears fold onto them: the loop's least-bend
     triangulations. ``same`` are the options every attempt keeps, ``options`` the filter's own
     (fairing, iterations, smoothing).
@@ -409,8 +409,10 @@ def _fallback_patch(ctx, F0, same, options):
     faired = options == FAIRED_OPTIONS
     tries = [] if faired else [("faired", lambda: F0, FAIRED_OPTIONS)]
     if crosses(ctx, ctx.points, F0):
-        plane = functools.cache(lambda: hole_plane_triangulation(ctx.points, ctx.forbidden_edges))
-        tries += [("hole plane", plane, options)] + ([] if faired else [("hole plane, faired", plane, FAIRED_OPTIONS)])
+        plane = _hole_plane_start(ctx, F0)
+        if plane is not None:
+            tries += [("hole plane", lambda: plane, options)]
+            tries += [] if faired else [("hole plane, faired", lambda: plane, FAIRED_OPTIONS)]
     for name, initial, chosen in itertools.chain(tries, _least_bend_tries(ctx, options, faired)):
         try:
             patch = _patch_from(ctx, initial(), **same, **chosen)
@@ -420,6 +422,22 @@ def _fallback_patch(ctx, F0, same, options):
             patch.info["fallback"] = name
             return patch
     return None
+
+
+def _hole_plane_start(ctx, F0):
+    """The hole plane's triangulation ((k - 2, 3) int64) as a fallback's start, or None where it is no better than ``F0``.
+
+    It replaces a triangulation that folds through the walls of a cut across; where it has at
+    least as many faces crossing the mesh or each other as ``F0`` (a jagged loop, whose faces
+    tilt every way, is no cut across), the patches grown from it cross too. Measured on the
+    noisy cow's 307-edge hole: ``F0`` has 6 faces crossing the mesh, the hole plane's 62, and
+    its two attempts took 0.12 of the hole's 0.26 s before the least-bend one closed it.
+    """
+    try:
+        plane = hole_plane_triangulation(ctx.points, ctx.forbidden_edges)
+    except HoleFillError:
+        return None
+    return plane if crossing_faces(ctx, ctx.points, plane) < crossing_faces(ctx, ctx.points, F0) else None
 
 
 def _least_bend_tries(ctx, options, faired):
