@@ -100,7 +100,7 @@ def test_warm_up_loads_every_kernel_of_the_filter():
 def test_a_paper_patch_crossing_the_mesh_falls_back_to_the_faired_patch(share):
     """The bunny's bottom cut off by height: a 271- or 292-edge loop whose minimum-angle surface, filtered
     along its normals, crosses the bunny's feet; the faired option set's patch crosses nothing."""
-    from meshlab_holefill.algorithms.hu2012.crossing_test import crosses, crossing_faces
+    from meshlab_holefill.algorithms.hu2012.crossing_test import crosses
     from meshlab_holefill.algorithms.hu2012.min_angle_bilateral import FAIRED_OPTIONS, RINGS
 
     ms = pymeshlab.MeshSet()
