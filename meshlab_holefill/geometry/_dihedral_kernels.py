@@ -28,6 +28,14 @@ def _bend(n0, n1, n2, m):
 
 
 @njit(cache=True)
+def _border_bend(n0, n1, n2, m):
+    """:func:`_bend` against the mesh face on a loop edge; 0 where that face has no normal (a zero row)."""
+    if m[0] == 0.0 and m[1] == 0.0 and m[2] == 0.0:
+        return 0.0
+    return _bend(n0, n1, n2, m)
+
+
+@njit(cache=True)
 def _is_banned(banned, code):
     at = np.searchsorted(banned, code)
     return at < len(banned) and banned[at] == code
@@ -40,7 +48,7 @@ def best_splits(P, border_normals, forbidden, banned):
     ``forbidden[i, j]``: the pair may not be an edge; ``banned``: sorted codes (i k + m) k + j of
     triangles (i, m, j), i < m < j, that may not be used. Bends are 1 - cos of the angle between
     the normals of two triangles sharing an edge; on a loop edge (i, i + 1) the neighbour is the
-    mesh face there (``border_normals[i]``, unit).
+    mesh face there (``border_normals[i]``, unit; a zero row bends nothing).
 
     Returns
     -------
@@ -72,11 +80,11 @@ def best_splits(P, border_normals, forbidden, banned):
                 n0, n1, n2, a = _unit_normal(P, i, m, j)
                 if a == 0.0:
                     continue
-                left = _bend(n0, n1, n2, border_normals[i] if m == i + 1 else normal[i, m])
-                right = _bend(n0, n1, n2, border_normals[m] if j == m + 1 else normal[m, j])
+                left = _border_bend(n0, n1, n2, border_normals[i]) if m == i + 1 else _bend(n0, n1, n2, normal[i, m])
+                right = _border_bend(n0, n1, n2, border_normals[m]) if j == m + 1 else _bend(n0, n1, n2, normal[m, j])
                 worst = max(inner, max(left, right))
                 if i == 0 and j == k - 1:  # the closing loop edge (k - 1, 0)
-                    worst = max(worst, _bend(n0, n1, n2, border_normals[k - 1]))
+                    worst = max(worst, _border_bend(n0, n1, n2, border_normals[k - 1]))
                 total = area[i, m] + area[m, j] + a
                 if worst < best_bend or (worst == best_bend and total < best_area):
                     best_bend, best_area = worst, total

@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import HoleFillError
 from . import _dihedral_kernels as K
 
-__all__ = ["dihedral_triangulation"]
+__all__ = ["dihedral_triangulation", "least_bend_splits"]
 
 
 def dihedral_triangulation(P, border_normals, forbidden_edges=(), banned=()):
@@ -26,7 +26,8 @@ def dihedral_triangulation(P, border_normals, forbidden_edges=(), banned=()):
     P : (k, 3) float64
         Loop points in patch orientation (the triangles come out oriented as the loop).
     border_normals : (k, 3) float64
-        Unit normal of the mesh face on each loop edge (i, i + 1).
+        Unit normal of the mesh face on each loop edge (i, i + 1); a zero row (no usable face there)
+        bends nothing.
     forbidden_edges : (p, 2) int
         Pairs of loop indices that may not become edges (already joined by a mesh edge).
     banned : (b, 3) int
@@ -59,6 +60,27 @@ def dihedral_triangulation(P, border_normals, forbidden_edges=(), banned=()):
     >>> dihedral_triangulation(P, np.tile([0.0, 0.0, 1.0], (4, 1))).tolist()
     [[0, 1, 3], [1, 2, 3]]
     """
+    split, worst = least_bend_splits(P, border_normals, forbidden_edges, banned)
+    if not np.isfinite(worst):
+        raise HoleFillError("no triangulation of the loop avoids the mesh's edges and the banned triangles")
+    return _triangles(split)
+
+
+def least_bend_splits(P, border_normals, forbidden_edges=(), banned=()):
+    """The dynamic programme's table behind :func:`dihedral_triangulation` (same parameters).
+
+    Returns
+    -------
+    split : (k, k) int64
+        The apex m of the best triangulation of each sub-polygon (i .. j), -1 where there is none.
+    worst : float
+        The best triangulation's largest bend, 1 - cos of its angle (inf when there is none).
+
+    Raises
+    ------
+    ValueError, HoleFillError
+        As :func:`dihedral_triangulation`.
+    """
     P = np.ascontiguousarray(P, np.float64)
     k = len(P)
     if k < 3:
@@ -71,9 +93,7 @@ def dihedral_triangulation(P, border_normals, forbidden_edges=(), banned=()):
     T = np.sort(np.asarray(banned, np.int64).reshape(-1, 3), axis=1)
     codes = np.unique((T[:, 0] * k + T[:, 1]) * k + T[:, 2])
     split, worst = K.best_splits(P, np.ascontiguousarray(border_normals, np.float64), forbidden, codes)
-    if not np.isfinite(worst):
-        raise HoleFillError("no triangulation of the loop avoids the mesh's edges and the banned triangles")
-    return _triangles(split)
+    return split, float(worst)
 
 
 def _triangles(split):

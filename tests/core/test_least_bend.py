@@ -83,7 +83,7 @@ def noisy_cow(seed, noise_seed=0):
 
 def test_hpde_closes_a_long_jagged_loop_by_its_last_resort_on_the_least_bend_triangulation():
     """The benchmark's cow_noisy 307-edge hole: every HPDE layout folds, and the loop is too long for the
-    plain-Python Liepa triangulation of the last resort (more than 60 edges)."""
+    last resort's pre-blocked Liepa triangulation (more than 60 edges)."""
     V, F = noisy_cow(0)
     V2, F2, result = fill_holes(V, F, "differential_evolution", workers=1, maxholesize=1000)
     assert result["closed_holes"] == 4

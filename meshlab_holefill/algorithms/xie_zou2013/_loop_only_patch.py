@@ -46,9 +46,9 @@ def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
     """
     k = ctx.size
     P = ctx.points
+    blocked = folds.crossing_triangles(ctx)  # loop triangles crossing the rings (none found past its size cap)
     candidates = [folds.loop_triangulation(P, mesh_normals, ctx.forbidden_edges,
-                                           max_size=folds.LOOP_TRIANGULATION_SIZE,
-                                           blocked=folds.crossing_triangles(ctx, folds.LOOP_TRIANGULATION_SIZE))[0]]
+                                           max_size=folds.LOOP_TRIANGULATION_SIZE, blocked=blocked)[0]]
     try:
         pmap = triangulation.plane_map_for(base, normals, seg, False)
         candidates.append(triangulation.triangulate_projection(P, np.zeros((0, 3)), pmap, 0.0)[1])
@@ -70,7 +70,7 @@ def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
         if optimisation.relax > 0:
             V, F = _relax_loop_only(ctx, P, F, mesh_normals, optimisation.relax)
         if optimisation.quality_floor > 0:
-            V, F = _raise_loop_only_quality(ctx, V, F, mesh_normals, info)
+            V, F = _raise_loop_only_quality(ctx, V, F, mesh_normals, info, blocked)
         return Patch(vertices=V[k:], faces=F, info=info)
     return None
 
@@ -90,18 +90,18 @@ def _relax_loop_only(ctx, P, F, mesh_normals, relax):
     return P, F
 
 
-def _raise_loop_only_quality(ctx, V, F, mesh_normals, info):
+def _raise_loop_only_quality(ctx, V, F, mesh_normals, info, blocked):
     """The guarded quality pass with splits (a loop-only patch has no free vertex to move).
 
-    Swaps may not create loop triangles that cross the rings. Each floor of
-    LAST_RESORT_FLOORS is kept only if it raises the minimum quality without crossing.
+    Swaps may not create loop triangles that cross the rings (``blocked``,
+    :func:`.folds.crossing_triangles`). Each floor of LAST_RESORT_FLOORS is kept only if it raises
+    the minimum quality without crossing.
     """
     k = ctx.size
 
     def fold_count(V_, F_):
         return int(folds.local_folds(V_, F_, mesh_normals, max_angle=LAST_RESORT_ANGLE).sum())
 
-    blocked = folds.crossing_triangles(ctx)
     for floor in LAST_RESORT_FLOORS:
         Vq, Fq, _, qstats = quality_pass.raise_min_quality(
             V, F, k, ctx.forbidden_edges, mesh_normals, floor=floor, fold_test=fold_count, blocked=blocked,

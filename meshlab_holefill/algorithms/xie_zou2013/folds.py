@@ -8,13 +8,17 @@ loop alone is triangulated with Liepa's weights (beyond the paper).
 """
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from ...geometry.flips import fixed_edge_keys, relax_edges
 from ...core.crossings import context_crossings
+from ...errors import HoleFillError
+from ...geometry.dihedral_triangulation import least_bend_splits
 from ...geometry.intersections import faces_intersecting
-from ...geometry.quality import cross_rows, face_normals
-from ...geometry.topology import edge_pair_set, interior_edges
+from ...geometry.quality import face_normals
+from ...geometry.topology import interior_edges
 from ._fold_kernels import fold_swap_rounds, fold_swap_scores
 from .optimisation import adjacency
 
@@ -25,7 +29,7 @@ __all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_fold
 FOLD_ANGLE = np.radians(150.0)
 
 
-#: Loops up to this size are triangulated by :func:`loop_triangulation` (its cost is cubic, in Python).
+#: Loops up to this size are triangulated by :func:`loop_triangulation` (it tests all C(k, 3) triangles).
 LOOP_TRIANGULATION_SIZE = 60
 
 
@@ -38,7 +42,7 @@ def crossing_triangles(ctx, max_size=LOOP_TRIANGULATION_SIZE):
     k = ctx.size
     if k > max_size or k < 3:
         return set()
-    T = np.array([t for t in np.ndindex(k, k, k) if t[0] < t[1] < t[2]], np.int64)
+    T = np.fromiter(itertools.chain.from_iterable(itertools.combinations(range(k), 3)), np.int64).reshape(-1, 3)
     surrounding_points, surrounding_faces = ctx.surroundings()
     X = np.concatenate([ctx.points, surrounding_points[k:]])
     allF = np.concatenate([T, surrounding_faces])
@@ -53,14 +57,17 @@ def loop_triangulation(P, border_normals, forbidden_edges=(), max_size=LOOP_TRIA
     crumpled natural holes, where no base point keeps a correspondence): dynamic programming
     over the O(k^3) triangulations of the polygon, the dihedral angle of a triangle taken
     against its neighbours in the triangulation and, on a loop edge, against the mesh face
-    across it; chords that duplicate a mesh edge and ``blocked`` triangles are not used.
+    across it (none where its row of ``border_normals`` is zero); chords that duplicate a mesh
+    edge and ``blocked`` triangles are not used. The programme is the compiled one of
+    :func:`meshlab_holefill.geometry.dihedral_triangulation.least_bend_splits` (bends compared as
+    1 - cos, the same order as the angles).
 
     Parameters
     ----------
     P : (k, 3) float64  loop points (patch orientation)
     border_normals : (k, 3) float64  unit normal of the mesh face on loop edge (i, i+1) (0 rows: unknown)
     forbidden_edges : (p, 2) int
-    max_size : int  larger loops are refused (cubic cost)
+    max_size : int  larger loops are refused (the blocked triangles are all C(k, 3) of them)
     blocked : set of (i, m, j), i < m < j  triangles not to use (they cross the mesh)
 
     Returns
@@ -71,63 +78,22 @@ def loop_triangulation(P, border_normals, forbidden_edges=(), max_size=LOOP_TRIA
     k = len(P)
     if k > max_size:
         return None, np.inf
-    forbidden = edge_pair_set(forbidden_edges)
-    normal = {}
-
-    def tri_normal(i, m, j):
-        key = (i, m, j)
-        if key not in normal:
-            n = cross_rows(P[m] - P[i], P[j] - P[i])  # np.cross's arithmetic, without its overhead
-            length = np.linalg.norm(n)
-            normal[key] = (n / length if length > 0 else n, 0.5 * length)
-        return normal[key]
-
-    def angle(n1, n2):
-        if not np.any(n1) or not np.any(n2):
-            return 0.0
-        return float(np.arccos(np.clip(n1 @ n2, -1.0, 1.0)))
-
-    inf = (np.inf, np.inf)
-    W = {}
-    apex = {}
-    for i in range(k - 1):
-        W[(i, i + 1)] = (0.0, 0.0)
-    for span in range(2, k):
-        for i in range(k - span):
-            j = i + span
-            if span < k - 1 and tuple(sorted((i, j))) in forbidden:
-                W[(i, j)] = inf
-                continue
-            best, best_m = inf, -1
-            for m in range(i + 1, j):
-                a, b = W[(i, m)], W[(m, j)]
-                if a[0] == np.inf or b[0] == np.inf:
-                    continue
-                n, area = tri_normal(i, m, j)
-                if area <= 0 or (i, m, j) in blocked:
-                    continue
-                worst = max(a[0], b[0])
-                for (u, v), sub in (((i, m), apex.get((i, m))), ((m, j), apex.get((m, j)))):
-                    other = border_normals[u] if v == u + 1 else tri_normal(u, sub, v)[0]
-                    worst = max(worst, angle(n, other))
-                if span == k - 1:
-                    worst = max(worst, angle(n, border_normals[k - 1]))
-                cand = (worst, a[1] + b[1] + area)
-                if cand < best:
-                    best, best_m = cand, m
-            W[(i, j)] = best
-            apex[(i, j)] = best_m
-    if W[(0, k - 1)][0] == np.inf:
+    banned = np.array(sorted(blocked), np.int64).reshape(-1, 3)
+    try:
+        split, worst = least_bend_splits(P, border_normals, forbidden_edges, banned)
+    except HoleFillError:
+        return None, np.inf
+    if not np.isfinite(worst):
         return None, np.inf
     faces, stack = [], [(0, k - 1)]
-    while stack:
+    while stack:  # the apexes read from the whole loop inwards, the second part first
         i, j = stack.pop()
         if j - i < 2:
             continue
-        m = apex[(i, j)]
+        m = int(split[i, j])
         faces.append((i, m, j))
         stack += [(i, m), (m, j)]
-    return np.asarray(faces, np.int64), W[(0, k - 1)][0]
+    return np.asarray(faces, np.int64), float(np.arccos(np.clip(1.0 - worst, -1.0, 1.0)))
 
 
 def fold_overs(V, F, reference):

@@ -55,6 +55,38 @@ def test_loop_triangulation_minimises_the_largest_dihedral_angle_exactly():
     assert F is None and worst == np.inf
 
 
+@settings(max_examples=40, deadline=None)
+@given(k=st.integers(3, 24), seed=st.integers(0, 2**31), bumpy=st.floats(0.0, 1.0), data=st.data())
+def test_loop_triangulation_is_the_plain_python_programme(k, seed, bumpy, data):
+    """The compiled programme gives the plain-Python one's triangles, in its order, and its largest angle:
+    on wavy loops, with unknown border normals (zero rows), forbidden chords and blocked triangles."""
+    from hpde_loop_dp_oracle import loop_triangulation_python
+
+    rng = np.random.default_rng(seed)
+    t = np.sort(rng.uniform(0, 2 * np.pi, k))
+    r = rng.uniform(0.6, 1.0, k)
+    P = np.c_[r * np.cos(t), r * np.sin(t), bumpy * rng.standard_normal(k)]
+    B = np.c_[0.5 * rng.standard_normal((k, 2)), np.ones(k)]
+    B /= np.linalg.norm(B, axis=1, keepdims=True)
+    B[rng.random(k) < data.draw(st.floats(0.0, 0.5))] = 0.0
+    triples = [(i, m, j) for i in range(k) for m in range(i + 1, k) for j in range(m + 1, k)]
+    blocked = {triples[x] for x in rng.choice(len(triples), size=min(len(triples), data.draw(st.integers(0, 6))),
+                                             replace=False)}
+    forbidden = [(i, j) for i, j in [(0, k // 2)] if 1 < j - i < k - 1] if data.draw(st.booleans()) else []
+    F, worst = hpde_folds.loop_triangulation(P, B, forbidden, blocked=blocked)
+    F0, worst0 = loop_triangulation_python(P, B, forbidden, blocked=blocked)
+    if F0 is None:
+        assert F is None and worst == np.inf
+        return
+    assert F.tolist() == F0.tolist()
+    assert worst == pytest.approx(worst0, rel=1e-9, abs=1e-7)
+
+
+def test_loop_triangulation_refuses_a_loop_above_its_size():
+    P = np.c_[np.cos(np.arange(8)), np.sin(np.arange(8)), np.zeros(8)]
+    assert hpde_folds.loop_triangulation(P, np.zeros((8, 3)), max_size=7) == (None, np.inf)
+
+
 @settings(max_examples=20, deadline=None)
 @given(k=st.integers(6, 14), points=st.integers(4, 24), seed=st.integers(0, 10_000), drag=st.floats(1.2, 2.5))
 def test_repair_folds_unfolds_a_dragged_vertex_and_keeps_the_loop(k, points, seed, drag):
