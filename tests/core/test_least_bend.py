@@ -121,23 +121,6 @@ def test_the_min_angle_filter_skips_a_hole_plane_start_that_crosses_more_than_it
     assert patch.info["fallback"] == "least bend"
 
 
-def test_hpde_smoothest_keeps_the_loop_only_patch_where_every_layout_bends_more():
-    """The noisy cow of seed 3, its 364-edge hole: the one clean layout (the development) meets the surface at
-    47 degrees across the border and lies 10.3 per mille from the removed surface; the loop-only patch bends
-    39 degrees (3.1 per mille), so ``layouts='smoothest'`` keeps it."""
-    from meshlab_holefill.algorithms.xie_zou2013 import differential_evolution as hpde
-    from meshlab_holefill.core.border_bend import border_bend
-
-    V, F = noisy_cow(3, noise_seed=3)
-    loop = max(boundary_loops(F), key=len)
-    ctx = hole_context(V, F, loop, rings=hpde.RINGS)
-    first = hpde.fill(ctx)
-    patch = hpde.fill(ctx, layouts="smoothest")
-    assert patch.info["layout"] == "loop only"
-    assert min(patch.info["layout_bends"], key=patch.info["layout_bends"].get) == "loop only"
-    assert border_bend(ctx, patch.vertices, patch.faces) < border_bend(ctx, first.vertices, first.faces)
-
-
 def test_hpde_closes_every_hole_of_another_noisy_cut():
     """Seed 2's 165-edge hole: the first layout's chords join loop vertices that the mesh joins, two of them in
     one triangle, and the patch must still be a disc (it had a non-manifold edge there)."""

@@ -134,9 +134,9 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
     record : dict, optional
         Receives ``smoothed_points`` of the returned patch.
     layouts : {'first', 'smoothest'}
-        Keep the first clean attempt of :func:`attempt_order`, or make them all, and the loop-only
-        patch, and keep the patch with the smallest :func:`meshlab_holefill.core.border_bend.border_bend`
-        (the first of equals), its ``info["layout_bends"]`` the bend of each attempt's patch.
+        Keep the first clean attempt of :func:`attempt_order`, or make them all and keep the
+        patch with the smallest :func:`meshlab_holefill.core.border_bend.border_bend` (the first
+        of equals), its ``info["layout_bends"]`` the bend of each attempt's patch.
 
     Returns
     -------
@@ -195,19 +195,15 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
             best, best_record = patch, clean.record
         reasons.append(f"{name}: kept only {kept:.0%} of the prediction points")
     if made:
-        # The loop-only patch competes too: where the predictions stray (a bump no arc of Sec. 4.5 follows, a
-        # noisy border), the loop's own least-bend triangulation continues the surface better.
-        loop_only = loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation,
-                                    _loop_only_info(base, reasons, t1 - t0, prediction_seconds))
-        if loop_only is not None:
-            made.append((border_bend(ctx, loop_only.vertices, loop_only.faces), "loop only", loop_only, {}))
         _, _, patch, kept_record = min(made, key=lambda m: m[0] if m[0] == m[0] else np.inf)  # NaN: no border edge
         patch.info["layout_bends"] = {name: float(b) for b, name, _, _ in made}
         return _returned(patch, kept_record, reasons, record)
     if best is not None:
         return _returned(best, best_record, reasons, record)
-    patch = loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation,
-                            _loop_only_info(base, reasons, t1 - t0, prediction_seconds))
+    info = {"base_points": len(base), "segmented": False, "layout": "loop only", "pairs": 0, "predicted": 0,
+            "rate": 0.0, "attempts_failed": "; ".join(reasons), "boundary_seconds": t1 - t0,
+            "prediction_seconds": prediction_seconds}
+    patch = loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info)
     if patch is not None:
         return patch
     if hole.crossing:  # crossings allowed: the first attempt refused only for crossing
@@ -218,13 +214,6 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
         info["crossing_surroundings"] = True
         return _returned(Patch(vertices=clean.V[k:], faces=clean.F, info=info), clean.record, reasons, record)
     raise HoleFillError("; ".join(reasons))
-
-
-def _loop_only_info(base, reasons, boundary_seconds, prediction_seconds):
-    """The report of a loop-only patch (:func:`._loop_only_patch.loop_only_patch` adds its own counts)."""
-    return {"base_points": len(base), "segmented": False, "layout": "loop only", "pairs": 0, "predicted": 0,
-            "rate": 0.0, "attempts_failed": "; ".join(reasons), "boundary_seconds": boundary_seconds,
-            "prediction_seconds": prediction_seconds}
 
 
 def _less_bent_of_development(ctx, development, disc):

@@ -163,9 +163,9 @@ PARAMS = [
               minimum=0, maximum=1000),
     ParamSpec("layouts", "enum", "first",
               "Which attempt's patch is kept: 'first' (the paper's choice, the other layouts only where it "
-              "fails) or 'smoothest' (beyond the paper: every prediction and layout is tried, and the loop's own "
-              "least-bend triangulation, and the patch that bends least against the surrounding surface across "
-              "the hole's border is kept; about four times the time).", choices=("first", "smoothest")),
+              "fails) or 'smoothest' (beyond the paper: every prediction and layout is tried and the patch that "
+              "bends least against the surrounding surface across the hole's border is kept; about four times "
+              "the time).", choices=("first", "smoothest")),
 ]
 
 _WARM = []  # set once the kernels are loaded in this process
@@ -231,7 +231,7 @@ def fill(ctx, population_factor=3.0, mutation=0.8, crossover=0.05, generations=N
         Start angle of the arcs of Sec. 4.5.
     layouts : {'first', 'smoothest'}
         'first' keeps the first clean attempt (above); 'smoothest' (beyond the paper) makes every
-        attempt and the loop-only patch of the last resort and keeps the patch with the smallest
+        attempt and keeps the patch with the smallest
         :func:`meshlab_holefill.core.border_bend.border_bend`.
     record : dict, optional
         Receives ``smoothed_points`` ((s, 3) float64, the SP_i of Sec. 4.7 of the returned
