@@ -88,6 +88,35 @@ def test_a_face_that_uses_a_vertex_twice_is_refused_by_name_on_arrays_and_on_a_m
     assert ms.current_mesh().face_number() > len(F) - 1
 
 
+def test_a_triangle_soup_is_refused_by_name_and_the_repair_it_names_makes_it_fillable():
+    """Every face with vertices of its own (an STL read without welding): each face is its own island."""
+    from meshlab_holefill.core.examples import bowl_with_hole
+
+    V, F, _ = bowl_with_hole()
+    soup_V, soup_F = V[F.ravel()], np.arange(3 * len(F)).reshape(-1, 3)
+    with pytest.raises(meshlab_holefill.MeshTopologyError, match=rf"triangle soup: its {len(F)} faces share no vertex"):
+        meshlab_holefill.fill_holes(soup_V, soup_F)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(soup_V, soup_F.astype(np.int32)))
+    with pytest.raises(meshlab_holefill.MeshTopologyError, match="meshing_merge_close_vertices"):
+        ms.meshing_close_holes_min_angle_bilateral()
+    assert ms.mesh_number() == 1 and ms.current_mesh().face_number() == len(F)  # nothing lost
+    ms.meshing_merge_close_vertices()  # the repair the message names
+    res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=100)
+    assert res["closed_holes"] == 1
+
+
+def test_two_faces_of_their_own_beside_a_welded_mesh_are_no_soup():
+    from meshlab_holefill.core.examples import bowl_with_hole
+
+    V, F, _ = bowl_with_hole()
+    n = len(V)
+    V2 = np.vstack([V, [[5, 5, 0], [6, 5, 0], [5, 6, 0]]])
+    F2 = np.vstack([F, [[n, n + 1, n + 2]]])
+    _, _, res = meshlab_holefill.fill_holes(V2, F2, maxholesize=100)
+    assert res["closed_holes"] == 1 and "outlines a single face" in res["holes"][-1]["reason"]
+
+
 def test_the_algorithms_warm_up_runs_once_before_any_hole_is_filled(holed_sphere, monkeypatch):
     # forked workers then inherit the loaded kernels instead of loading them within their first hole
     from meshlab_holefill.algorithms.xu2013 import lssvm_poisson

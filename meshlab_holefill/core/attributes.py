@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import MeshTopologyError
 from .holes import nonmanifold_edges
 
-__all__ = ["MeshArrays", "check_manifold_edges", "extend_attributes", "refine_mesh_arrays"]
+__all__ = ["MeshArrays", "check_manifold_edges", "check_faces_joined", "extend_attributes", "refine_mesh_arrays"]
 
 
 @dataclass
@@ -66,6 +66,22 @@ def check_manifold_edges(F, label="", bad=None):
     raise MeshTopologyError(
         f"mesh '{label}' has {len(bad)} non-manifold edges (e.g. vertices {bad[0].tolist()}); "
         "run meshing_repair_non_manifold_edges first")
+
+
+def check_faces_joined(F, border_halfedges, label=""):
+    """Raise MeshTopologyError for a triangle soup: two faces or more, and no vertex shared by two of them.
+
+    Such a mesh (an STL file read without welding its vertices) has a border loop round every
+    face and no hole to fill; the message names the repair. ``border_halfedges`` is the count of
+    the mesh's border half-edges: only where it is 3 per face (no edge shared) are the vertices
+    counted.
+    """
+    if len(F) < 2 or border_halfedges != 3 * len(F):
+        return
+    if np.bincount(np.asarray(F).ravel()).max() == 1:
+        raise MeshTopologyError(
+            f"mesh '{label}' is a triangle soup: its {len(F)} faces share no vertex, so each face is an island of "
+            "its own and there is no hole to fill; run meshing_merge_close_vertices (Merge Close Vertices) first")
 
 
 def _idw_weights(sources, targets):

@@ -17,7 +17,7 @@ import numpy as np
 from dataclasses import dataclass
 
 from .content_key import content_key
-from .attributes import MeshArrays, check_manifold_edges, extend_attributes, refine_mesh_arrays
+from .attributes import MeshArrays, check_faces_joined, check_manifold_edges, extend_attributes, refine_mesh_arrays
 from .crossings import (clashing_patches, context_crossings, crossing_patches, face_boxes_near, load_crossing_kernels,
                         patch_box, patch_intersections)
 from .face_grid import face_grid
@@ -163,6 +163,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     V, F = arrays.V, arrays.F
     he, he_faces, bad_edges = edge_summary(F)
     check_manifold_edges(F, arrays.label, bad_edges)
+    check_faces_joined(F, len(he), arrays.label)
     loops = boundary_loops(F, (he, he_faces))
     incidence = vertex_face_incidence(F, len(V)) if len(loops) else None
     report, todo = _select_holes(V, F, loops, params, arrays.face_attrs["selected"].ravel() > 0, incidence)
