@@ -11,25 +11,9 @@ from meshlab_holefill.geometry.topology import edge_pair_set
 
 
 def loop_triangulation_python(P, border_normals, forbidden_edges=(), blocked=frozenset()):
-    """Triangulation of the loop alone minimising (largest dihedral angle, area), as Liepa (2003).
+    """:func:`meshlab_holefill.algorithms.xie_zou2013.folds.loop_triangulation` as it was, in Python, without its size cap.
 
-    Last resort beyond the paper, used only when every HPDE attempt folds (slit-like or
-    crumpled natural holes, where no base point keeps a correspondence): dynamic programming
-    over the O(k^3) triangulations of the polygon, the dihedral angle of a triangle taken
-    against its neighbours in the triangulation and, on a loop edge, against the mesh face
-    across it; chords that duplicate a mesh edge and ``blocked`` triangles are not used.
-
-    Parameters
-    ----------
-    P : (k, 3) float64  loop points (patch orientation)
-    border_normals : (k, 3) float64  unit normal of the mesh face on loop edge (i, i+1) (0 rows: unknown)
-    forbidden_edges : (p, 2) int
-    blocked : set of (i, m, j), i < m < j  triangles not to use (they cross the mesh)
-
-    Returns
-    -------
-    F : (k - 2, 3) int64, or None when impossible
-    worst : float  largest dihedral angle (radians) of the result
+    Returns (F (k - 2, 3) int64 or None, the largest dihedral angle in radians or inf).
     """
     k = len(P)
     forbidden = edge_pair_set(forbidden_edges)
