@@ -78,8 +78,10 @@ def least_bend_splits(P, border_normals, forbidden_edges=(), banned=()):
 
     Raises
     ------
-    ValueError, HoleFillError
-        As :func:`dihedral_triangulation`.
+    ValueError
+        When P or border_normals is not (k, 3).
+    HoleFillError
+        When the loop has fewer than 3 vertices (no triangulation at all is ``worst`` = inf).
     """
     P = np.ascontiguousarray(P, np.float64)
     k = len(P)
