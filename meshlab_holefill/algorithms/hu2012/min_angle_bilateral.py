@@ -55,6 +55,7 @@ from ...geometry.flips import relax_edges
 from ...geometry.refine import refine_patch
 from ...geometry.topology import boundary_edges_and_chords
 from .hole_guards import LoopSectors, patch_guard, relax_in_sectors, swaps_crossing
+from ...core.content_key import content_key
 from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...errors import HoleFillError
@@ -184,6 +185,26 @@ def relaxation_guard(ctx, sector=None):
         return ok
 
     return allowed
+
+
+_REFINED = []  # the last few (ctx, key, refinement) of _refined
+
+
+def _refined(ctx, F0, alpha, fixed, criterion):
+    """:func:`_refine` of ``F0``, the same refinement handed out again (as copies) for the same triangulation.
+
+    A fallback starts from the triangulation an earlier attempt refined (the faired option set
+    from the paper's, the least-bend one with the faired set after the filter's own options);
+    the refinement depends on the triangulation and these options only.
+    """
+    key = (content_key(np.asarray(F0), np.asarray(fixed), np.array([alpha], float)), criterion)
+    for c, k, (V, F, scale, info) in _REFINED:
+        if c is ctx and k == key:
+            return V.copy(), F.copy(), scale.copy(), dict(info)
+    V, F, scale, info = _refine(ctx, F0, alpha, fixed, criterion=criterion)
+    _REFINED.insert(0, (ctx, key, (V.copy(), F.copy(), scale.copy(), dict(info))))
+    del _REFINED[4:]
+    return V, F, scale, info
 
 
 def _refine(ctx, F0, alpha, fixed, max_passes=4, criterion="sphere"):
@@ -335,7 +356,7 @@ def _patch_from(ctx, initial, alpha, sigma_c, sigma_s, iterations, fairing, rela
     F0 = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges) if initial is None else initial
     t1 = time.perf_counter()
     fixed = boundary_edges_and_chords(k, ctx.forbidden_edges)
-    V, F, scale, info = _refine(ctx, F0, alpha, fixed, criterion=relaxation)
+    V, F, scale, info = _refined(ctx, F0, alpha, fixed, relaxation)
     t2 = time.perf_counter()
 
     def optimise(V, F, scale, n_iter):

@@ -170,3 +170,24 @@ def test_a_cut_across_walls_is_triangulated_about_the_holes_plane(name, axis, sh
     V2, F2, res = fill_holes(V, F, "min_angle_bilateral", maxholesize=400)
     assert res["failed_holes"] == 0 and res["holes"][0]["fallback"] == chosen
     assert_filled_cleanly(V, F, V2, F2)
+
+
+def test_a_triangulation_refined_again_gets_the_same_refinement_as_copies():
+    """The fallbacks start from triangulations an earlier attempt refined: the refinement is handed out again,
+    equal to a fresh one, and changing what a caller got changes nothing for the next."""
+    from meshlab_holefill.algorithms.hu2012 import min_angle_bilateral as mab
+    from meshlab_holefill.core import examples
+    from meshlab_holefill.geometry.topology import boundary_edges_and_chords
+
+    V, F, loop = examples.bowl_with_hole()
+    ctx = hole_context(V, F, loop, rings=mab.RINGS)
+    F0 = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges)
+    fixed = boundary_edges_and_chords(ctx.size, ctx.forbidden_edges)
+    fresh = mab._refine(ctx, F0, np.sqrt(2.0), fixed, criterion="angles")
+    first = mab._refined(ctx, F0, np.sqrt(2.0), fixed, "angles")
+    first[0][:] = 0.0
+    first[3]["swaps"] = -1
+    again = mab._refined(ctx, F0, np.sqrt(2.0), fixed, "angles")
+    for a, b in zip(fresh[:3], again[:3]):
+        np.testing.assert_array_equal(a, b)
+    assert again[3] == fresh[3]
