@@ -13,7 +13,7 @@ from ...geometry.segments import polygon_edges_touch
 from ._projection_kernels import projected_turns
 from .hole_guards import patch_crossings
 
-__all__ = ["crosses", "crosses_uncached", "crossing_faces", "embeds_in_projection"]
+__all__ = ["crosses", "crosses_uncached", "embeds_in_projection"]
 
 
 def embeds_in_projection(V, F, k, min_sine=1e-6):
@@ -112,14 +112,3 @@ def crosses_uncached(ctx, V, F):
     if embeds_in_projection(V, F, ctx.size):
         return False
     return bool(len(intersecting_pairs(V, F, np.arange(len(F)), np.arange(len(F)))))
-
-
-def crossing_faces(ctx, V, F):
-    """How many faces of the patch (V loop-first, F) cross the surrounding faces or another face of the patch."""
-    from ...geometry.intersections import intersecting_pairs
-
-    F = np.asarray(F, np.int64)
-    hit = np.zeros(len(F), bool)
-    hit[patch_crossings(ctx, V, F)] = True
-    hit[intersecting_pairs(V, F, np.arange(len(F)), np.arange(len(F))).ravel()] = True
-    return int(np.count_nonzero(hit))

@@ -56,13 +56,14 @@ from ...geometry.refine import refine_patch
 from ...geometry.topology import boundary_edges_and_chords
 from .hole_guards import LoopSectors, patch_guard, relax_in_sectors, swaps_crossing
 from ...core.content_key import content_key
+from ...core.crossings import context_crossings
 from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...core.parameters import ParamSpec
 from .tangential_smoothing import tangential_smoothing
 from .min_angle_triangulation import hole_plane_triangulation, min_angle_triangulation
-from .crossing_test import crosses, crossing_faces
+from .crossing_test import crosses
 
 __all__ = ["fill", "FAIRED_OPTIONS", "PARAMS", "RINGS", "WARM_UP", "warm_up", "relaxation_guard"]
 
@@ -458,7 +459,8 @@ def _hole_plane_start(ctx, F0):
         plane = hole_plane_triangulation(ctx.points, ctx.forbidden_edges)
     except HoleFillError:
         return None
-    return plane if crossing_faces(ctx, ctx.points, plane) < crossing_faces(ctx, ctx.points, F0) else None
+    crossing = len(context_crossings(ctx, ctx.points, plane)), len(context_crossings(ctx, ctx.points, F0))
+    return plane if crossing[0] < crossing[1] else None
 
 
 def _least_bend_tries(ctx, options, faired):
