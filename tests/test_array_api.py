@@ -82,6 +82,19 @@ def test_a_face_that_uses_a_vertex_twice_is_refused_by_name_on_arrays_and_on_a_m
     assert res["closed_holes"] == 1
 
 
+@pytest.mark.parametrize("orientation", [1, -1])
+def test_a_face_stored_twice_is_refused_by_name_on_arrays_and_on_a_meshset(orientation):
+    from meshlab_holefill.core.examples import bowl_with_hole
+
+    V, F, _ = bowl_with_hole()
+    F = np.vstack([F, F[7][::orientation]])
+    with pytest.raises(meshlab_holefill.MeshTopologyError,
+                       match=rf"1 faces stored twice \(e.g. faces \[7, {len(F) - 1}\] on vertices"):
+        meshlab_holefill.fill_holes(V, F)
+    res = refused_on_a_meshset_until_repaired(V, F, "meshing_remove_duplicate_faces")
+    assert res["closed_holes"] == 1
+
+
 def test_a_triangle_soup_is_refused_by_name_and_the_repair_it_names_makes_it_fillable():
     """Every face with vertices of its own (an STL read without welding): each face is its own island."""
     from meshlab_holefill.core.examples import bowl_with_hole

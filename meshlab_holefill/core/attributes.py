@@ -50,10 +50,11 @@ class MeshArrays:
 def check_manifold_edges(F, label="", bad=None):
     """Raise MeshTopologyError when an edge is shared by more than two faces.
 
-    Where faces that use a vertex twice (such as [a, a, b]) are present, the message names them
-    and the repair that removes them: they are what makes such edges, most often. Elsewhere in
-    the mesh these faces are kept as they are. ``bad`` may pass the non-manifold edges when
-    already computed (``holes.edge_summary``).
+    Where faces that use a vertex twice (such as [a, a, b]) or faces on the same three vertices
+    (a face stored twice, in either orientation) are present, the message names them and the
+    repair that removes them: they are what makes such edges, most often. Elsewhere in the mesh
+    these faces are kept as they are. ``bad`` may pass the non-manifold edges when already
+    computed (``holes.edge_summary``).
     """
     bad = nonmanifold_edges(F) if bad is None else bad
     if not len(bad):
@@ -63,9 +64,27 @@ def check_manifold_edges(F, label="", bad=None):
         raise MeshTopologyError(
             f"mesh '{label}' has {len(bad)} non-manifold edges and {len(repeats)} faces that use a vertex twice "
             f"(e.g. face {int(repeats[0])}: vertices {F[repeats[0]].tolist()}); run meshing_remove_null_faces first")
+    twins = _faces_stored_twice(F)
+    if len(twins):
+        raise MeshTopologyError(
+            f"mesh '{label}' has {len(bad)} non-manifold edges and {len(twins)} faces stored twice (e.g. faces "
+            f"{twins[0].tolist()} on vertices {sorted(F[twins[0][0]].tolist())}); run meshing_remove_duplicate_faces "
+            "first")
     raise MeshTopologyError(
         f"mesh '{label}' has {len(bad)} non-manifold edges (e.g. vertices {bad[0].tolist()}); "
         "run meshing_repair_non_manifold_edges first")
+
+
+def _faces_stored_twice(F):
+    """(d, 2) int64: pairs (first, later) of faces on the same three vertices, one row per later copy."""
+    keys = np.sort(np.asarray(F, np.int64), axis=1)
+    order = np.lexsort(keys.T[::-1])  # rows in sorted order, copies side by side, the first stored first
+    same = np.flatnonzero(np.all(keys[order[1:]] == keys[order[:-1]], axis=1))
+    if not len(same):
+        return np.zeros((0, 2), np.int64)
+    runs = np.r_[0, np.flatnonzero(np.diff(same) != 1) + 1]  # each run of copies starts here in ``same``
+    first = np.repeat(order[same[runs]], np.diff(np.r_[runs, len(same)]))
+    return np.stack([first, order[same + 1]], axis=1)
 
 
 def check_faces_joined(F, border_halfedges, label=""):

@@ -239,7 +239,7 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0, obstacles=None):
         incidence = vertex_face_incidence(F, len(V))
     loop_v = np.asarray(loop.vertices, np.int64)
     k = len(loop_v)
-    _refuse_zero_length_border_edges(np.asarray(V[loop_v], np.float64), loop_v)
+    _refuse_coincident_border_vertices(np.asarray(V[loop_v], np.float64), loop_v)
     depth_parts = [np.zeros(k, np.int64)]
     vertex_parts = [loop_v]
     frontier = loop_v
@@ -291,10 +291,19 @@ def hole_context(V, F, loop, incidence=None, rings=3, index=0, obstacles=None):
 ZERO_EDGE = 2e-14
 
 
-def _refuse_zero_length_border_edges(P, loop_v):
-    """Raise HoleFillError, naming them, where two consecutive loop vertices coincide (P: (k, 3) loop points)."""
+def _refuse_coincident_border_vertices(P, loop_v):
+    """Raise HoleFillError, naming them, where two distinct loop vertices coincide (P: (k, 3) loop points).
+
+    Consecutive ones make a zero-length border edge. Others (an unwelded vertex: the border runs
+    v -> a -> v' -> b -> v around a face cut loose at a corner) pinch the hole at one position,
+    where every patch would touch or overlap itself. Once the vertices are merged the loop is a
+    pinched one, which the filters fill, or no hole at all. Coincident means within ``ZERO_EDGE``
+    of the loop's box diagonal, tested between neighbours in the rows' sorted order.
+    """
+    if len(P) == 0:
+        return
+    diag = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
     lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
-    diag = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))) if len(P) else 0.0
     short = np.flatnonzero(lengths <= ZERO_EDGE * diag)
     if len(short):
         i = int(short[0])
@@ -302,6 +311,15 @@ def _refuse_zero_length_border_edges(P, loop_v):
             f"the hole's border has an edge of length {lengths[i]:.3g} between vertices {loop_v[i]} and "
             f"{loop_v[(i + 1) % len(loop_v)]} (duplicate vertices), so every triangle on it would have zero area: "
             "merge close vertices first (MeshLab's Merge Close Vertices, meshing_merge_close_vertices)")
+    order = np.lexsort(P.T[::-1])  # rows sorted by x, then y, then z
+    gaps = np.linalg.norm(P[order[1:]] - P[order[:-1]], axis=1)
+    same = np.flatnonzero((gaps <= ZERO_EDGE * diag) & (loop_v[order[1:]] != loop_v[order[:-1]]))
+    if len(same):
+        a, b = sorted((int(loop_v[order[same[0]]]), int(loop_v[order[same[0] + 1]])))
+        raise HoleFillError(
+            f"the hole's border passes twice through one position: vertices {a} and {b} coincide (duplicate "
+            "vertices, an unwelded seam), so every patch would overlap itself there: merge close vertices first "
+            "(MeshLab's Merge Close Vertices, meshing_merge_close_vertices)")
 
 
 def _obstacle_faces(V, F, global_index, ring_faces, obstacles):

@@ -225,7 +225,8 @@ def _select_holes(V, F, loops, params, selected_faces, incidence):
             entry.update(hole_measures(V, loop))
             entry["size_class"] = loop_class(V, F, loop, incidence)
         if not loop.closed:
-            entry.update(status="skipped", reason="open boundary chain (inconsistent face orientation)")
+            entry.update(status="skipped", reason="open boundary chain (inconsistent face orientation): run "
+                                                  "meshing_re_orient_faces_coherently first")
         elif len(loop) < 3:
             entry.update(status="skipped", reason="degenerate loop with fewer than 3 edges")
         elif outlines_one_face(loop):

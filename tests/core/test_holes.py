@@ -6,6 +6,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from meshlab_holefill.algorithms.hu2012.hole_guards import inside_hole_sector
+from meshlab_holefill.errors import HoleFillError
 from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops, edge_face_counts, edge_summary, hole_context, nonmanifold_edges, vertex_face_incidence
 
 from conftest import cut_disks, grid, mesh_arrays, sample, sphere_with_holes
@@ -287,3 +288,42 @@ def test_a_border_edge_between_coincident_vertices_is_refused_by_name_and_the_me
     assert np.array_equal(V3, V2) and np.array_equal(F3, F2)
     with pytest.raises(Exception, match="duplicate vertices"):
         hole_context(V2, F2, hole)
+
+
+def _with_face_cut_loose_at_a_corner():
+    """A sphere whose face 100 uses a copy v' of its first vertex v: the border runs v -> a -> v' -> b -> v.
+
+    Returns V, F and the pair (v, v').
+    """
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=3)
+    V, F = mesh_arrays(ms)
+    v = int(F[100, 0])
+    V = np.vstack([V, V[v]])
+    F = F.copy()
+    F[100, 0] = len(V) - 1
+    return V, F, (v, len(V) - 1)
+
+
+@pytest.mark.parametrize("algorithm", ["min_angle_bilateral", "curve_unfolding", "lssvm_poisson", "differential_evolution"])
+def test_a_border_through_one_position_twice_is_refused_by_name_and_the_mesh_kept(algorithm):
+    from meshlab_holefill import fill_holes
+
+    V, F, (v, copy) = _with_face_cut_loose_at_a_corner()
+    (hole,) = boundary_loops(F)
+    assert len(hole) == 4 and len(set(hole.vertices.tolist())) == 4  # no vertex twice: not a pinched loop
+    V2, F2, result = fill_holes(V, F, algorithm, workers=1)
+    (entry,) = result["holes"]
+    assert entry["status"] == "failed"
+    assert "passes twice through one position" in entry["reason"] and "meshing_merge_close_vertices" in entry["reason"]
+    assert np.array_equal(V2, V) and np.array_equal(F2, F)
+    with pytest.raises(HoleFillError, match=f"vertices {v} and {copy} coincide"):
+        hole_context(V, F, hole)
+
+
+def test_merging_close_vertices_leaves_no_hole_where_a_face_was_cut_loose():
+    V, F, _ = _with_face_cut_loose_at_a_corner()
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(V, F))
+    ms.meshing_merge_close_vertices()
+    assert boundary_loops(mesh_arrays(ms)[1]) == []

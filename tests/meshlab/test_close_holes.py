@@ -174,6 +174,19 @@ def test_open_boundary_chain_is_skipped_and_the_mesh_left_unchanged():
     np.testing.assert_array_equal(F2, F)
 
 
+def test_the_repair_an_open_chain_names_turns_it_into_a_hole_that_closes():
+    V, F, inner = _grid_with_flipped_hole_border()
+    ms = meshset_from_arrays(V, F)
+    res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=12)
+    (reason,) = {h["reason"] for h in res["holes"] if h["boundary_edges"] <= 12}
+    repair = reason.split("run ")[1].split()[0]
+    assert repair == "meshing_re_orient_faces_coherently"
+    getattr(ms, repair)()
+    res = ms.meshing_close_holes_min_angle_bilateral(maxholesize=12)
+    (hole,) = [h for h in res["holes"] if h["boundary_edges"] <= 12]
+    assert hole["boundary_edges"] == len(inner) and hole["status"] == "closed"
+
+
 def test_reported_boundary_edges_add_up_to_the_mesh_boundary_on_open_chains():
     V, F, inner = _grid_with_flipped_hole_border()
     res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral(maxholesize=12)
