@@ -302,18 +302,20 @@ def _refuse_coincident_border_vertices(P, loop_v):
     """
     if len(P) == 0:
         return
-    diag = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
-    lengths = np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
-    short = np.flatnonzero(lengths <= ZERO_EDGE * diag)
+    # squared lengths against the squared bound: a few small array operations per hole
+    tol2 = ZERO_EDGE * ZERO_EDGE * float(((P.max(axis=0) - P.min(axis=0)) ** 2).sum())
+    following = np.concatenate([P[1:], P[:1]])
+    short = np.flatnonzero(((following - P) ** 2).sum(axis=1) <= tol2)
     if len(short):
         i = int(short[0])
+        length = float(np.linalg.norm(following[i] - P[i]))
         raise HoleFillError(
-            f"the hole's border has an edge of length {lengths[i]:.3g} between vertices {loop_v[i]} and "
+            f"the hole's border has an edge of length {length:.3g} between vertices {loop_v[i]} and "
             f"{loop_v[(i + 1) % len(loop_v)]} (duplicate vertices), so every triangle on it would have zero area: "
             "merge close vertices first (MeshLab's Merge Close Vertices, meshing_merge_close_vertices)")
     order = np.lexsort(P.T[::-1])  # rows sorted by x, then y, then z
-    gaps = np.linalg.norm(P[order[1:]] - P[order[:-1]], axis=1)
-    same = np.flatnonzero((gaps <= ZERO_EDGE * diag) & (loop_v[order[1:]] != loop_v[order[:-1]]))
+    S = P[order]
+    same = np.flatnonzero((((S[1:] - S[:-1]) ** 2).sum(axis=1) <= tol2) & (loop_v[order[1:]] != loop_v[order[:-1]]))
     if len(same):
         a, b = sorted((int(loop_v[order[same[0]]]), int(loop_v[order[same[0] + 1]])))
         raise HoleFillError(
