@@ -13,7 +13,8 @@ Xie and Zou 2013. :func:`patch_hole` runs, for one hole:
   paper the ``relax`` rounds and the guarded quality pass (:mod:`.quality_pass`);
 
 trying the layouts in :func:`attempt_order` until one is clean, and the loop-only
-triangulation (:func:`._loop_only_patch.loop_only_patch`) as the last resort. The readings behind each choice
+triangulation (:func:`._loop_only_patch.loop_only_patch`) as the last resort and as the rival
+of a fallback layout's patch (:func:`_bends_more_than_loop_only`). The readings behind each choice
 are in the module docstring of :mod:`.differential_evolution`.
 """
 from __future__ import annotations
@@ -159,7 +160,15 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
     hole = _Hole(ctx, base, normals, seg, edge_len, mesh_normals, smoothing, optimisation)
     prediction_seconds = 0.0
     made = []  # with layouts='smoothest': (bend, attempt's name, patch, record) of every attempt
-    for segmented, layout in attempts:
+
+    def loop_only(failed):
+        """The loop-only patch (None where it is not clean), its info naming the attempts ``failed``."""
+        info = {"base_points": len(base), "segmented": False, "layout": "loop only", "pairs": 0, "predicted": 0,
+                "rate": 0.0, "attempts_failed": "; ".join(failed), "boundary_seconds": t1 - t0,
+                "prediction_seconds": prediction_seconds}
+        return loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info)
+
+    for position, (segmented, layout) in enumerate(attempts):
         t2 = time.perf_counter()
         if segmented not in predictions:
             # Steps 3-5, once per prediction.
@@ -189,6 +198,11 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
             made.append((border_bend(ctx, patch.vertices, patch.faces), name, patch, clean.record))
             continue
         if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
+            if position > 0:  # the paper's own attempt failed: this is a fallback layout's patch
+                kept_name = f"{name.rsplit(', ', 1)[0]}, {layout}"  # the disc, where it beat the development
+                guard = _bends_more_than_loop_only(ctx, patch, kept_name, reasons, loop_only)
+                if guard is not None:
+                    return guard
             return _returned(patch, clean.record, reasons, record)
         # The layout lost many prediction points: keep it, but try the others first.
         if best is None or kept > best.info["kept_share"]:
@@ -200,10 +214,7 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
         return _returned(patch, kept_record, reasons, record)
     if best is not None:
         return _returned(best, best_record, reasons, record)
-    info = {"base_points": len(base), "segmented": False, "layout": "loop only", "pairs": 0, "predicted": 0,
-            "rate": 0.0, "attempts_failed": "; ".join(reasons), "boundary_seconds": t1 - t0,
-            "prediction_seconds": prediction_seconds}
-    patch = loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info)
+    patch = loop_only(reasons)
     if patch is not None:
         return patch
     if hole.crossing:  # crossings allowed: the first attempt refused only for crossing
@@ -214,6 +225,29 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
         info["crossing_surroundings"] = True
         return _returned(Patch(vertices=clean.V[k:], faces=clean.F, info=info), clean.record, reasons, record)
     raise HoleFillError("; ".join(reasons))
+
+
+def _bends_more_than_loop_only(ctx, patch, name, reasons, loop_only):
+    """The loop-only patch where it bends less against the surface than the fallback layout's ``patch``, else None.
+
+    Beyond the paper. A fallback layout (the development, the disc, the other plane layout or
+    prediction) runs where the paper's own layout failed, which is where the predictions stray
+    most: a bump that no arc of Sec. 4.5 follows, a noisy border, a loop wrapped round a part.
+    The loop's own least-bend triangulation (the last resort, :func:`._loop_only_patch.loop_only_patch`)
+    is made too and kept where its :func:`meshlab_holefill.core.border_bend.border_bend` is
+    smaller, the criterion that already chooses between the development and the disc. Only after
+    a failed paper layout: against every first clean patch the coarse loop-only patch won on small
+    holes by its coarseness alone (README, "HPDE (Xie & Zou)", tried and not kept). ``name``
+    is the attempt's label, ``reasons`` the attempts that failed before it (the loop-only patch's
+    report names them and this one); ``loop_only(reasons)`` makes the loop-only patch or None.
+    """
+    failed = reasons + [f"{name}: bends more against the surface than the loop-only patch"]
+    alternative = loop_only(failed)
+    if alternative is None:
+        return None
+    if not border_bend(ctx, alternative.vertices, alternative.faces) < border_bend(ctx, patch.vertices, patch.faces):
+        return None
+    return alternative
 
 
 def _less_bent_of_development(ctx, development, disc):

@@ -91,9 +91,43 @@ def test_a_long_curved_strip_takes_the_development_layout_where_the_disc_rounds_
     off_sphere = lambda p: np.abs(np.linalg.norm(p.vertices, axis=1) - 1.0).mean()  # noqa: E731
     order = hpde_algorithm2.attempt_order
     monkeypatch.setattr(hpde_algorithm2, "attempt_order", lambda *a: [x for x in order(*a) if x[1] != "development"])
+    monkeypatch.setattr(hpde_algorithm2, "_bends_more_than_loop_only", lambda *a: None)  # the disc as it is
     disc = hpde.fill(ctx)
     assert disc.info["layout"] == "disc"
     assert off_sphere(patch) < 0.1 * off_sphere(disc)  # measured 0.00054 and 0.0213
+
+
+def test_a_fallback_patch_that_bends_more_than_the_loop_only_patch_gives_way_to_it(monkeypatch):
+    """The band without its development: the disc rounds the strip, the loop's own triangulation follows it."""
+    from meshlab_holefill.core.border_bend import border_bend
+
+    ctx = _equatorial_band()
+    order = hpde_algorithm2.attempt_order
+    monkeypatch.setattr(hpde_algorithm2, "attempt_order", lambda *a: [x for x in order(*a) if x[1] != "development"])
+    patch = hpde.fill(ctx)
+    assert patch.info["layout"] == "loop only"
+    assert "unsegmented prediction, disc: bends more against the surface than the loop-only patch" in \
+        patch.info["attempts_failed"]
+    check_patch(ctx, patch)
+    monkeypatch.setattr(hpde_algorithm2, "_bends_more_than_loop_only", lambda *a: None)
+    disc = hpde.fill(ctx)
+    assert disc.info["layout"] == "disc"
+    assert border_bend(ctx, patch.vertices, patch.faces) < border_bend(ctx, disc.vertices, disc.faces)
+    off_sphere = lambda p: np.abs(np.linalg.norm(p.all_points(ctx.points), axis=1) - 1.0).mean()  # noqa: E731
+    assert off_sphere(patch) < 0.2 * off_sphere(disc)  # measured 0.0012 and 0.0140
+
+
+def test_the_papers_own_layout_is_kept_without_the_loop_only_patch_made(monkeypatch):
+    """The guard is for fallbacks: where the paper's layout closes the hole, no loop-only patch is made."""
+    from meshlab_holefill.core import examples
+
+    V, F, loop = examples.bowl_with_hole()
+    ctx = hole_context(V, F, loop, rings=hpde.RINGS)
+    made = []
+    loop_only = hpde_algorithm2.loop_only_patch
+    monkeypatch.setattr(hpde_algorithm2, "loop_only_patch", lambda *a: made.append(1) or loop_only(*a))
+    patch = hpde.fill(ctx)
+    assert patch.info["layout"] == "plane" and not made
 
 
 def test_a_cap_round_a_knob_keeps_the_disc_layout_whose_patch_bends_less():
