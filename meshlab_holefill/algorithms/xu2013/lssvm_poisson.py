@@ -203,6 +203,10 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
     The training set and regression (Sec. 3.3, 2.2) come first; then the initial patches of
     :func:`.poisson_patch.initial_patches` are tried in turn (the paper's 3D advancing front
     first) until one is repositioned (:func:`.poisson_reconstruction.reposition`) clear of the surrounding mesh.
+    A patch no Poisson solve could be kept for (each folded it beyond repair, or gave no finite
+    positions) is the initial triangulation alone, without the Sec. 3.4 step that gives the
+    patch its shape: the later initial patches are tried for one the solve does shape, and it
+    is kept only when none is (measured in README, "LS-SVM Laplacian + Poisson (Xu et al.)").
 
     Parameters
     ----------
@@ -273,7 +277,7 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
         elif samples:
             regressors = fit_laplacian_regressors(samples_X, samples_delta, gamma, kernel_width, model_selection)
     t1 = time.perf_counter()
-    failures, crossing = [], None
+    failures, crossing, unshaped = [], None, None
     for X0, F0, stats, layout in initial_patches(ctx, merge_factor, failures):
         t2 = time.perf_counter()
         solves = poisson_solves(stats, poisson_iterations)
@@ -288,7 +292,15 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
             if crossing is None and "crossing_patch" in pinfo:  # crossings allowed: the first such patch
                 crossing = (*pinfo.pop("crossing_patch"), stats, pinfo, seconds)
             continue
+        if pinfo["poisson_solves"] == 0:  # no solve kept: the initial patch only, which a later one may improve on
+            if unshaped is None:
+                unshaped = (X, F, stats, pinfo, seconds, list(failures))
+            failures.append(f"{stats['domain']} patch: no Poisson solve could be kept")
+            continue
         return _patch(k, X, F, stats, pinfo, samples, seconds, failures)
+    if unshaped is not None:
+        X, F, stats, pinfo, seconds, failed = unshaped
+        return _patch(k, X, F, stats, pinfo, samples, seconds, failed)
     if crossing is not None:
         X, F, stats, pinfo, seconds = crossing
         patch = _patch(k, X, F, stats, pinfo, samples, seconds, failures)

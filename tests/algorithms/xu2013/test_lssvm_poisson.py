@@ -1,4 +1,6 @@
 """Xu et al. 2013: the LS-SVM Poisson hole-filling filter as a whole (MeshSet runs, parameters, whole holes)."""
+import itertools
+
 import numpy as np
 import pymeshlab
 import pytest
@@ -176,3 +178,60 @@ def test_the_patch_does_not_depend_on_the_unit(scale):
     patch = xu.fill(hole_context(V * scale, F, boundary_loops(F)[0], rings=xu.RINGS))
     assert np.array_equal(patch.faces, ref.faces) and patch.info["afm_rejected"] == ref.info["afm_rejected"]
     np.testing.assert_allclose(patch.vertices / scale, ref.vertices, rtol=0, atol=1e-9)
+
+
+def _reposition_unshaped(monkeypatch, calls):
+    """Make the first ``calls`` repositionings report no Poisson solve kept (positions as computed)."""
+    real, made = xu.reposition, []
+
+    def reposition(*args, **kwargs):
+        X, F, info = real(*args, **kwargs)
+        made.append(1)
+        if len(made) <= calls:
+            info = dict(info, poisson_solves=0)
+        return X, F, info
+
+    monkeypatch.setattr(xu, "reposition", reposition)
+    return made
+
+
+def test_an_initial_patch_no_solve_was_kept_for_gives_way_to_one_the_solve_shapes(monkeypatch):
+    V, F, _ = sphere_hole()
+    ctx = context_of(V, F)
+    assert xu.fill(ctx).info["afm_domain"] == "3d"
+    _reposition_unshaped(monkeypatch, calls=1)
+    patch = xu.fill(ctx)
+    assert patch.info["afm_domain"] != "3d" and patch.info["poisson_solves"] >= 1
+    assert patch.info["fallback_reasons"].startswith("3d patch: no Poisson solve could be kept")
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)  # a disc closing the loop once
+
+
+def test_the_unshaped_patch_is_kept_where_no_initial_patch_is_shaped(monkeypatch):
+    V, F, _ = sphere_hole()
+    ctx = context_of(V, F)
+    made = _reposition_unshaped(monkeypatch, calls=100)
+    patch = xu.fill(ctx)
+    assert len(made) > 1  # the later initial patches were tried
+    assert patch.info["afm_domain"] == "3d" and "fallback_reasons" not in patch.info
+
+
+def test_the_scans_8_edge_hole_takes_an_initial_patch_the_solve_shapes(bunny_scan, monkeypatch):
+    """bunny10k_textured.obj's 8-edge hole: every solve of its 3D, developed and projected patches is discarded."""
+    from meshlab_holefill import fill_holes
+    from meshlab_holefill.core.border_bend import border_bend
+
+    V, F = mesh_arrays(bunny_scan)
+    _, _, result = fill_holes(V, F, "lssvm_poisson", workers=1)
+    (entry,) = [h for h in result["holes"] if h["boundary_edges"] == 8]
+    assert entry["status"] == "closed" and entry["poisson_solves"] >= 1 and entry["afm_domain"] == "ears"
+    assert "3d patch: no Poisson solve could be kept" in entry["fallback_reasons"]
+    # The shaped patch meets the scan more smoothly than the unshaped 3D one, kept when it is the only patch.
+    (loop,) = [lp for lp in boundary_loops(F) if len(lp) == 8]
+    ctx = hole_context(V, F, loop, rings=xu.RINGS)
+    shaped = xu.fill(ctx)
+    patches = xu.initial_patches
+    monkeypatch.setattr(xu, "initial_patches", lambda *a: itertools.islice(patches(*a), 1))
+    unshaped = xu.fill(ctx)
+    assert (shaped.info["afm_domain"], unshaped.info["afm_domain"]) == ("ears", "3d")
+    assert shaped.info["poisson_solves"] >= 1 and unshaped.info["poisson_solves"] == 0
+    assert border_bend(ctx, shaped.vertices, shaped.faces) < border_bend(ctx, unshaped.vertices, unshaped.faces)
