@@ -235,3 +235,15 @@ def test_the_scans_8_edge_hole_takes_an_initial_patch_the_solve_shapes(bunny_sca
     assert (shaped.info["afm_domain"], unshaped.info["afm_domain"]) == ("ears", "3d")
     assert shaped.info["poisson_solves"] >= 1 and unshaped.info["poisson_solves"] == 0
     assert border_bend(ctx, shaped.vertices, shaped.faces) < border_bend(ctx, unshaped.vertices, unshaped.faces)
+
+
+def test_a_shaped_patch_yields_to_the_unshaped_one_only_for_a_poor_triangle_the_other_has_not():
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    good = np.array([[0, 1, 2], [0, 2, 3]])
+    centre = np.vstack([square, [[0.5, 0.5, 0.0]]])
+    fan = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+    sliver = np.vstack([square, [[0.5, 0.02, 0.0]]])  # a fan apex next to edge 0-1: quality about 0.08
+    assert xu._poorer(sliver, fan, square, good)
+    assert not xu._poorer(centre, fan, square, good)
+    # a poor triangle the unshaped patch is as poor in does not count against the shaped one
+    assert not xu._poorer(sliver, fan, sliver, fan)
