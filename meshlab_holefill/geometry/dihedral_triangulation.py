@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import HoleFillError
 from . import _dihedral_kernels as K
 
-__all__ = ["dihedral_triangulation", "least_bend_splits"]
+__all__ = ["dihedral_triangulation", "least_bend_splits", "split_triangles"]
 
 
 def dihedral_triangulation(P, border_normals, forbidden_edges=(), banned=()):
@@ -63,7 +63,8 @@ def dihedral_triangulation(P, border_normals, forbidden_edges=(), banned=()):
     split, worst = least_bend_splits(P, border_normals, forbidden_edges, banned)
     if not np.isfinite(worst):
         raise HoleFillError("no triangulation of the loop avoids the mesh's edges and the banned triangles")
-    return _triangles(split)
+    T = split_triangles(split)
+    return T[np.lexsort(T.T[::-1])]  # rows in increasing order
 
 
 def least_bend_splits(P, border_normals, forbidden_edges=(), banned=()):
@@ -98,8 +99,19 @@ def least_bend_splits(P, border_normals, forbidden_edges=(), banned=()):
     return split, float(worst)
 
 
-def _triangles(split):
-    """The triangles of the best triangulation of (0, k - 1), read off the split table."""
+def split_triangles(split):
+    """The triangles of the best triangulation of (0, k - 1), read off the split table.
+
+    Parameters
+    ----------
+    split : (k, k) int  :func:`least_bend_splits`' table (its whole loop has a triangulation)
+
+    Returns
+    -------
+    (k - 2, 3) int64
+        Triangles (i, m, j), i < m < j, in reading order: from the whole loop inwards, the
+        second part of each split first.
+    """
     k = len(split)
     faces, stack = [], [(0, k - 1)]
     while stack:
@@ -108,4 +120,4 @@ def _triangles(split):
             m = int(split[i, j])
             faces.append((i, m, j))
             stack += [(i, m), (m, j)]
-    return np.array(sorted(faces), np.int64).reshape(-1, 3)
+    return np.array(faces, np.int64).reshape(-1, 3)

@@ -15,7 +15,7 @@ import numpy as np
 from ...geometry.flips import fixed_edge_keys, relax_edges
 from ...core.crossings import context_crossings
 from ...errors import HoleFillError
-from ...geometry.dihedral_triangulation import least_bend_splits
+from ...geometry.dihedral_triangulation import least_bend_splits, split_triangles
 from ...geometry.intersections import faces_intersecting
 from ...geometry.quality import face_normals
 from ...geometry.topology import interior_edges
@@ -85,15 +85,7 @@ def loop_triangulation(P, border_normals, forbidden_edges=(), max_size=LOOP_TRIA
         return None, np.inf
     if not np.isfinite(worst):
         return None, np.inf
-    faces, stack = [], [(0, k - 1)]
-    while stack:  # the apexes read from the whole loop inwards, the second part first
-        i, j = stack.pop()
-        if j - i < 2:
-            continue
-        m = int(split[i, j])
-        faces.append((i, m, j))
-        stack += [(i, m), (m, j)]
-    return np.asarray(faces, np.int64), float(np.arccos(np.clip(1.0 - worst, -1.0, 1.0)))
+    return split_triangles(split), float(np.arccos(np.clip(1.0 - worst, -1.0, 1.0)))
 
 
 def fold_overs(V, F, reference):
