@@ -1,4 +1,5 @@
 """Shared fixtures: pymeshlab sample meshes and analytic shapes with holes of known shape."""
+import functools
 import os
 
 import numpy as np
@@ -130,3 +131,34 @@ def assert_filled_cleanly(V0, F0, V1, F1, faces_kept=True):
         old = set(map(tuple, F0.tolist()))
         new = np.array([i for i, f in enumerate(map(tuple, F1.tolist())) if f not in old], np.int64)
     assert len(faces_intersecting(V1, F1, new, np.arange(len(F1)))) == 0
+
+
+def assert_one_hole_filled_cleanly(V0, F0, V1, F1):
+    """One hole of a mesh with many filled: one boundary loop fewer, originals bit-exact, 2-manifold,
+    consistently oriented, no new face crossing the mesh."""
+    from meshlab_holefill.geometry.intersections import faces_intersecting
+    from meshlab_holefill.core.holes import boundary_loops, nonmanifold_edges
+
+    assert np.array_equal(V1[:len(V0)], V0) and np.array_equal(F1[:len(F0)], F0)
+    assert len(boundary_loops(F1)) == len(boundary_loops(F0)) - 1
+    assert len(nonmanifold_edges(F1)) == len(nonmanifold_edges(F0))
+    directed = np.concatenate([F1[:, [0, 1]], F1[:, [1, 2]], F1[:, [2, 0]]])
+    assert len(np.unique(directed, axis=0)) == len(directed), "a directed edge twice: orientation flips"
+    assert len(faces_intersecting(V1, F1, np.arange(len(F0), len(F1)), np.arange(len(F1)))) == 0
+
+
+@functools.cache
+def noisy_cow_scan(seed):
+    """A virtual range scan of cow.obj Loop-subdivided twice, with noise of 0.15 mean edges along the normals,
+    from the direction drawn with ``seed`` (the benchmark's noisy scans): (V, F) of the seen sheet, whose holes
+    are what the scanner did not see (occlusion shadows, grazing strips; many pinched, some slit-like)."""
+    from meshlab_holefill.evaluation.comparison import prepare_case
+    from meshlab_holefill.evaluation.virtual_scan import virtual_scan_case
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(sample("cow.obj"))
+    ms.meshing_surface_subdivision_loop(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    V, F = mesh_arrays(ms)
+    direction = np.random.default_rng(seed).normal(size=3)
+    case = prepare_case(virtual_scan_case("cow scan", V, F, direction, noise=0.15, seed=seed))
+    return case.V0, case.F0

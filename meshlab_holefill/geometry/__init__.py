@@ -10,11 +10,12 @@ Plain numpy arrays in and out; nothing here imports the core, the algorithms or 
 * :mod:`.pca`: least-squares planes and plane frames.
 * :mod:`.triangulate`: constrained Delaunay triangulation of a simple polygon (Triangle).
 * :mod:`.dihedral_triangulation`: a 3D loop triangulated by least bend against its neighbours (Liepa's weight).
+* :mod:`.caps`: caps of loop-only triangles split open by an inner vertex.
 * :mod:`.segments`: exact segment distances, simple-polygon tests.
 * :mod:`.intersections`: topology-aware triangle-triangle intersection queries.
 * :mod:`.development`: a border loop laid out in the plane with its edge lengths and surface angles.
 * :mod:`.sets`: np.unique, np.isin and np.setdiff1d of integer arrays, by sorting.
 """
 
-__all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca", "triangulate", "dihedral_triangulation", "segments", "intersections",
+__all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca", "triangulate", "dihedral_triangulation", "caps", "segments", "intersections",
            "development", "sets"]

@@ -112,8 +112,9 @@ PARAMS = [
               "mesh after the guarded refinement and fewer filter iterations, the patch of the faired option "
               "set (fairing=thinplate, iterations=0, smoothing=10) is taken instead if that one crosses nothing; "
               "where the initial triangulation itself crosses, the same steps are tried from a triangulation about "
-              "the hole's own plane; last, for jagged borders, the same steps (then the faired set) from the "
-              "loop's least-bend triangulations; otherwise the hole is reported failed as before."),
+              "the hole's own plane (first where fewer of its faces cross than of the initial one, else last); "
+              "for jagged borders, the same steps (then the faired set) from the loop's least-bend "
+              "triangulations; otherwise the hole is reported failed as before."),
     ParamSpec("filter_guard", "float", 0.3,
               "Guard on the bilateral step: a move that would leave a new triangle with quality 2r/R below "
               "min(filter_guard, its quality before), or flip it, is undone; 0 turns the guard off.",
@@ -311,9 +312,10 @@ def fill(ctx, alpha=np.sqrt(2.0), sigma_c=0.1, sigma_s=0.5, iterations=3, fairin
         :data:`FAIRED_OPTIONS` patch when that one crosses nothing, and, where the initial
         triangulation itself crosses the mesh or itself, by the patches grown from
         :func:`.min_angle_triangulation.hole_plane_triangulation` (paper's steps, then faired) when one of them crosses nothing;
-        last, by the paper's steps grown from the loop's least-bend triangulations
+        then by the paper's steps grown from the loop's least-bend triangulations
         (:func:`meshlab_holefill.core.least_bend.least_bend_triangulations`), for jagged borders
         whose faces tilt every way (noisy scans), then by the faired option set grown from them.
+        Where the hole plane's triangulation crosses as much as the initial one, its patches come last.
 
     Returns
     -------
@@ -423,19 +425,25 @@ def _fallback_patch(ctx, F0, same, options):
     the normals keep crossing the mesh, where a faired patch bends away from it; so the faired
     option set is tried first from ``F0``. Where ``F0`` folds already (a cut across walls standing
     on the hole's plane), the steps are tried from the hole plane's triangulation, if it crosses
-    less than ``F0`` (:func:`_hole_plane_start`). Last, a jagged
+    less than ``F0`` (:func:`_hole_plane_start`). Then a jagged
     border, whose faces tilt every way so that the ears fold onto them: the loop's least-bend
-    triangulations. ``same`` are the options every attempt keeps, ``options`` the filter's own
-    (fairing, iterations, smoothing).
+    triangulations; after them, the hole plane's attempts where they were not tried first.
+    ``same`` are the options every attempt keeps, ``options`` the filter's own (fairing,
+    iterations, smoothing).
     """
     faired = options == FAIRED_OPTIONS
     tries = [] if faired else [("faired", lambda: F0, FAIRED_OPTIONS)]
+    last = []
     if crosses(ctx, ctx.points, F0):
-        plane = _hole_plane_start(ctx, F0)
+        plane, first = _hole_plane_start(ctx, F0)
         if plane is not None:
-            tries += [("hole plane", lambda: plane, options)]
-            tries += [] if faired else [("hole plane, faired", lambda: plane, FAIRED_OPTIONS)]
-    for name, initial, chosen in itertools.chain(tries, _least_bend_tries(ctx, options, faired)):
+            plane_tries = [("hole plane", lambda: plane, options)]
+            plane_tries += [] if faired else [("hole plane, faired", lambda: plane, FAIRED_OPTIONS)]
+            if first:
+                tries += plane_tries
+            else:
+                last = plane_tries
+    for name, initial, chosen in itertools.chain(tries, _least_bend_tries(ctx, options, faired), last):
         try:
             patch = _patch_from(ctx, initial(), **same, **chosen)
         except HoleFillError:  # the hole fails for the paper's patch, not for a fallback's
@@ -447,20 +455,23 @@ def _fallback_patch(ctx, F0, same, options):
 
 
 def _hole_plane_start(ctx, F0):
-    """The hole plane's triangulation ((k - 2, 3) int64) as a fallback's start, or None where it is no better than ``F0``.
+    """The hole plane's triangulation ((k - 2, 3) int64, None where there is none) as a fallback's start, and
+    whether it is tried before the least-bend triangulations.
 
     It replaces a triangulation that folds through the walls of a cut across; where it has at
     least as many faces crossing the mesh or each other as ``F0`` (a jagged loop, whose faces
-    tilt every way, is no cut across), the patches grown from it cross too. Measured on the
-    noisy cow's 307-edge hole: ``F0`` has 6 faces crossing the mesh, the hole plane's 62, and
-    its two attempts took 0.12 of the hole's 0.26 s before the least-bend one closed it.
+    tilt every way, is no cut across), the patches grown from it mostly cross too, and it is
+    tried after the least-bend ones only. Measured on the noisy cow's 307-edge hole: ``F0`` has
+    6 faces crossing the mesh, the hole plane's 62, and its two attempts took 0.12 of the
+    hole's 0.26 s before the least-bend one closed it. A 12-edge hole of a noisy range scan,
+    whose three least-bend triangulations each cross the mesh, is closed by the hole plane's.
     """
     try:
         plane = hole_plane_triangulation(ctx.points, ctx.forbidden_edges)
     except HoleFillError:
-        return None
+        return None, False
     crossing = len(context_crossings(ctx, ctx.points, plane)), len(context_crossings(ctx, ctx.points, F0))
-    return plane if crossing[0] < crossing[1] else None
+    return plane, crossing[0] < crossing[1]
 
 
 def _least_bend_tries(ctx, options, faired):

@@ -15,6 +15,7 @@ import scipy.sparse.linalg as spla
 
 from ._laplacian_kernels import edge_weight_rows, with_unit_diagonal
 from .advancing_front import advancing_front_triangulation
+from ...geometry.caps import split_loop_caps
 from ...geometry.flips import folds, relax_edges
 from ...core.crossings import context_crossings
 from ...core.least_bend import least_bend_triangulations
@@ -407,6 +408,9 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
     holes have no such triangle. With the boundary's Laplacian rows (the default) the solve
     does not squeeze that row (0.340 without a repair) and no benchmark hole needs one.
 
+    A poor triangle of loop vertices only (a cap of a loop-only least-bend patch) is out of
+    reach of any move: it is split first (:func:`_split_loop_caps`), which counts as a round kept.
+
     Parameters
     ----------
     X : (n, 3) float64, F : (m, 3) int64, fixed : (n,) bool (the hole boundary)
@@ -420,6 +424,10 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
     """
     q = triangle_quality(X, F)
     kept = 0
+    fixed = np.asarray(fixed, bool)
+    X, F, fixed, split = _split_loop_caps(X, F, fixed, ctx.size, floor)
+    if split:
+        q, kept = triangle_quality(X, F), 1
     for _ in range(rounds):
         if len(q) == 0 or q.min() >= floor:
             break
@@ -435,6 +443,25 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
         X, F, q = Y, G, qn
         kept += 1
     return X, F, kept
+
+
+def _split_loop_caps(X, F, fixed, k, floor):
+    """:func:`geometry.caps.split_loop_caps` on the patch (its first ``k`` vertices the loop's), kept unless
+    the split patch folds.
+
+    A small slit-like hole filled by its loop-only least-bend patch (a range scan's 9-edge hole
+    whose chords mostly duplicate mesh edges) can keep a cap: a loop vertex almost on the chord
+    of two others (quality 0.002, angle 177 degrees), the swap of that chord being a mesh edge.
+    The split's vertex is an inner vertex the repair's later rounds may move.
+
+    Returns
+    -------
+    X, F, fixed, split : the patch (with the new inner vertices appended, not fixed) and whether it was split
+    """
+    Y, G = split_loop_caps(X, F, k, floor)
+    if len(Y) == len(X) or folds(Y, G):
+        return X, F, fixed, False
+    return Y, G, np.concatenate([fixed, np.zeros(len(Y) - len(X), bool)]), True
 
 
 def context_hits(X, F, ctx):

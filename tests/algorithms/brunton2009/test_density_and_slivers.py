@@ -13,7 +13,7 @@ from meshlab_holefill.algorithms.brunton2009 import slivers
 from meshlab_holefill.algorithms.brunton2009.slivers import repair_slivers
 from meshlab_holefill.geometry.flips import folds
 from meshlab_holefill.core.holes import boundary_loops, hole_context
-from meshlab_holefill.core.patch import validate_patch
+from meshlab_holefill.core.patch import Patch, validate_patch
 from meshlab_holefill.evaluation.cut_holes import cut_holes
 from meshlab_holefill.evaluation.metrics import corner_quality_bound
 from meshlab_holefill.geometry.quality import edge_lengths, triangle_quality
@@ -149,6 +149,29 @@ def test_repair_slivers_leaves_a_good_patch_alone():
     V2, F2, rounds = repair_slivers(ctx, patch.vertices, patch.faces, lambda W, G: 0, floor=0.05)
     assert rounds == 0 and V2 is patch.vertices and F2 is patch.faces
 
+
+
+def test_a_loop_only_patchs_cap_is_split_and_its_vertex_moved():
+    """A noisy range scan's slit-like 9-edge hole closes on its loop-only least-bend triangulation, with a loop
+    vertex almost on the chord of two others (a cap of quality 0.002) whose swap would duplicate a mesh edge:
+    the repair has no inner vertex to move, so the cap is split first."""
+    from meshlab_holefill.core.crossings import context_crossings
+    from meshlab_holefill.core.least_bend import least_bend_triangulations
+    from conftest import noisy_cow_scan
+
+    V, F = noisy_cow_scan(2)
+    ctx = hole_context(V, F, boundary_loops(F)[114], rings=cu.RINGS)
+    (loop_only,) = least_bend_triangulations(ctx)
+    assert triangle_quality(ctx.points, loop_only).min() < 0.01
+    V2, F2, rounds = repair_slivers(ctx, np.zeros((0, 3)), loop_only,
+                                    lambda W, G: len(crossing_repair.crossing_faces(ctx, W, G)))
+    Z = np.concatenate([ctx.points, V2])
+    assert rounds >= 1 and len(V2) >= 1 and triangle_quality(Z, F2).min() > 0.1
+    validate_patch(Patch(vertices=V2, faces=F2), ctx.points, ctx.forbidden_edges)
+    assert len(context_crossings(ctx, Z, F2)) == 0
+    patch = cu.fill(ctx)
+    assert patch.info["fallback"] == "least bend"
+    assert triangle_quality(patch.all_points(ctx.points), patch.faces).min() > 0.1
 
 def _largest_cut_hole(name, subdivisions, seed):
     """A pymeshlab sample Loop-subdivided, with the holes ``scripts/large_holes.py`` cuts for ``seed``:

@@ -9,7 +9,7 @@ from meshlab_holefill.core.holes import boundary_loops, hole_context
 from meshlab_holefill.core.patch import validate_patch
 from meshlab_holefill.geometry.quality import triangle_quality
 
-from conftest import assert_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+from conftest import assert_filled_cleanly, assert_one_hole_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
 from hu2012_cases import first_hole_context
 
 
@@ -193,3 +193,26 @@ def test_a_triangulation_refined_again_gets_the_same_refinement_as_copies():
     for a, b in zip(fresh[:3], again[:3]):
         np.testing.assert_array_equal(a, b)
     assert again[3] == fresh[3]
+
+
+def test_a_hole_plane_that_crosses_as_much_as_the_papers_triangulation_is_tried_after_the_least_bend_ones():
+    """A noisy range scan's 12-edge hole: the paper's triangulation crosses the mesh, the hole plane's
+    as much, and each of the three least-bend triangulations' patches crosses too; the hole plane's
+    patch, tried last, crosses nothing."""
+    from meshlab_holefill.algorithms.hu2012 import min_angle_bilateral
+    from meshlab_holefill.array_api import fill_holes
+    from conftest import noisy_cow_scan
+
+    V, F = noisy_cow_scan(2)
+    loop = boundary_loops(F)[55]
+    ctx = hole_context(V, F, loop, rings=min_angle_bilateral.RINGS)
+    assert ctx.size == 12
+    own = min_angle_triangulation(ctx.points, ctx.loop_normals, ctx.forbidden_edges)
+    plane, first = min_angle_bilateral._hole_plane_start(ctx, own)
+    assert plane is not None and not first
+    assert min_angle_bilateral.fill(ctx).info["fallback"] == "hole plane"
+    selected = np.zeros(len(F), bool)
+    selected[loop.border_faces] = True  # the faces on its border: only this hole is filled
+    V2, F2, res = fill_holes(V, F, "min_angle_bilateral", selected_faces=selected, selected=True, workers=1)
+    assert res["holes"][55]["status"] == "closed" and res["holes"][55]["fallback"] == "hole plane"
+    assert_one_hole_filled_cleanly(V, F, V2, F2)

@@ -141,3 +141,27 @@ def test_sliver_repair_leaves_good_patches_alone():
     Y, G, kept = repair_slivers(X, F, fixed, ctx, floor=0.3)
     assert triangle_quality(X, F).min() >= 0.3
     assert kept == 0 and Y is X and G is F
+
+
+def test_a_cap_of_loop_vertices_only_is_split_and_smoothed():
+    """A noisy range scan's slit-like 9-edge hole, six of whose chords are mesh edges: only its loop-only
+    least-bend triangulation stays clear of the mesh, with a loop vertex almost on the chord of two others
+    (a cap of 177 degrees, quality 0.002) whose swap would duplicate a mesh edge. No move reaches a
+    triangle of loop vertices only: the cap is split, and the split's vertex smoothed."""
+    from meshlab_holefill.algorithms.xu2013 import lssvm_poisson
+    from meshlab_holefill.core.crossings import context_crossings
+    from meshlab_holefill.core.holes import boundary_loops, hole_context
+    from meshlab_holefill.core.least_bend import least_bend_triangulations
+    from conftest import noisy_cow_scan
+
+    V, F = noisy_cow_scan(2)
+    ctx = hole_context(V, F, boundary_loops(F)[114], rings=lssvm_poisson.RINGS)
+    assert ctx.size == 9 and len(ctx.forbidden_edges) == 6
+    (loop_only,) = least_bend_triangulations(ctx)
+    assert triangle_quality(ctx.points, loop_only).min() < 0.01
+    patch = lssvm_poisson.fill(ctx)
+    assert patch.info["afm_domain"] == "least bend" and patch.info["sliver_repairs"] >= 1
+    validate_patch(patch, ctx.points, ctx.forbidden_edges)
+    X = patch.all_points(ctx.points)
+    assert len(patch.vertices) >= 1 and triangle_quality(X, patch.faces).min() > 0.1
+    assert len(context_crossings(ctx, X, patch.faces)) == 0
