@@ -89,10 +89,31 @@ def _quality_or_flipped(V, F, f, n_old):
 
 
 @njit(cache=True)
+def _vertex_faces(F, n):
+    """The faces at each vertex as runs of one array: faces[start[v]:start[v + 1]] (a face once per corner)."""
+    start = np.zeros(n + 1, np.int64)
+    for f in range(F.shape[0]):
+        for c in range(3):
+            start[F[f, c] + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    faces = np.empty(start[n], np.int64)
+    for f in range(F.shape[0]):
+        for c in range(3):
+            faces[fill[F[f, c]]] = f
+            fill[F[f, c]] += 1
+    return start, faces
+
+
+@njit(cache=True)
 def refuse_worse(V_old, V_new, F, moved):
     """V_new with the moves undone that lower the smallest quality around a moved vertex or flip a face.
 
     V_old, V_new : (n, 3) float64; F : (m, 3) int64 (valid indices); moved : (n,) bool.
+    After the first pass only the vertices of the faces a put-back vertex touches are looked at
+    again: every other vertex keeps its faces' qualities, and so its verdict (minima are exact,
+    so the result is the same as re-testing every vertex each pass).
     """
     n, m = V_old.shape[0], F.shape[0]
     worst_old = np.full(n, np.inf)
@@ -105,24 +126,52 @@ def refuse_worse(V_old, V_new, F, moved):
     V = V_new.copy()
     moved = moved.copy()
     q = np.empty(m)
+    worst = np.full(n, np.inf)
     for f in range(m):
         q[f] = _quality_or_flipped(V, F, f, n_old)
+        for c in range(3):
+            worst[F[f, c]] = _minimum(worst[F[f, c]], q[f])
+    start, faces = _vertex_faces(F, n)
+    check = np.arange(n)  # the vertices whose worst quality may have changed
+    following = np.empty(n, np.int64)
+    checked = n
     back = np.zeros(n, np.bool_)
-    for _ in range(n):
-        worst = np.full(n, np.inf)
-        for f in range(m):
-            for c in range(3):
-                worst[F[f, c]] = _minimum(worst[F[f, c]], q[f])
+    face_stamp = np.zeros(m, np.int64)
+    vertex_stamp = np.zeros(n, np.int64)
+    for it in range(1, n + 1):
         anything = False
-        for v in range(n):
+        for i in range(checked):
+            v = check[i]
             back[v] = moved[v] and worst[v] < worst_old[v] - 1e-12
             anything = anything or back[v]
         if not anything:
             break
         undo_moves(V, V_old, moved, back)
-        for f in range(m):
-            if back[F[f, 0]] or back[F[f, 1]] or back[F[f, 2]]:
+        count = 0
+        for i in range(checked):
+            v = check[i]
+            if not back[v]:
+                continue
+            back[v] = False
+            for j in range(start[v], start[v + 1]):
+                f = faces[j]
+                if face_stamp[f] == it:
+                    continue
+                face_stamp[f] = it
                 q[f] = _quality_or_flipped(V, F, f, n_old)
+                for c in range(3):
+                    u = F[f, c]
+                    if vertex_stamp[u] != it:
+                        vertex_stamp[u] = it
+                        following[count] = u
+                        count += 1
+        for i in range(count):
+            u = following[i]
+            w = np.inf
+            for j in range(start[u], start[u + 1]):
+                w = _minimum(w, q[faces[j]])
+            worst[u] = w
+        check, following, checked = following, check, count
     return V
 
 

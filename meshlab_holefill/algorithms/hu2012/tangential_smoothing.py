@@ -138,7 +138,9 @@ def bisect_obtuse(V, F, movable, fixed=None, attr=None, min_angle=2.0 * np.pi / 
     E, f1, c1, f2, c2 = interior_edges(F, n)
     if len(E) == 0:
         return V, F, movable, attr
-    ang = corner_angles(V, F)
+    poor = q < max_quality
+    ang = np.zeros((len(F), 3))  # only the poor faces' angles are read
+    ang[poor] = corner_angles(V, F[poor])
     o1, o2 = (c1 + 2) % 3, (c2 + 2) % 3
     bad1 = (q[f1] < max_quality) & (ang[f1, o1] > min_angle)
     bad2 = (q[f2] < max_quality) & (ang[f2, o2] > min_angle)
