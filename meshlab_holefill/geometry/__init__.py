@@ -17,5 +17,5 @@ Plain numpy arrays in and out; nothing here imports the core, the algorithms or 
 * :mod:`.sets`: np.unique, np.isin and np.setdiff1d of integer arrays, by sorting.
 """
 
-__all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca", "triangulate", "dihedral_triangulation", "caps", "segments", "intersections",
-           "development", "sets"]
+__all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca",
+           "triangulate", "dihedral_triangulation", "caps", "segments", "intersections", "development", "sets"]

@@ -424,10 +424,10 @@ def repair_slivers(X, F, fixed, ctx, floor=0.3, rings=2, iterations=20, rounds=3
     """
     q = triangle_quality(X, F)
     kept = 0
-    fixed = np.asarray(fixed, bool)
-    X, F, fixed, split = _split_loop_caps(X, F, fixed, ctx.size, floor)
-    if split:
-        q, kept = triangle_quality(X, F), 1
+    if len(q) and q.min() < floor:
+        X, F, fixed, split = _split_loop_caps(X, F, np.asarray(fixed, bool), ctx.size, floor)
+        if split:
+            q, kept = triangle_quality(X, F), 1
     for _ in range(rounds):
         if len(q) == 0 or q.min() >= floor:
             break

@@ -150,7 +150,6 @@ def test_repair_slivers_leaves_a_good_patch_alone():
     assert rounds == 0 and V2 is patch.vertices and F2 is patch.faces
 
 
-
 def test_a_loop_only_patchs_cap_is_split_and_its_vertex_moved():
     """A noisy range scan's slit-like 9-edge hole closes on its loop-only least-bend triangulation, with a loop
     vertex almost on the chord of two others (a cap of quality 0.002) whose swap would duplicate a mesh edge:
@@ -172,6 +171,7 @@ def test_a_loop_only_patchs_cap_is_split_and_its_vertex_moved():
     patch = cu.fill(ctx)
     assert patch.info["fallback"] == "least bend"
     assert triangle_quality(patch.all_points(ctx.points), patch.faces).min() > 0.1
+
 
 def _largest_cut_hole(name, subdivisions, seed):
     """A pymeshlab sample Loop-subdivided, with the holes ``scripts/large_holes.py`` cuts for ``seed``:

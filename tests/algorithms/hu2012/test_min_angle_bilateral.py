@@ -9,7 +9,8 @@ from meshlab_holefill.core.holes import boundary_loops, hole_context
 from meshlab_holefill.core.patch import validate_patch
 from meshlab_holefill.geometry.quality import triangle_quality
 
-from conftest import assert_filled_cleanly, assert_one_hole_filled_cleanly, cut_disks, grid, mesh_arrays, meshset_from_arrays, sample, sphere_with_holes
+from conftest import (assert_filled_cleanly, assert_one_hole_filled_cleanly, cut_disks, grid, mesh_arrays,
+                      meshset_from_arrays, sample, sphere_with_holes)
 from hu2012_cases import first_hole_context
 
 
