@@ -162,3 +162,13 @@ def noisy_cow_scan(seed):
     direction = np.random.default_rng(seed).normal(size=3)
     case = prepare_case(virtual_scan_case("cow scan", V, F, direction, noise=0.15, seed=seed))
     return case.V0, case.F0
+
+
+def loop_nearest(V, F, point):
+    """(index, BoundaryLoop) of the boundary loop whose vertices' centroid is nearest ``point``: a hole found by
+    where it is, which stays the same hole where a change elsewhere renumbers the loops."""
+    from meshlab_holefill.core.holes import boundary_loops
+
+    loops = boundary_loops(F)
+    i = int(np.argmin([np.linalg.norm(V[loop.vertices].mean(axis=0) - point) for loop in loops]))
+    return i, loops[i]

@@ -156,10 +156,12 @@ def test_a_loop_only_patchs_cap_is_split_and_its_vertex_moved():
     the repair has no inner vertex to move, so the cap is split first."""
     from meshlab_holefill.core.crossings import context_crossings
     from meshlab_holefill.core.least_bend import least_bend_triangulations
-    from conftest import noisy_cow_scan
+    from conftest import loop_nearest, noisy_cow_scan
 
     V, F = noisy_cow_scan(2)
-    ctx = hole_context(V, F, boundary_loops(F)[114], rings=cu.RINGS)
+    _, loop = loop_nearest(V, F, (-0.0938, 0.3015, 0.6943))  # the slit-like 9-edge hole
+    ctx = hole_context(V, F, loop, rings=cu.RINGS)
+    assert ctx.size == 9
     (loop_only,) = least_bend_triangulations(ctx)
     assert triangle_quality(ctx.points, loop_only).min() < 0.01
     V2, F2, rounds = repair_slivers(ctx, np.zeros((0, 3)), loop_only,
