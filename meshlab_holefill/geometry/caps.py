@@ -13,7 +13,7 @@ import numpy as np
 from .quality import corner_angles, triangle_quality
 from .topology import interior_edges, undirected_keys
 
-__all__ = ["CAP_ANGLE", "split_caps", "split_loop_caps"]
+__all__ = ["CAP_ANGLE", "split_caps", "split_loop_caps", "split_quads"]
 
 #: A triangle's largest angle above which it is a cap (120 degrees, as the obtuse-angle splits of smoothing).
 CAP_ANGLE = 2.0 * np.pi / 3.0
@@ -97,13 +97,31 @@ def split_caps(V, F, floor, fixed_edges=(), candidates=None):
     if not keep:
         return V, F
     keep = np.asarray(keep)
-    mk = n + np.arange(len(keep))
-    a, b, c, d = a[keep], b[keep], c[keep], d[keep]
+    return split_quads(V, F, f1[idx[keep]], f2[idx[keep]], a[keep], b[keep], c[keep], d[keep], M[keep])
+
+
+def split_quads(V, F, f1, f2, a, b, c, d, points):
+    """Split each edge (a, b) between faces f1 = (a, b, c) and f2 = (b, a, d) by a new vertex m at its row of ``points``.
+
+    f1 becomes (a, m, c), f2 (b, m, d), and (m, b, c), (m, a, d) are appended: the orientation is
+    kept. The edges' faces must be distinct.
+
+    Parameters
+    ----------
+    V : (n, 3) float64, F : (m, 3) int64
+    f1, f2, a, b, c, d : (s,) int64
+    points : (s, 3) float64
+
+    Returns
+    -------
+    V : (n + s, 3) float64, F : (m + 2 s, 3) int64
+    """
+    m = len(V) + np.arange(len(a))
     F = F.copy()
-    F[f1[idx[keep]]] = np.stack([a, mk, c], axis=1)
-    F[f2[idx[keep]]] = np.stack([b, mk, d], axis=1)
-    F = np.concatenate([F, np.stack([mk, b, c], axis=1), np.stack([mk, a, d], axis=1)])
-    return np.concatenate([V, M[keep]]), F
+    F[f1] = np.stack([a, m, c], axis=1)
+    F[f2] = np.stack([b, m, d], axis=1)
+    F = np.concatenate([F, np.stack([m, b, c], axis=1), np.stack([m, a, d], axis=1)])
+    return np.concatenate([V, points]), F
 
 
 def split_loop_caps(V, F, k, floor):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...geometry.caps import split_quads
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
@@ -171,13 +172,8 @@ def bisect_obtuse(V, F, movable, fixed=None, attr=None, min_angle=2.0 * np.pi / 
     if not keep:
         return V, F, movable, attr
     keep = np.asarray(keep)
-    mk = n + np.arange(len(keep))
-    a, b, c, d = a[keep], b[keep], c[keep], d[keep]
-    F = F.copy()
-    F[f1[idx[keep]]] = np.stack([a, mk, c], axis=1)
-    F[f2[idx[keep]]] = np.stack([b, mk, d], axis=1)
-    F = np.concatenate([F, np.stack([mk, b, c], axis=1), np.stack([mk, a, d], axis=1)])
-    V = np.concatenate([V, M[keep]])
+    a, b = a[keep], b[keep]
+    V, F = split_quads(V, F, f1[idx[keep]], f2[idx[keep]], a, b, c[keep], d[keep], M[keep])
     if attr is not None:
         attr = np.concatenate([attr, 0.5 * (attr[a] + attr[b])])
     return V, F, np.concatenate([np.asarray(movable, bool), np.ones(len(keep), bool)]), attr
