@@ -52,3 +52,13 @@ def test_a_split_cap_is_replaced_by_four_triangles_each_better_than_the_worse_of
     _, counts = np.unique(edges, axis=0, return_counts=True)
     assert counts.max() == 2 and (counts == 1).sum() == 4  # a disc: the quad's four sides are its border
 
+
+
+def test_split_quads_puts_a_vertex_on_each_edge_and_keeps_the_orientation():
+    from meshlab_holefill.geometry.caps import split_quads
+
+    V, F = cap_over_diagonal(0.5)
+    V2, F2 = split_quads(V, F, np.array([0]), np.array([1]), np.array([0]), np.array([1]), np.array([2]),
+                         np.array([3]), np.array([[1.0, 0.0, 0.0]]))
+    assert len(V2) == 5 and F2.tolist() == [[0, 4, 2], [1, 4, 3], [4, 1, 2], [4, 0, 3]]
+    assert np.all(face_normals(V2, F2)[:, 2] > 0) and np.array_equal(F, [[0, 1, 2], [1, 0, 3]])  # F not changed
