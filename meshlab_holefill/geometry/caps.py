@@ -27,8 +27,9 @@ def split_caps(V, F, floor, fixed_edges=(), candidates=None):
     triangles become (a, m, c), (m, b, c), (b, m, d), (m, a, d) with m the mean of a, b, c and d:
     the midpoint of (a, b) would leave (a, m, c) and (m, b, c) as flat as the cap, where c lies
     near that midpoint. Each triangle is split once at most (the flattest cap first), and only
-    where the four new triangles are each better than the worse of the two they replace. m lies inside the tetrahedron
-    (a, b, c, d), off the surface where the quad is not flat: the caller checks crossings.
+    where the four new triangles are each better than the worse of the two they replace. m lies
+    inside the tetrahedron (a, b, c, d), off the surface where the quad is not flat: the caller
+    checks crossings.
 
     Parameters
     ----------
@@ -101,9 +102,9 @@ def split_caps(V, F, floor, fixed_edges=(), candidates=None):
 
 
 def split_quads(V, F, f1, f2, a, b, c, d, points):
-    """Split each edge (a, b) between faces f1 = (a, b, c) and f2 = (b, a, d) by a new vertex m at its row of ``points``.
+    """Split each edge (a, b) between faces f1 = (a, b, c) and f2 = (b, a, d) by a new vertex m.
 
-    f1 becomes (a, m, c), f2 (b, m, d), and (m, b, c), (m, a, d) are appended: the orientation is
+    m is the edge's row of ``points``; f1 becomes (a, m, c), f2 (b, m, d), and (m, b, c), (m, a, d) are appended: the orientation is
     kept. The edges' faces must be distinct.
 
     Parameters
@@ -142,8 +143,4 @@ def split_loop_caps(V, F, k, floor):
     V, F  as :func:`split_caps` (unchanged when there is no such cap)
     """
     F = np.asarray(F, np.int64)
-    q = triangle_quality(V, F)
-    loop_only = (q < floor) & (F < k).all(axis=1)
-    if not loop_only.any():
-        return V, F
-    return split_caps(V, F, floor, candidates=loop_only)
+    return split_caps(V, F, floor, candidates=(F < k).all(axis=1))
