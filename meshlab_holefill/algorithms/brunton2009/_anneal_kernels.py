@@ -151,6 +151,9 @@ def apply_moves(P, N, T, D, J, q, normals, angles, acc, mask, near, eps):
     P[:] = trial
     for r in range(moved.shape[0]):
         D[moved[r], :] = rows[r]
-    for r in range(moved.shape[0]):  # columns after rows, as numpy: distances are symmetric only to rounding
-        D[:, moved[r]] = rows[r]
+    # Columns after rows, as numpy: distances are symmetric only to rounding. Row by row, so that
+    # the writes run along memory.
+    for i in range(m):
+        for r in range(moved.shape[0]):
+            D[i, moved[r]] = rows[r, i]
     return acc, D.min()

@@ -50,7 +50,7 @@ import math
 import numpy as np
 
 from ...geometry.quality import cross_rows
-from ...geometry.segments import min_segment_distance, nonadjacent_mask, segment_distance_matrix, segment_distance_rows
+from ...geometry.segments import nonadjacent_mask, segment_distance_matrix, segment_distance_rows
 from ._anneal_kernels import apply_moves, propose_moves
 from .linear_motion import linear_motion_is_simple, project_to_best_plane, projection_is_simple
 
@@ -168,7 +168,8 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
     A : (m, 3) float64
         Annealed loop, still simple with d_MD > eps.
     stats : dict
-        ``steps``, ``accepted``, ``stages``, ``energy_start``, ``energy_end``, ``d_md``,
+        ``steps``, ``accepted``, ``stages``, ``energy_start``, ``energy_end``, ``d_md`` (the clearance
+        at the end, exact where it is within the near distance the run measures exactly),
         ``simple`` (the run ended on a simple projection).
     """
     P = np.array(P, np.float64)
@@ -230,7 +231,7 @@ def anneal_loop(P, rng, k=0.9, temperature=0.5, eps=1e-5, sa_steps=5000, step_bo
         stages += 1
         kT *= k
     return P, {"steps": steps, "accepted": accepted, "stages": stages, "energy_start": energy_start,
-               "energy_end": planarity_energy(P), "d_md": min_segment_distance(P), "simple": simple}
+               "energy_end": planarity_energy(P), "d_md": d_md, "simple": simple}
 
 
 def _compiled_class(P, N, T, D, J, rng, improving, last_dir, d_md, mask, near, eps, kT, step_bound):
