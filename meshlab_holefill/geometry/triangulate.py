@@ -12,13 +12,19 @@ __all__ = ["polygon_signed_area", "polygon_perimeter", "triangulate_polygon"]
 def polygon_signed_area(Q):
     """Signed area of a closed 2D polygon (positive when counter-clockwise), Q : (k, 2)."""
     x, y = Q[:, 0], Q[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    return 0.5 * float(np.dot(x, _next_rows(y)) - np.dot(_next_rows(x), y))
 
 
 def polygon_perimeter(P):
     """Length of a closed polygon, P : (m, d)."""
     P = np.asarray(P, np.float64)
-    return float(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1).sum())
+    return float(np.linalg.norm(_next_rows(P) - P, axis=1).sum())
+
+
+def _next_rows(P):
+    """``np.roll(P, -1, axis=0)``: row i + 1 at row i, the first row last (without roll's axis handling,
+    its main cost on the small polygons of a hole)."""
+    return np.concatenate((P[1:], P[:1]))
 
 
 def triangulate_polygon(Q, max_area=None, min_angle=None, extra_points=None, steiner_on_boundary=False):
@@ -67,7 +73,7 @@ def triangulate_polygon(Q, max_area=None, min_angle=None, extra_points=None, ste
         # Triangle reads the switch's digits and '.' only: an exponent ("1e-06") would be cut
         # to its mantissa, so the bound is written positionally.
         opts += "a" + np.format_float_positional(float(max_area), trim="-")
-    if len(np.unique(pts, axis=0)) < len(pts):
+    if _has_repeated_rows(pts):
         # Triangle crashes (segmentation fault) on repeated input points.
         raise HoleFillError("constrained triangulation: the polygon has two vertices at the same position "
                             "(an unwelded border vertex? try meshing_remove_duplicate_vertices)")
@@ -97,3 +103,12 @@ def triangulate_polygon(Q, max_area=None, min_angle=None, extra_points=None, ste
         if not all(key in have for key in need.tolist()):
             raise HoleFillError("constrained triangulation lost a polygon edge (polygon not simple?)")
     return np.asarray(P, np.float64), T
+
+
+def _has_repeated_rows(points):
+    """Whether two rows of ``points`` (n, 2) are equal, as ``len(np.unique(points, axis=0)) < n`` tells
+    (coordinates compared as numbers: 0.0 equals -0.0, NaN equals nothing), without its structured sort."""
+    order = np.lexsort((points[:, 1], points[:, 0]))
+    ordered = points[order]
+    return bool((ordered[1:] == ordered[:-1]).all(axis=1).any())
+

@@ -1,6 +1,8 @@
 """Constrained Delaunay triangulation of geometry.triangulate."""
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from meshlab_holefill.geometry.triangulate import triangulate_polygon
 from meshlab_holefill.core.patch import HoleFillError
@@ -51,3 +53,30 @@ def test_area_bounded_refinement_does_not_depend_on_the_unit(scale):
     area = 0.5 * np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
     assert area.max() <= np.sqrt(3) / 4 * (edge * scale) ** 2 * (1 + 1e-9)
     assert area.sum() == pytest.approx(0.5 * 64 * np.sin(2 * np.pi / 64) * scale ** 2, rel=1e-9)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(1, 12), st.integers(0, 2**31 - 1), st.booleans(), st.booleans())
+def test_repeated_points_are_found_as_numpy_unique_finds_them(n, seed, with_nan, signed_zeros):
+    """The coincident-point test before Triangle answers as len(np.unique(points, axis=0)) < n:
+    coordinates compared as numbers, so 0.0 and -0.0 coincide and NaN coincides with nothing."""
+    from meshlab_holefill.geometry.triangulate import _has_repeated_rows
+
+    rng = np.random.default_rng(seed)
+    points = rng.integers(-1, 2, (n, 2)).astype(float)  # few values: repeats are common
+    if with_nan:
+        points[rng.integers(0, n, 2)] = np.nan
+    if signed_zeros:
+        points[points == 0] = -0.0
+    assert _has_repeated_rows(points) == (len(np.unique(points, axis=0)) < n)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(3, 40), st.integers(0, 2**31 - 1))
+def test_polygon_area_and_perimeter_are_the_rolled_formulas_bit_for_bit(m, seed):
+    from meshlab_holefill.geometry.triangulate import polygon_perimeter, polygon_signed_area
+
+    Q = np.random.default_rng(seed).normal(size=(m, 2)) * 10.0 ** np.random.default_rng(seed).integers(-6, 6)
+    x, y = Q[:, 0], Q[:, 1]
+    assert polygon_signed_area(Q) == 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    assert polygon_perimeter(Q) == float(np.linalg.norm(np.roll(Q, -1, axis=0) - Q, axis=1).sum())
