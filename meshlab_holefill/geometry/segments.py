@@ -5,9 +5,10 @@ for testing planar polygons for simplicity; works in 2D and 3D.
 
 The pairwise distances of a loop and of its moved segments (:func:`segment_distance_matrix`,
 :func:`segment_distance_rows`, called thousands of times by the annealing) are numba kernels
-that make, pair by pair, the operations of the numpy formulas (:func:`segment_distances`, the
-bounding-sphere bound) in the same order, sums of squares added left to right as numpy's row
-sums add them, without FMA contraction: the same bits, without the (a, b, d) temporaries.
+that make the operations of the numpy formulas (:func:`segment_distances`, the bounding-sphere
+bound) in the same order, sums of squares added left to right as numpy's row sums add them,
+without FMA contraction: the same bits, without the (a, b, d) temporaries. The bounds go a row
+of pairs at a time, in loops that compile to vector instructions; the exact distances pair by pair.
 tests/geometry/test_segments.py checks them against the numpy formulas.
 """
 from __future__ import annotations
