@@ -20,7 +20,7 @@ from ...geometry._quality_kernels import face_cross, face_quality, unit_vertex_n
 from ...geometry._vector_kernels import dot3, norm3, npmax
 from ._bilateral_kernels import undo_moves
 
-__all__ = ["best_collapse", "refuse_worse", "tangential_steps"]
+__all__ = ["best_collapse", "refuse_worse", "refuse_worse_steps", "tangential_steps"]
 
 _HALF_SQRT3 = np.sqrt(3.0) / 2.0  # the numpy code's constant, the same double
 
@@ -111,30 +111,98 @@ def refuse_worse(V_old, V_new, F, moved):
     """V_new with the moves undone that lower the smallest quality around a moved vertex or flip a face.
 
     V_old, V_new : (n, 3) float64; F : (m, 3) int64 (valid indices); moved : (n,) bool.
-    After the first pass only the vertices of the faces a put-back vertex touches are looked at
-    again: every other vertex keeps its faces' qualities, and so its verdict (minima are exact,
-    so the result is the same as re-testing every vertex each pass).
+    """
+    start, faces = _vertex_faces(F, V_old.shape[0])
+    q_old, n_old = _face_states(V_old, F)
+    return _refused(V_old, V_new, F, moved, q_old, n_old, start, faces)
+
+
+@njit(cache=True)
+def refuse_worse_steps(V, d, F, pending, steps):
+    """The trial moves of a smoothing round: for each step s in turn, while a vertex is pending,
+    ``refuse_worse(V, V + s * d * pending, F, pending)``, the vertices it put back pending at the next.
+
+    V, d : (n, 3) float64; F : (m, 3) int64 (valid indices); pending : (n,) bool; steps : (s,) float64.
+    The faces' qualities and normals before a step are those after the last one: only the faces of the
+    vertices it moved are measured again (the same operations on the same coordinates, the same bits).
+    """
+    n, m = V.shape[0], F.shape[0]
+    start, faces = _vertex_faces(F, n)
+    q_old, n_old = _face_states(V, F)
+    pending = pending.copy()
+    for s in steps:
+        if not pending.any():
+            break
+        trial = np.empty_like(V)
+        for v in range(n):
+            on = 1.0 if pending[v] else 0.0
+            for c in range(3):
+                trial[v, c] = V[v, c] + (s * d[v, c]) * on
+        moved_to = _refused(V, trial, F, pending, q_old, n_old, start, faces)
+        changed = np.zeros(n, np.bool_)
+        for v in range(n):
+            changed[v] = not (moved_to[v, 0] == V[v, 0] and moved_to[v, 1] == V[v, 1] and moved_to[v, 2] == V[v, 2])
+            pending[v] = pending[v] and not changed[v]
+        for f in range(m):
+            if changed[F[f, 0]] or changed[F[f, 1]] or changed[F[f, 2]]:
+                q_old[f] = face_quality(moved_to, F[f, 0], F[f, 1], F[f, 2])
+                n_old[f, 0], n_old[f, 1], n_old[f, 2] = face_cross(moved_to, F, f)
+        V = moved_to
+    return V
+
+
+@njit(cache=True)
+def _face_states(V, F):
+    """Each face's quality 2r/R (m,) and its (v1 - v0) x (v2 - v0) (m, 3)."""
+    m = F.shape[0]
+    q = np.empty(m)
+    normals = np.empty((m, 3))
+    for f in range(m):
+        q[f] = face_quality(V, F[f, 0], F[f, 1], F[f, 2])
+        normals[f, 0], normals[f, 1], normals[f, 2] = face_cross(V, F, f)
+    return q, normals
+
+
+@njit(cache=True)
+def _corners_moved(V_old, V, F, f):
+    """Whether a corner of face f differs between V_old and V."""
+    for c in range(3):
+        v = F[f, c]
+        if not (V[v, 0] == V_old[v, 0] and V[v, 1] == V_old[v, 1] and V[v, 2] == V_old[v, 2]):
+            return True
+    return False
+
+
+@njit(cache=True)
+def _refused(V_old, V_new, F, moved, q_old, n_old, start, faces):
+    """:func:`refuse_worse` given the faces' states in V_old (:func:`_face_states`) and :func:`_vertex_faces`.
+
+    A face whose corners are where they were has the quality q_old (-1 where its normal is zero,
+    as a recomputation finds it). After the first pass only the vertices of the faces a
+    put-back vertex touches are looked at again: every other vertex keeps its faces' qualities, and
+    so its verdict (minima are exact, so the result is the same as re-testing every vertex each pass).
     """
     n, m = V_old.shape[0], F.shape[0]
     worst_old = np.full(n, np.inf)
-    n_old = np.empty((m, 3))
     for f in range(m):
-        q = face_quality(V_old, F[f, 0], F[f, 1], F[f, 2])
         for c in range(3):
-            worst_old[F[f, c]] = _minimum(worst_old[F[f, c]], q)
-        n_old[f, 0], n_old[f, 1], n_old[f, 2] = face_cross(V_old, F, f)
+            worst_old[F[f, c]] = _minimum(worst_old[F[f, c]], q_old[f])
     V = V_new.copy()
     moved = moved.copy()
     q = np.empty(m)
     worst = np.full(n, np.inf)
     for f in range(m):
-        q[f] = _quality_or_flipped(V, F, f, n_old)
+        if _corners_moved(V_old, V, F, f):
+            q[f] = _quality_or_flipped(V, F, f, n_old)
+        else:
+            q[f] = -1.0 if dot3((n_old[f, 0], n_old[f, 1], n_old[f, 2]), (n_old[f, 0], n_old[f, 1], n_old[f, 2])) <= 0 \
+                else q_old[f]
         for c in range(3):
             worst[F[f, c]] = _minimum(worst[F[f, c]], q[f])
-    start, faces = _vertex_faces(F, n)
-    check = np.arange(n)  # the vertices whose worst quality may have changed
+    check = np.flatnonzero(moved)  # the vertices whose verdict may be a put-back
     following = np.empty(n, np.int64)
-    checked = n
+    checked = check.shape[0]
+    check = np.concatenate((check, np.empty(n - checked, np.int64)))
     back = np.zeros(n, np.bool_)
     face_stamp = np.zeros(m, np.int64)
     vertex_stamp = np.zeros(n, np.int64)

@@ -17,7 +17,7 @@ from ...geometry.caps import split_quads
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
-from ._smoothing_kernels import NO_COLLAPSE, best_collapse, refuse_worse, tangential_steps
+from ._smoothing_kernels import NO_COLLAPSE, best_collapse, refuse_worse, refuse_worse_steps, tangential_steps
 
 __all__ = ["bisect_obtuse", "collapse_poor", "tangential_smoothing"]
 
@@ -72,6 +72,33 @@ def _refuse_worse(V_old, V_new, F, moved):
         return _refuse_worse_numpy(V_old, V_new, F, moved)
     return refuse_worse(np.ascontiguousarray(V_old, np.float64), np.ascontiguousarray(V_new, np.float64), F,
                         np.ascontiguousarray(moved, bool))
+
+
+TRIAL_STEPS = (1.0, 0.5, 0.25)  # fractions of a smoothing step tried in turn
+
+
+def _trial_moves(V, d, F, pending, steps):
+    """Each pending vertex moved by the first of ``steps`` times its step d that :func:`_refuse_worse` keeps.
+
+    Compiled (:func:`._smoothing_kernels.refuse_worse_steps`, the bits of :func:`_trial_moves_numpy`).
+    """
+    F = np.ascontiguousarray(F, np.int64)
+    if len(F) and (F.min() < 0 or F.max() >= len(V)):
+        return _trial_moves_numpy(V, d, F, pending, steps)
+    return refuse_worse_steps(np.ascontiguousarray(V, np.float64), np.ascontiguousarray(d, np.float64), F,
+                              np.ascontiguousarray(pending, bool), np.asarray(steps, np.float64))
+
+
+def _trial_moves_numpy(V, d, F, pending, steps):
+    """:func:`_trial_moves` by :func:`_refuse_worse` once per step (the reference of the compiled moves)."""
+    pending = np.array(pending, bool)
+    for step in steps:
+        if not pending.any():
+            break
+        V_new = _refuse_worse(V, V + step * d * pending[:, None], F, pending)
+        pending &= np.all(V_new == V, axis=1)
+        V = V_new
+    return V
 
 
 def _refuse_worse_numpy(V_old, V_new, F, moved):
@@ -278,7 +305,7 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
     its ideal positions, one per incident face (v, a, b): the apex of the equilateral triangle on
     a b, in the face's plane on v's side. A move that lowers the smallest quality of v's faces,
     or flips one, is undone and tried again at half and a quarter of the step
-    (:func:`_refuse_worse`), and the edges are then relaxed again by the test of Sec. III.C
+    (:func:`_trial_moves`), and the edges are then relaxed again by the test of Sec. III.C
     (``criterion``, ``fixed`` edges kept, swaps vetoed by ``allowed``). With ``split`` each round
     starts with :func:`bisect_obtuse` (new vertices are movable), for the obtuse ears between two
     border edges that no vertex move can reach, and :func:`collapse_poor`, for a vertex with no
@@ -308,13 +335,7 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
             V, F, movable, attr = collapse_poor(V, F, movable, fixed, attr)
             V, F, movable, attr = bisect_obtuse(V, F, movable, fixed, attr)
         d, ok = _tangential_steps(V, F, movable)
-        pending = ok & np.any(d != 0, axis=1)
-        for step in (1.0, 0.5, 0.25):
-            # Vertices whose move was undone try a shorter one (the others keep theirs).
-            if not pending.any():
-                break
-            V_new = _refuse_worse(V, V + step * d * pending[:, None], F, pending)
-            pending &= np.all(V_new == V, axis=1)
-            V = V_new
+        # Vertices whose move was undone try a shorter one (the others keep theirs).
+        V = _trial_moves(V, d, F, ok & np.any(d != 0, axis=1), TRIAL_STEPS)
         F, _ = relax_edges(V, F, fixed, allowed=allowed, criterion=criterion)
     return V, F, attr

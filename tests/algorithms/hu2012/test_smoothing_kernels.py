@@ -77,3 +77,22 @@ def test_compiled_collapse_search_chooses_the_numpy_collapse(seed):
         assert got == _best_collapse_numpy(V, F, movable, fixed, max_quality)
         chosen += got is not None
     assert chosen > 0  # the search found collapses, not only refusals
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_compiled_trial_moves_are_the_step_by_step_guard_bit_for_bit(seed):
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import TRIAL_STEPS, _trial_moves, _trial_moves_numpy
+
+    rng = np.random.default_rng(seed)
+    for trial in range(25):
+        V, F = grid(int(rng.integers(3, 9)), int(rng.integers(3, 9)))
+        V = V + rng.normal(scale=0.05, size=V.shape)
+        d = rng.normal(scale=10.0 ** rng.uniform(-3, 0), size=V.shape)
+        pending = rng.random(len(V)) < 0.7
+        if trial % 5 == 0:
+            F = np.concatenate([F, F[:1, [0, 0, 1]]])  # a face of zero area: its normal is zero, it counts as flipped
+        got = _trial_moves(V, d, F, pending, TRIAL_STEPS)
+        want = _trial_moves_numpy(V, d, F, pending, TRIAL_STEPS)
+        np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
+        shorter = [V + s * d for s in TRIAL_STEPS]
+        assert all(np.any([np.all(got[v] == x[v]) for x in [V] + shorter]) for v in range(len(V)))
