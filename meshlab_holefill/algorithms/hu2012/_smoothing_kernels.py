@@ -1,8 +1,8 @@
 """Compiled steps of the tangential smoothing (numba): its moves, its guard and its collapse search.
 
 :func:`tangential_steps` is :func:`.tangential_smoothing._tangential_steps_numpy` (each round's
-move of every movable vertex), :func:`refuse_worse` is :func:`.tangential_smoothing._refuse_worse_numpy`
-(the guard run after every trial move), :func:`best_collapse` the search of
+move of every movable vertex), :func:`refuse_worse_steps` is :func:`.tangential_smoothing._trial_moves_numpy`
+(the trial moves and the guard run after each), :func:`best_collapse` the search of
 :func:`.tangential_smoothing._best_collapse_numpy` (each round's collapse). They run on a few
 hundred faces, every round, and their numpy forms are dominated by the overhead of small array
 operations (the collapse search by Python sets, on noisy borders with many poor triangles). The kernels do the same
@@ -20,7 +20,7 @@ from ...geometry._quality_kernels import face_cross, face_quality, unit_vertex_n
 from ...geometry._vector_kernels import dot3, norm3, npmax
 from ._bilateral_kernels import undo_moves
 
-__all__ = ["best_collapse", "refuse_worse", "refuse_worse_steps", "tangential_steps"]
+__all__ = ["best_collapse", "refuse_worse_steps", "tangential_steps"]
 
 _HALF_SQRT3 = np.sqrt(3.0) / 2.0  # the numpy code's constant, the same double
 
@@ -107,20 +107,10 @@ def _vertex_faces(F, n):
 
 
 @njit(cache=True)
-def refuse_worse(V_old, V_new, F, moved):
-    """V_new with the moves undone that lower the smallest quality around a moved vertex or flip a face.
-
-    V_old, V_new : (n, 3) float64; F : (m, 3) int64 (valid indices); moved : (n,) bool.
-    """
-    start, faces = _vertex_faces(F, V_old.shape[0])
-    q_old, n_old = _face_states(V_old, F)
-    return _refused(V_old, V_new, F, moved, q_old, n_old, start, faces)
-
-
-@njit(cache=True)
 def refuse_worse_steps(V, d, F, pending, steps):
     """The trial moves of a smoothing round: for each step s in turn, while a vertex is pending,
-    ``refuse_worse(V, V + s * d * pending, F, pending)``, the vertices it put back pending at the next.
+    :func:`.tangential_smoothing._refuse_worse_numpy` ``(V, V + s * d * pending, F, pending)``, the vertices it
+    put back pending at the next.
 
     V, d : (n, 3) float64; F : (m, 3) int64 (valid indices); pending : (n,) bool; steps : (s,) float64.
     The faces' qualities and normals before a step are those after the last one: only the faces of the
@@ -175,7 +165,8 @@ def _corners_moved(V_old, V, F, f):
 
 @njit(cache=True)
 def _refused(V_old, V_new, F, moved, q_old, n_old, start, faces):
-    """:func:`refuse_worse` given the faces' states in V_old (:func:`_face_states`) and :func:`_vertex_faces`.
+    """V_new with the moves undone that lower the smallest quality around a moved vertex or flip a face,
+    given the faces' states in V_old (:func:`_face_states`) and :func:`_vertex_faces`.
 
     A face whose corners are where they were has the quality q_old (-1 where its normal is zero,
     as a recomputation finds it). After the first pass only the vertices of the faces a

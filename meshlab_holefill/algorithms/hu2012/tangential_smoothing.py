@@ -17,7 +17,7 @@ from ...geometry.caps import split_quads
 from ...geometry.flips import relax_edges
 from ...geometry.quality import corner_angles, cross_rows, triangle_quality, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, undirected_keys
-from ._smoothing_kernels import NO_COLLAPSE, best_collapse, refuse_worse, refuse_worse_steps, tangential_steps
+from ._smoothing_kernels import NO_COLLAPSE, best_collapse, refuse_worse_steps, tangential_steps
 
 __all__ = ["bisect_obtuse", "collapse_poor", "tangential_smoothing"]
 
@@ -59,26 +59,17 @@ def _tangential_steps_numpy(V, F, movable):
     return d, ok
 
 
-def _refuse_worse(V_old, V_new, F, moved):
-    """Undo the moves that lower the smallest quality around a moved vertex, or flip a face.
-
-    Jacobi-style: all moves are made, then every moved vertex whose incident faces' smallest
-    quality 2r/R dropped (or one of whose faces flipped) goes back, until no such vertex is
-    left (undoing only restores faces, so this ends). Compiled
-    (:func:`._smoothing_kernels.refuse_worse`, the bits of :func:`_refuse_worse_numpy`).
-    """
-    F = np.ascontiguousarray(F, np.int64)
-    if len(F) and (F.min() < 0 or F.max() >= len(V_old)):
-        return _refuse_worse_numpy(V_old, V_new, F, moved)
-    return refuse_worse(np.ascontiguousarray(V_old, np.float64), np.ascontiguousarray(V_new, np.float64), F,
-                        np.ascontiguousarray(moved, bool))
-
-
 TRIAL_STEPS = (1.0, 0.5, 0.25)  # fractions of a smoothing step tried in turn
 
 
 def _trial_moves(V, d, F, pending, steps):
-    """Each pending vertex moved by the first of ``steps`` times its step d that :func:`_refuse_worse` keeps.
+    """Each pending vertex moved by the first of ``steps`` times its step d that is kept.
+
+    A trial move is undone when it lowers the smallest quality 2r/R of the vertex's faces or flips
+    one of them. Jacobi-style: all moves of a step are made, then every moved vertex whose
+    incident faces' smallest quality dropped (or one of whose faces flipped) goes back, until no
+    such vertex is left (undoing only restores faces, so this ends); the vertices put back try
+    the next, shorter step.
 
     Compiled (:func:`._smoothing_kernels.refuse_worse_steps`, the bits of :func:`_trial_moves_numpy`).
     """
@@ -90,19 +81,20 @@ def _trial_moves(V, d, F, pending, steps):
 
 
 def _trial_moves_numpy(V, d, F, pending, steps):
-    """:func:`_trial_moves` by :func:`_refuse_worse` once per step (the reference of the compiled moves)."""
+    """:func:`_trial_moves` by :func:`_refuse_worse_numpy` once per step (the reference of the compiled moves)."""
     pending = np.array(pending, bool)
     for step in steps:
         if not pending.any():
             break
-        V_new = _refuse_worse(V, V + step * d * pending[:, None], F, pending)
+        V_new = _refuse_worse_numpy(V, V + step * d * pending[:, None], F, pending)
         pending &= np.all(V_new == V, axis=1)
         V = V_new
     return V
 
 
 def _refuse_worse_numpy(V_old, V_new, F, moved):
-    """:func:`_refuse_worse` in numpy (the reference of the compiled guard)."""
+    """One step's guard of :func:`_trial_moves`: V_new with the moves undone that lower the smallest quality
+    around a moved vertex or flip a face (moved: (n,) bool, the vertices V_new moves)."""
     n = len(V_old)
     q_old = triangle_quality(V_old, F)
     worst_old = np.full(n, np.inf)

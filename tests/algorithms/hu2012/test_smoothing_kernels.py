@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
-from meshlab_holefill.algorithms.hu2012.tangential_smoothing import (_refuse_worse, _refuse_worse_numpy,
-                                                                     _tangential_steps, _tangential_steps_numpy)
+from meshlab_holefill.algorithms.hu2012.tangential_smoothing import (TRIAL_STEPS, _refuse_worse_numpy, _tangential_steps,
+                                                                     _tangential_steps_numpy, _trial_moves,
+                                                                     _trial_moves_numpy)
 
 from conftest import grid
 
@@ -14,8 +15,9 @@ def test_compiled_guard_undoes_the_moves_the_numpy_code_undoes():
         V, F = grid(int(rng.integers(3, 9)), int(rng.integers(3, 9)))
         V = V + rng.normal(scale=0.05, size=V.shape)
         moved = rng.random(len(V)) < 0.6
-        V_new = V + moved[:, None] * rng.normal(scale=10.0 ** rng.uniform(-3, 0), size=V.shape)
-        got = _refuse_worse(V, V_new, F, moved)
+        d = rng.normal(scale=10.0 ** rng.uniform(-3, 0), size=V.shape)
+        V_new = V + 1.0 * d * moved[:, None]
+        got = _trial_moves(V, d, F, moved, (1.0,))
         want = _refuse_worse_numpy(V, V_new, F, moved)
         np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
         assert np.all((got == V) | (got == V_new))  # each vertex keeps its move or goes back
@@ -24,9 +26,8 @@ def test_compiled_guard_undoes_the_moves_the_numpy_code_undoes():
 def test_a_move_that_flips_a_face_is_undone():
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
     F = np.array([[0, 1, 2]])
-    V_new = V.copy()
-    V_new[2] = [0, -1, 0]  # the face turns over
-    np.testing.assert_array_equal(_refuse_worse(V, V_new, F, np.array([False, False, True])), V)
+    d = np.array([[0, 0, 0], [0, 0, 0], [0, -2, 0]], float)  # the face turns over, at every step
+    np.testing.assert_array_equal(_trial_moves(V, d, F, np.array([False, False, True]), TRIAL_STEPS), V)
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -81,8 +82,6 @@ def test_compiled_collapse_search_chooses_the_numpy_collapse(seed):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_compiled_trial_moves_are_the_step_by_step_guard_bit_for_bit(seed):
-    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import TRIAL_STEPS, _trial_moves, _trial_moves_numpy
-
     rng = np.random.default_rng(seed)
     for trial in range(25):
         V, F = grid(int(rng.integers(3, 9)), int(rng.integers(3, 9)))
