@@ -33,7 +33,7 @@ from . import prediction as prediction_steps
 from . import sections
 from . import smoothing as smoothing_steps
 from . import triangulation
-from ._loop_only_patch import loop_only_patch
+from ._loop_only_patch import faired_where_less_bent, loop_only_patch
 from ._smooth_and_optimise import smooth_and_optimise
 
 __all__ = ["PredictionOptions", "SmoothingOptions", "OptimisationOptions", "patch_hole", "boundary_step",
@@ -161,12 +161,12 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
     prediction_seconds = 0.0
     made = []  # with layouts='smoothest': (bend, attempt's name, patch, record) of every attempt
 
-    def loop_only(failed):
+    def loop_only(failed, fair=True):
         """The loop-only patch (None where it is not clean), its info naming the attempts ``failed``."""
         info = {"base_points": len(base), "segmented": False, "layout": "loop only", "pairs": 0, "predicted": 0,
                 "rate": 0.0, "attempts_failed": "; ".join(failed), "boundary_seconds": t1 - t0,
                 "prediction_seconds": prediction_seconds}
-        return loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info)
+        return loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info, fair=fair)
 
     for position, (segmented, layout) in enumerate(attempts):
         t2 = time.perf_counter()
@@ -200,9 +200,10 @@ def patch_hole(ctx, prediction, smoothing, optimisation, record=None, layouts="f
         if info["predicted"] == 0 or kept >= GOOD_KEPT_SHARE:
             if position > 0:  # the paper's own attempt failed: this is a fallback layout's patch
                 kept_name = f"{name.rsplit(', ', 1)[0]}, {layout}"  # the disc, where it beat the development
-                guard = _bends_more_than_loop_only(ctx, patch, kept_name, reasons, loop_only)
-                if guard is not None:
-                    return guard
+                guard = _bends_more_than_loop_only(ctx, patch, kept_name, reasons,
+                                                   lambda failed: loop_only(failed, fair=False))
+                if guard is not None:  # compared as the loop's own triangulation, then faired where that bends less
+                    return faired_where_less_bent(ctx, guard, mesh_normals, optimisation)
             return _returned(patch, clean.record, reasons, record)
         # The layout lost many prediction points: keep it, but try the others first.
         if best is None or kept > best.info["kept_share"]:

@@ -2,7 +2,8 @@
 
 :func:`loop_only_patch` triangulates the loop by Liepa's weights (or flat in the PCA plane, or by
 the compiled least-bend triangulations for long loops), then relaxes it and raises its quality
-with splits, each kept only if clean. :mod:`._algorithm2` calls it after the last layout.
+with splits, and refines and fairs it as Liepa does where that bends less against the surface,
+each kept only if clean. :mod:`._algorithm2` calls it after the last layout.
 """
 from __future__ import annotations
 
@@ -10,24 +11,28 @@ import itertools
 
 import numpy as np
 
+from ...core.border_bend import border_bend
 from ...core.least_bend import least_bend_triangulations
 from ...core.patch import Patch
 from ...errors import HoleFillError
 from ...geometry.laplacian import tangential_umbrella_smoothing
 from ...geometry.quality import triangle_quality
+from ...geometry.refine import refine_patch
+from ...geometry.topology import boundary_edges_and_chords
 from . import folds
 from . import optimisation as optimisation_steps
 from . import quality_pass
 from . import triangulation
+from ..hu2012.fairing import fair_patch_in_context
 from ._smooth_and_optimise import RELAX_ROUNDS
 
-__all__ = ["loop_only_patch", "LAST_RESORT_ANGLE"]
+__all__ = ["loop_only_patch", "faired_where_less_bent", "LAST_RESORT_ANGLE"]
 
 LAST_RESORT_ANGLE = np.radians(175.0)  # largest crease the loop-only last resort accepts
 LAST_RESORT_FLOORS = (0.4, 0.6)  # quality pass floors of the loop-only last resort (splits give it inner vertices)
 
 
-def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
+def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info, fair=True):
     """Last resort (beyond the paper): the loop alone, triangulated by Liepa's weights or flat in the PCA plane.
 
     Loops longer than ``folds.LOOP_TRIANGULATION_SIZE`` take the compiled least-bend triangulations
@@ -37,7 +42,8 @@ def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
     accepted (a triangle flipped onto its neighbour is at 180 degrees). The first candidate
     that duplicates no mesh edge, has no sharper fold and does not cross the rings is relaxed
     (``relax``: its splits give it interior vertices) and raised by the quality pass with
-    splits (``quality_floor``), each kept only if clean.
+    splits (``quality_floor``), each kept only if clean; then, with ``fair``, refined and faired
+    where that bends less against the surface (:func:`faired_where_less_bent`).
 
     Returns
     -------
@@ -71,8 +77,54 @@ def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info):
             V, F = _relax_loop_only(ctx, P, F, mesh_normals, optimisation.relax)
         if optimisation.quality_floor > 0:
             V, F = _raise_loop_only_quality(ctx, V, F, mesh_normals, info, blocked)
-        return Patch(vertices=V[k:], faces=F, info=info)
+        patch = Patch(vertices=V[k:], faces=F, info=info)
+        return faired_where_less_bent(ctx, patch, mesh_normals, optimisation, blocked) if fair else patch
     return None
+
+
+def faired_where_less_bent(ctx, patch, mesh_normals, optimisation, blocked=None):
+    """A loop-only patch refined and faired as Liepa's fill is, where that bends less against the surface.
+
+    The least-bend triangulation of the loop and its splits lie across the hole as a near-flat
+    sheet. Liepa refines such a patch to the density of the surrounding mesh and fairs it; so
+    does this last resort: the refinement of :func:`meshlab_holefill.geometry.refine.refine_patch`
+    (centroid splits and relaxation swaps; the loop's vertices at their rings' mean edge length,
+    the splits' vertices at the loop's mean, the loop edges and chords fixed), then the
+    thin-plate energy with the hole's rings fixed (:func:`..hu2012.fairing.fair_patch_in_context`),
+    so the patch continues the surface's slope across the border. The faired patch is kept only
+    when it is clean (no fold beyond LAST_RESORT_ANGLE, no crossing of the rings), bends less
+    against the surface across the border (:func:`meshlab_holefill.core.border_bend.border_bend`,
+    the criterion that chooses between the layouts) and, after the guarded quality pass has run
+    again on it, has no triangle poorer than the patch had or than the pass's first floor (swaps
+    may not create loop triangles crossing the rings: ``blocked``, :func:`.folds.crossing_triangles`,
+    found here when not given). ``info["faired"]`` says it was kept.
+
+    Returns
+    -------
+    Patch  the faired patch, or ``patch``
+    """
+    k = ctx.size
+    if len(patch.vertices) == 0:
+        return patch
+    V, F, info = patch.all_points(ctx.points), patch.faces, patch.info
+    scale = np.r_[ctx.edge_scale, np.full(len(V) - k, float(np.mean(ctx.edge_scale)))]
+    Vr, Fr, _, _ = refine_patch(V, F, scale, fixed_edges=boundary_edges_and_chords(k, ctx.forbidden_edges),
+                                criterion="angles")
+    faired = Vr.copy()
+    faired[k:] = fair_patch_in_context(ctx.vertices, ctx.faces, k, Vr[k:], Fr, order=2)
+    if not np.all(np.isfinite(faired)) or folds.local_folds(faired, Fr, mesh_normals, max_angle=LAST_RESORT_ANGLE).any() \
+            or folds.intersects_surroundings(ctx, faired, Fr):
+        return patch
+    if not border_bend(ctx, faired[k:], Fr) < border_bend(ctx, V[k:], F):
+        return patch
+    counts = dict(info)
+    if optimisation.quality_floor > 0:
+        blocked = folds.crossing_triangles(ctx) if blocked is None else blocked
+        faired, Fr = _raise_loop_only_quality(ctx, faired, Fr, mesh_normals, counts, blocked)
+    if triangle_quality(faired, Fr).min() < min(triangle_quality(V, F).min(), LAST_RESORT_FLOORS[0]):
+        return patch
+    info.update(counts, faired=True)
+    return Patch(vertices=faired[k:], faces=Fr, info=info)
 
 
 def _relax_loop_only(ctx, P, F, mesh_normals, relax):
