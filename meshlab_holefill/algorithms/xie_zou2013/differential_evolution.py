@@ -59,8 +59,8 @@ Readings of passages the paper leaves open (each documented at the function that
   dropped for up to 2 rounds. A loop-only triangulation with Liepa's weights is the last
   resort; where it is the result, it is refined and faired as Liepa's fill is where that bends
   less against the surface (``_loop_only_patch.faired_where_less_bent``; README, "HPDE (Xie &
-  Zou)", measured: seeds 1-3 of the unseen groups 3.910 -> 3.854 per mille, 5 holes changed). Where the paper's layout failed and a fallback layout gave the patch, the loop-only
-  patch is made too and kept if it bends less against the surface across the border
+  Zou)": seeds 1-3 of the unseen groups 3.910 -> 3.854 per mille, 5 holes changed). Where the
+  paper's layout failed and a fallback layout gave the patch, the loop-only patch is made too and kept if it bends less against the surface across the border
   (``core.border_bend``; ``_algorithm2._bends_more_than_loop_only``): the fallbacks run where
   the predictions stray (noisy borders, strips, loops round a part). Measured, before -> after,
   mean patch->GT per mille: ``scripts/unseen_holes.py`` groups through
