@@ -1,8 +1,8 @@
 """Compiled steps of the tangential smoothing (numba): its moves, its guard and its collapse search.
 
 :func:`tangential_steps` is :func:`.tangential_smoothing._tangential_steps_numpy` (each round's
-move of every movable vertex), :func:`refuse_worse_steps` is :func:`.tangential_smoothing._trial_moves_numpy`
-(the trial moves and the guard run after each), :func:`best_collapse` the search of
+move of every movable vertex), :func:`refuse_worse_steps` is :func:`.tangential_smoothing._guarded_moves_numpy`
+(the guarded moves of each step), :func:`best_collapse` the search of
 :func:`.tangential_smoothing._best_collapse_numpy` (each round's collapse). They run on a few
 hundred faces, every round, and their numpy forms are dominated by the overhead of small array
 operations (the collapse search by Python sets, on noisy borders with many poor triangles). The kernels do the same
@@ -108,7 +108,7 @@ def _vertex_faces(F, n):
 
 @njit(cache=True)
 def refuse_worse_steps(V, d, F, pending, steps):
-    """The trial moves of a smoothing round: for each step s in turn, while a vertex is pending,
+    """The guarded moves of a smoothing round: for each step s in turn, while a vertex is pending,
     :func:`.tangential_smoothing._refuse_worse_numpy` ``(V, V + s * d * pending, F, pending)``, the vertices it
     put back pending at the next.
 
@@ -123,15 +123,15 @@ def refuse_worse_steps(V, d, F, pending, steps):
     for s in steps:
         if not pending.any():
             break
-        trial = np.empty_like(V)
+        stepped = np.empty_like(V)
         for v in range(n):
             on = 1.0 if pending[v] else 0.0
             for c in range(3):
-                trial[v, c] = V[v, c] + (s * d[v, c]) * on
-        moved_to = _refused(V, trial, F, pending, q_old, n_old, start, faces)
+                stepped[v, c] = V[v, c] + (s * d[v, c]) * on
+        moved_to = _refused(V, stepped, F, pending, q_old, n_old, start, faces)
         changed = np.zeros(n, np.bool_)
         for v in range(n):
-            changed[v] = not (moved_to[v, 0] == V[v, 0] and moved_to[v, 1] == V[v, 1] and moved_to[v, 2] == V[v, 2])
+            changed[v] = not _same_place(moved_to, V, v)
             pending[v] = pending[v] and not changed[v]
         for f in range(m):
             if changed[F[f, 0]] or changed[F[f, 1]] or changed[F[f, 2]]:
@@ -154,13 +154,15 @@ def _face_states(V, F):
 
 
 @njit(cache=True)
+def _same_place(A, B, v):
+    """Whether vertex v has equal coordinates in A and B."""
+    return A[v, 0] == B[v, 0] and A[v, 1] == B[v, 1] and A[v, 2] == B[v, 2]
+
+
+@njit(cache=True)
 def _corners_moved(V_old, V, F, f):
     """Whether a corner of face f differs between V_old and V."""
-    for c in range(3):
-        v = F[f, c]
-        if not (V[v, 0] == V_old[v, 0] and V[v, 1] == V_old[v, 1] and V[v, 2] == V_old[v, 2]):
-            return True
-    return False
+    return not (_same_place(V, V_old, F[f, 0]) and _same_place(V, V_old, F[f, 1]) and _same_place(V, V_old, F[f, 2]))
 
 
 @njit(cache=True)

@@ -59,29 +59,29 @@ def _tangential_steps_numpy(V, F, movable):
     return d, ok
 
 
-TRIAL_STEPS = (1.0, 0.5, 0.25)  # fractions of a smoothing step tried in turn
+STEP_FRACTIONS = (1.0, 0.5, 0.25)  # fractions of a smoothing step tried in turn
 
 
-def _trial_moves(V, d, F, pending, steps):
+def _guarded_moves(V, d, F, pending, steps):
     """Each pending vertex moved by the first of ``steps`` times its step d that is kept.
 
-    A trial move is undone when it lowers the smallest quality 2r/R of the vertex's faces or flips
-    one of them. Jacobi-style: all moves of a step are made, then every moved vertex whose
+    A vertex's move is undone when it lowers the smallest quality 2r/R of the vertex's faces or
+    flips one of them. Jacobi-style: all moves of a step are made, then every moved vertex whose
     incident faces' smallest quality dropped (or one of whose faces flipped) goes back, until no
     such vertex is left (undoing only restores faces, so this ends); the vertices put back try
     the next, shorter step.
 
-    Compiled (:func:`._smoothing_kernels.refuse_worse_steps`, the bits of :func:`_trial_moves_numpy`).
+    Compiled (:func:`._smoothing_kernels.refuse_worse_steps`, the bits of :func:`_guarded_moves_numpy`).
     """
     F = np.ascontiguousarray(F, np.int64)
     if len(F) and (F.min() < 0 or F.max() >= len(V)):
-        return _trial_moves_numpy(V, d, F, pending, steps)
+        return _guarded_moves_numpy(V, d, F, pending, steps)
     return refuse_worse_steps(np.ascontiguousarray(V, np.float64), np.ascontiguousarray(d, np.float64), F,
                               np.ascontiguousarray(pending, bool), np.asarray(steps, np.float64))
 
 
-def _trial_moves_numpy(V, d, F, pending, steps):
-    """:func:`_trial_moves` by :func:`_refuse_worse_numpy` once per step (the reference of the compiled moves)."""
+def _guarded_moves_numpy(V, d, F, pending, steps):
+    """:func:`_guarded_moves` by :func:`_refuse_worse_numpy` once per step (the reference of the compiled moves)."""
     pending = np.array(pending, bool)
     for step in steps:
         if not pending.any():
@@ -93,7 +93,7 @@ def _trial_moves_numpy(V, d, F, pending, steps):
 
 
 def _refuse_worse_numpy(V_old, V_new, F, moved):
-    """One step's guard of :func:`_trial_moves`: V_new with the moves undone that lower the smallest quality
+    """One step's guard of :func:`_guarded_moves`: V_new with the moves undone that lower the smallest quality
     around a moved vertex or flip a face (moved: (n,) bool, the vertices V_new moves)."""
     n = len(V_old)
     q_old = triangle_quality(V_old, F)
@@ -297,7 +297,7 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
     its ideal positions, one per incident face (v, a, b): the apex of the equilateral triangle on
     a b, in the face's plane on v's side. A move that lowers the smallest quality of v's faces,
     or flips one, is undone and tried again at half and a quarter of the step
-    (:func:`_trial_moves`), and the edges are then relaxed again by the test of Sec. III.C
+    (:func:`_guarded_moves`), and the edges are then relaxed again by the test of Sec. III.C
     (``criterion``, ``fixed`` edges kept, swaps vetoed by ``allowed``). With ``split`` each round
     starts with :func:`bisect_obtuse` (new vertices are movable), for the obtuse ears between two
     border edges that no vertex move can reach, and :func:`collapse_poor`, for a vertex with no
@@ -328,6 +328,6 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
             V, F, movable, attr = bisect_obtuse(V, F, movable, fixed, attr)
         d, ok = _tangential_steps(V, F, movable)
         # Vertices whose move was undone try a shorter one (the others keep theirs).
-        V = _trial_moves(V, d, F, ok & np.any(d != 0, axis=1), TRIAL_STEPS)
+        V = _guarded_moves(V, d, F, ok & np.any(d != 0, axis=1), STEP_FRACTIONS)
         F, _ = relax_edges(V, F, fixed, allowed=allowed, criterion=criterion)
     return V, F, attr

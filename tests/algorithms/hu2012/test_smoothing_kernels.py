@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from meshlab_holefill.algorithms.hu2012.tangential_smoothing import (TRIAL_STEPS, _refuse_worse_numpy, _tangential_steps,
-                                                                     _tangential_steps_numpy, _trial_moves,
-                                                                     _trial_moves_numpy)
+from meshlab_holefill.algorithms.hu2012.tangential_smoothing import (STEP_FRACTIONS, _refuse_worse_numpy, _tangential_steps,
+                                                                     _tangential_steps_numpy, _guarded_moves,
+                                                                     _guarded_moves_numpy)
 
 from conftest import grid
 
@@ -17,7 +17,7 @@ def test_compiled_guard_undoes_the_moves_the_numpy_code_undoes():
         moved = rng.random(len(V)) < 0.6
         d = rng.normal(scale=10.0 ** rng.uniform(-3, 0), size=V.shape)
         V_new = V + 1.0 * d * moved[:, None]
-        got = _trial_moves(V, d, F, moved, (1.0,))
+        got = _guarded_moves(V, d, F, moved, (1.0,))
         want = _refuse_worse_numpy(V, V_new, F, moved)
         np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
         assert np.all((got == V) | (got == V_new))  # each vertex keeps its move or goes back
@@ -27,7 +27,7 @@ def test_a_move_that_flips_a_face_is_undone():
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
     F = np.array([[0, 1, 2]])
     d = np.array([[0, 0, 0], [0, 0, 0], [0, -2, 0]], float)  # the face turns over, at every step
-    np.testing.assert_array_equal(_trial_moves(V, d, F, np.array([False, False, True]), TRIAL_STEPS), V)
+    np.testing.assert_array_equal(_guarded_moves(V, d, F, np.array([False, False, True]), STEP_FRACTIONS), V)
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -81,7 +81,7 @@ def test_compiled_collapse_search_chooses_the_numpy_collapse(seed):
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_compiled_trial_moves_are_the_step_by_step_guard_bit_for_bit(seed):
+def test_compiled_guarded_moves_are_the_step_by_step_guard_bit_for_bit(seed):
     rng = np.random.default_rng(seed)
     for trial in range(25):
         V, F = grid(int(rng.integers(3, 9)), int(rng.integers(3, 9)))
@@ -90,8 +90,8 @@ def test_compiled_trial_moves_are_the_step_by_step_guard_bit_for_bit(seed):
         pending = rng.random(len(V)) < 0.7
         if trial % 5 == 0:
             F = np.concatenate([F, F[:1, [0, 0, 1]]])  # a face of zero area: its normal is zero, it counts as flipped
-        got = _trial_moves(V, d, F, pending, TRIAL_STEPS)
-        want = _trial_moves_numpy(V, d, F, pending, TRIAL_STEPS)
+        got = _guarded_moves(V, d, F, pending, STEP_FRACTIONS)
+        want = _guarded_moves_numpy(V, d, F, pending, STEP_FRACTIONS)
         np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64))
-        shorter = [V + s * d for s in TRIAL_STEPS]
+        shorter = [V + s * d for s in STEP_FRACTIONS]
         assert all(np.any([np.all(got[v] == x[v]) for x in [V] + shorter]) for v in range(len(V)))

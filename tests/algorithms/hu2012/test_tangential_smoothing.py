@@ -155,7 +155,7 @@ def test_smoothing_option_keeps_the_loop_and_the_disc(k, points, seed, split):
 
 
 def _refuse_worse_by_full_recompute(V_old, V_new, F, moved):
-    """Oracle of one step of tangential_smoothing._trial_moves: every face's quality recomputed each pass."""
+    """Oracle of one step of tangential_smoothing._guarded_moves: every face's quality recomputed each pass."""
     from meshlab_holefill.geometry.quality import triangle_quality
 
     n = len(V_old)
@@ -175,9 +175,9 @@ def _refuse_worse_by_full_recompute(V_old, V_new, F, moved):
         moved &= ~back
 
 
-def test_a_trial_step_undoes_exactly_the_moves_a_full_recompute_undoes():
+def test_one_step_undoes_exactly_the_moves_a_full_recompute_undoes():
     from conftest import grid
-    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import _trial_moves
+    from meshlab_holefill.algorithms.hu2012.tangential_smoothing import _guarded_moves
     from meshlab_holefill.geometry.quality import triangle_quality
 
     rng = np.random.default_rng(0)
@@ -187,7 +187,7 @@ def test_a_trial_step_undoes_exactly_the_moves_a_full_recompute_undoes():
         d = rng.normal(size=V.shape) * rng.choice([0.01, 0.1, 0.5])
         moved = rng.random(len(V)) < 0.7
         V_new = V + 1.0 * d * moved[:, None]
-        got = _trial_moves(V, d, F, moved, (1.0,))
+        got = _guarded_moves(V, d, F, moved, (1.0,))
         np.testing.assert_array_equal(got, _refuse_worse_by_full_recompute(V, V_new, F, moved))
         worst = np.full(len(V), np.inf)
         np.minimum.at(worst, F.ravel(), np.repeat(triangle_quality(got, F), 3))
