@@ -2,8 +2,8 @@
 
 :func:`loop_only_patch` triangulates the loop by Liepa's weights (or flat in the PCA plane, or by
 the compiled least-bend triangulations for long loops), then relaxes it and raises its quality
-with splits, and refines and fairs it as Liepa does where that bends less against the surface,
-each kept only if clean. :mod:`._algorithm2` calls it after the last layout.
+with splits, and refines and fairs it as Liepa does where that bends less against the surface
+(else refines it alone), each kept only if clean. :mod:`._algorithm2` calls it after the last layout.
 """
 from __future__ import annotations
 
@@ -83,7 +83,8 @@ def loop_only_patch(ctx, base, normals, seg, mesh_normals, optimisation, info, f
 
 
 def faired_where_less_bent(ctx, patch, mesh_normals, optimisation, blocked=None):
-    """A loop-only patch refined and faired as Liepa's fill is, where that bends less against the surface.
+    """A loop-only patch refined and faired as Liepa's fill is, where that bends less against the surface;
+    else refined alone, where that is clean.
 
     The least-bend triangulation of the loop and its splits lie across the hole as a near-flat
     sheet. Liepa refines such a patch to the density of the surrounding mesh and fairs it; so
@@ -99,32 +100,55 @@ def faired_where_less_bent(ctx, patch, mesh_normals, optimisation, blocked=None)
     may not create loop triangles crossing the rings: ``blocked``, :func:`.folds.crossing_triangles`,
     found here when not given). ``info["faired"]`` says it was kept.
 
+    Where the faired patch is not kept (on a jagged scan border it can cross the rings), the
+    refined patch is kept instead when the refinement added vertices, it is clean and, after the
+    quality pass, it has no triangle poorer than the patch had: it lies on the patch's own
+    triangles at the surrounding density, where the coarse triangulation of a long loop holds
+    slivers (a 97-edge occlusion hole of a noisy range scan: quality 0.011 -> 0.558).
+    ``info["refined"]`` says so.
+
     Returns
     -------
-    Patch  the faired patch, or ``patch``
+    Patch  the faired patch, the refined one, or ``patch``
     """
     k = ctx.size
-    if len(patch.vertices) == 0:
-        return patch
     V, F, info = patch.all_points(ctx.points), patch.faces, patch.info
     scale = np.r_[ctx.edge_scale, np.full(len(V) - k, float(np.mean(ctx.edge_scale)))]
     Vr, Fr, _, _ = refine_patch(V, F, scale, fixed_edges=boundary_edges_and_chords(k, ctx.forbidden_edges),
                                 criterion="angles")
+    if len(Vr) == k:  # no inner vertex to fair or to add
+        return patch
+    poorest = triangle_quality(V, F).min()
+    found = []  # folds.crossing_triangles(ctx), found once where the quality pass needs it
+
+    def raised(X, faces):
+        counts = dict(info)
+        if optimisation.quality_floor > 0:
+            if not found:
+                found.append(folds.crossing_triangles(ctx) if blocked is None else blocked)
+            X, faces = _raise_loop_only_quality(ctx, X, faces, mesh_normals, counts, found[0])
+        return X, faces, counts
+
     faired = Vr.copy()
     faired[k:] = fair_patch_in_context(ctx.vertices, ctx.faces, k, Vr[k:], Fr, order=2)
-    if not np.all(np.isfinite(faired)) or folds.local_folds(faired, Fr, mesh_normals, max_angle=LAST_RESORT_ANGLE).any() \
-            or folds.intersects_surroundings(ctx, faired, Fr):
-        return patch
-    if not border_bend(ctx, faired[k:], Fr) < border_bend(ctx, V[k:], F):
-        return patch
-    counts = dict(info)
-    if optimisation.quality_floor > 0:
-        blocked = folds.crossing_triangles(ctx) if blocked is None else blocked
-        faired, Fr = _raise_loop_only_quality(ctx, faired, Fr, mesh_normals, counts, blocked)
-    if triangle_quality(faired, Fr).min() < min(triangle_quality(V, F).min(), LAST_RESORT_FLOORS[0]):
-        return patch
-    info.update(counts, faired=True)
-    return Patch(vertices=faired[k:], faces=Fr, info=info)
+    if _clean(ctx, faired, Fr, mesh_normals) and border_bend(ctx, faired[k:], Fr) < border_bend(ctx, V[k:], F):
+        X, faces, counts = raised(faired, Fr)
+        if triangle_quality(X, faces).min() >= min(poorest, LAST_RESORT_FLOORS[0]):
+            info.update(counts, faired=True)
+            return Patch(vertices=X[k:], faces=faces, info=info)
+    if len(Vr) > len(V) and _clean(ctx, Vr, Fr, mesh_normals):
+        X, faces, counts = raised(Vr, Fr)
+        if triangle_quality(X, faces).min() >= poorest:
+            info.update(counts, refined=True)
+            return Patch(vertices=X[k:], faces=faces, info=info)
+    return patch
+
+
+def _clean(ctx, X, F, mesh_normals):
+    """Finite, no fold sharper than LAST_RESORT_ANGLE, no crossing of the rings."""
+    if not np.all(np.isfinite(X)) or folds.local_folds(X, F, mesh_normals, max_angle=LAST_RESORT_ANGLE).any():
+        return False
+    return not folds.intersects_surroundings(ctx, X, F)
 
 
 def _relax_loop_only(ctx, P, F, mesh_normals, relax):

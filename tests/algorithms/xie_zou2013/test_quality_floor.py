@@ -90,6 +90,29 @@ def test_the_loop_only_last_resort_is_faired_onto_the_sphere_where_that_bends_le
     assert triangle_quality(patch_points(ctx, faired), faired.faces).min() >= 0.3
 
 
+def test_a_loop_only_patch_that_fairing_bends_no_less_is_refined_to_the_surrounding_density(monkeypatch):
+    """A round hole in a flat grid with every layout taken away: fairing leaves the flat loop-only patch
+    as flat, bending no less, so the patch is refined instead: at the grid's edge length, still in the
+    plane, crossing nothing, with no triangle poorer than the unrefined patch's."""
+    from meshlab_holefill.algorithms.xie_zou2013 import _algorithm2
+    from meshlab_holefill.geometry.quality import edge_lengths
+
+    V, F = grid_plane(24)
+    ctx = context(V, cut(V, F, (0.5, 0.5, 0.0), 0.3)[0])
+    monkeypatch.setattr(_algorithm2, "attempt_order", lambda *a: [])
+    refined = hpde.fill(ctx)
+    monkeypatch.setattr(hpde_loop_only, "faired_where_less_bent", lambda ctx, patch, *a: patch)
+    coarse = hpde.fill(ctx)
+    assert refined.info["layout"] == coarse.info["layout"] == "loop only"
+    assert refined.info.get("refined") and not refined.info.get("faired")
+    assert len(refined.vertices) > 2 * len(coarse.vertices)  # measured 134 against 57
+    assert np.all(refined.vertices[:, 2] == 0.0)
+    X, Y = check_patch(ctx, refined), patch_points(ctx, coarse)
+    assert triangle_quality(X, refined.faces).min() >= triangle_quality(Y, coarse.faces).min()
+    grid_edge = edge_lengths(V, F).mean()
+    assert abs(edge_lengths(X, refined.faces).mean() / grid_edge - 1.0) < 0.1  # coarse: 1.24 times the grid's
+
+
 def test_raise_min_quality_lifts_a_sliver_and_keeps_the_loop():
     """A free vertex pushed next to a loop edge (a sliver) is moved back; loop vertices stay, nothing folds."""
     from meshlab_holefill.algorithms.xie_zou2013 import quality_pass as hpde_quality
