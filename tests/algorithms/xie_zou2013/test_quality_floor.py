@@ -65,23 +65,31 @@ def test_loop_only_last_resort_is_lifted_by_the_quality_pass():
     assert q.min() >= 0.3 and len(patch.vertices) > 0
 
 
+def loop_only_with_and_without_fairing(monkeypatch, ctx):
+    """HPDE's patches of ``ctx`` with every layout taken away (the loop-only last resort): as filled, then
+    as filled without :func:`faired_where_less_bent` (neither faired nor refined)."""
+    from meshlab_holefill.algorithms.xie_zou2013 import _algorithm2
+
+    monkeypatch.setattr(_algorithm2, "attempt_order", lambda *a: [])
+    filled = hpde.fill(ctx)
+    monkeypatch.setattr(hpde_loop_only, "faired_where_less_bent", lambda ctx, patch, *a: patch)
+    coarse = hpde.fill(ctx)
+    assert filled.info["layout"] == coarse.info["layout"] == "loop only"
+    return filled, coarse
+
+
 @pytest.mark.parametrize("radius", [0.45, 0.7])
 def test_the_loop_only_last_resort_is_faired_onto_the_sphere_where_that_bends_less(monkeypatch, radius):
     """A hole round the sphere's pole with every layout taken away: the loop-only patch, a near-flat
     sheet across the cap, is faired (thin-plate, the rings fixed) and kept so, being closer to the
     removed cap and bending less across the border; without the fairing it stays flat."""
-    from meshlab_holefill.algorithms.xie_zou2013 import _algorithm2
     from meshlab_holefill.core.border_bend import border_bend
 
     from hpde_cases import sphere_mesh
 
     V, F = sphere_mesh(4)
     ctx = context(V, cut(V, F, (0, 0, 1.0), radius)[0])
-    monkeypatch.setattr(_algorithm2, "attempt_order", lambda *a: [])
-    faired = hpde.fill(ctx)
-    monkeypatch.setattr(hpde_loop_only, "faired_where_less_bent", lambda ctx, patch, *a: patch)
-    flat = hpde.fill(ctx)
-    assert faired.info["layout"] == flat.info["layout"] == "loop only"
+    faired, flat = loop_only_with_and_without_fairing(monkeypatch, ctx)
     assert faired.info.get("faired") and not flat.info.get("faired")
     off_sphere = lambda p: np.abs(np.linalg.norm(p.vertices, axis=1) - 1.0).mean()  # noqa: E731
     assert off_sphere(faired) < 0.75 * off_sphere(flat)  # measured 0.0120 / 0.0254 and 0.0242 / 0.0367
@@ -94,16 +102,11 @@ def test_a_loop_only_patch_that_fairing_bends_no_less_is_refined_to_the_surround
     """A round hole in a flat grid with every layout taken away: fairing leaves the flat loop-only patch
     as flat, bending no less, so the patch is refined instead: at the grid's edge length, still in the
     plane, crossing nothing, with no triangle poorer than the unrefined patch's."""
-    from meshlab_holefill.algorithms.xie_zou2013 import _algorithm2
     from meshlab_holefill.geometry.quality import edge_lengths
 
     V, F = grid_plane(24)
     ctx = context(V, cut(V, F, (0.5, 0.5, 0.0), 0.3)[0])
-    monkeypatch.setattr(_algorithm2, "attempt_order", lambda *a: [])
-    refined = hpde.fill(ctx)
-    monkeypatch.setattr(hpde_loop_only, "faired_where_less_bent", lambda ctx, patch, *a: patch)
-    coarse = hpde.fill(ctx)
-    assert refined.info["layout"] == coarse.info["layout"] == "loop only"
+    refined, coarse = loop_only_with_and_without_fairing(monkeypatch, ctx)
     assert refined.info.get("refined") and not refined.info.get("faired")
     assert len(refined.vertices) > 2 * len(coarse.vertices)  # measured 134 against 57
     assert np.all(refined.vertices[:, 2] == 0.0)
