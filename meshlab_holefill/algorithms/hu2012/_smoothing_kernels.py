@@ -167,7 +167,7 @@ def _corners_moved(V_old, V, F, f):
 
 @njit(cache=True)
 def _refused(V_old, V_new, F, moved, q_old, n_old, start, faces):
-    """V_new with the moves undone that lower the smallest quality around a moved vertex or flip a face,
+    """V_new with the moves taken back that lower the smallest quality around a moved vertex or flip a face,
     given the faces' states in V_old (:func:`_face_states`) and :func:`_vertex_faces`.
 
     A face whose corners are where they were has the quality q_old (-1 where its normal is zero,

@@ -65,10 +65,10 @@ STEP_FRACTIONS = (1.0, 0.5, 0.25)  # fractions of a smoothing step tried in turn
 def _guarded_moves(V, d, F, pending, steps):
     """Each pending vertex moved by the first of ``steps`` times its step d that is kept.
 
-    A vertex's move is undone when it lowers the smallest quality 2r/R of the vertex's faces or
+    A vertex's move is taken back when it lowers the smallest quality 2r/R of the vertex's faces or
     flips one of them. Jacobi-style: all moves of a step are made, then every moved vertex whose
     incident faces' smallest quality dropped (or one of whose faces flipped) goes back, until no
-    such vertex is left (undoing only restores faces, so this ends); the vertices put back try
+    such vertex is left (putting vertices back only restores faces, so this ends); the vertices put back try
     the next, shorter step.
 
     Compiled (:func:`._smoothing_kernels.refuse_worse_steps`, the bits of :func:`_guarded_moves_numpy`).
@@ -93,7 +93,7 @@ def _guarded_moves_numpy(V, d, F, pending, steps):
 
 
 def _refuse_worse_numpy(V_old, V_new, F, moved):
-    """One step's guard of :func:`_guarded_moves`: V_new with the moves undone that lower the smallest quality
+    """One step's guard of :func:`_guarded_moves`: V_new with the moves taken back that lower the smallest quality
     around a moved vertex or flip a face (moved: (n,) bool, the vertices V_new moves)."""
     n = len(V_old)
     q_old = triangle_quality(V_old, F)
@@ -296,7 +296,7 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
     every movable vertex v to the tangential part (about its area-weighted normal) of the mean of
     its ideal positions, one per incident face (v, a, b): the apex of the equilateral triangle on
     a b, in the face's plane on v's side. A move that lowers the smallest quality of v's faces,
-    or flips one, is undone and tried again at half and a quarter of the step
+    or flips one, is taken back and tried again at half and a quarter of the step
     (:func:`_guarded_moves`), and the edges are then relaxed again by the test of Sec. III.C
     (``criterion``, ``fixed`` edges kept, swaps vetoed by ``allowed``). With ``split`` each round
     starts with :func:`bisect_obtuse` (new vertices are movable), for the obtuse ears between two
@@ -327,7 +327,7 @@ def tangential_smoothing(V, F, movable, rounds, fixed=None, allowed=None, criter
             V, F, movable, attr = collapse_poor(V, F, movable, fixed, attr)
             V, F, movable, attr = bisect_obtuse(V, F, movable, fixed, attr)
         d, ok = _tangential_steps(V, F, movable)
-        # Vertices whose move was undone try a shorter one (the others keep theirs).
+        # Vertices whose move was taken back try a shorter one (the others keep theirs).
         V = _guarded_moves(V, d, F, ok & np.any(d != 0, axis=1), STEP_FRACTIONS)
         F, _ = relax_edges(V, F, fixed, allowed=allowed, criterion=criterion)
     return V, F, attr

@@ -119,14 +119,13 @@ def faired_where_less_bent(ctx, patch, mesh_normals, optimisation, blocked=None)
     if len(Vr) == k:  # no inner vertex to fair or to add
         return patch
     poorest = triangle_quality(V, F).min()
-    found = []  # folds.crossing_triangles(ctx), found once where the quality pass needs it
 
     def raised(X, faces):
+        nonlocal blocked
         counts = dict(info)
         if optimisation.quality_floor > 0:
-            if not found:
-                found.append(folds.crossing_triangles(ctx) if blocked is None else blocked)
-            X, faces = _raise_loop_only_quality(ctx, X, faces, mesh_normals, counts, found[0])
+            blocked = folds.crossing_triangles(ctx) if blocked is None else blocked
+            X, faces = _raise_loop_only_quality(ctx, X, faces, mesh_normals, counts, blocked)
         return X, faces, counts
 
     faired = Vr.copy()
@@ -160,8 +159,7 @@ def _relax_loop_only(ctx, P, F, mesh_normals, relax):
         Vr = tangential_umbrella_smoothing(Vr, Fr, np.arange(len(Vr)) < k, relax)
         if s_ == 0:
             break
-    if not folds.local_folds(Vr, Fr, mesh_normals, max_angle=LAST_RESORT_ANGLE).any() and \
-            not folds.intersects_surroundings(ctx, Vr, Fr):
+    if _clean(ctx, Vr, Fr, mesh_normals):
         return Vr, Fr
     return P, F
 

@@ -58,9 +58,11 @@ Readings of passages the paper leaves open (each documented at the function that
   swaps and local relaxation repair what they can, prediction points left on folds are
   dropped for up to 2 rounds. A loop-only triangulation with Liepa's weights is the last
   resort; where it is the result, it is refined and faired as Liepa's fill is where that bends
-  less against the surface (``_loop_only_patch.faired_where_less_bent``; README, "HPDE (Xie &
-  Zou)": seeds 1-3 of the unseen groups 3.910 -> 3.854 per mille, 5 holes changed). Where the
-  paper's layout failed and a fallback layout gave the patch, the loop-only patch is made too and kept if it bends less against the surface across the border
+  less against the surface, else refined alone where that is clean
+  (``_loop_only_patch.faired_where_less_bent``; README, "HPDE (Xie & Zou)": seeds 1-3 of the
+  unseen groups 3.910 -> 3.854 per mille, 5 holes changed). Where the paper's layout failed and
+  a fallback layout gave the patch, the loop-only patch is made too and kept if it bends less
+  against the surface across the border
   (``core.border_bend``; ``_algorithm2._bends_more_than_loop_only``): the fallbacks run where
   the predictions stray (noisy borders, strips, loops round a part). Measured, before -> after,
   mean patch->GT per mille: ``scripts/unseen_holes.py`` groups through
@@ -92,7 +94,7 @@ Readings of passages the paper leaves open (each documented at the function that
   degrees of the old pair's normal. ``relax`` (beyond the paper, on by
   default for the quality target): obtuse-edge splits, collapse of slivers on the loop and
   tangential relaxation, then moves of the free vertices of triangles below quality 0.5
-  (improve_worst_vertices), undone if it folds. ``quality_floor`` (beyond the paper, 0.4 by
+  (improve_worst_vertices), taken back if it folds. ``quality_floor`` (beyond the paper, 0.4 by
   default): the final guarded pass of quality_pass on the triangles below the floor, the
   paper's swaps and collapses plus vertex moves, each kept only if it raises the smallest
   quality of the triangles it changes, keeps them unfolded, and the patch does not cross the
@@ -202,7 +204,7 @@ def warm_up():
     V, F, loop = examples.bowl_with_hole()
     fill(hole_context(V, F, loop, rings=RINGS), seed=1)
     # The bowl's patch needs no quality pass: one on a square with an off-centre vertex, whose move
-    # a fold test refuses, so the round runs again face by face and the move is undone.
+    # a fold test refuses, so the round runs again face by face and the move is taken back.
     square = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.9, 0.12, 0.0]])
     raise_min_quality(square, np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]), 4,
                       fold_test=lambda V, F: int(V[4, 0] != 0.9))

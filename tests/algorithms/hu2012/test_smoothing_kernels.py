@@ -23,7 +23,7 @@ def test_compiled_guard_undoes_the_moves_the_numpy_code_undoes():
         assert np.all((got == V) | (got == V_new))  # each vertex keeps its move or goes back
 
 
-def test_a_move_that_flips_a_face_is_undone():
+def test_a_move_that_flips_a_face_is_taken_back():
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)
     F = np.array([[0, 1, 2]])
     d = np.array([[0, 0, 0], [0, 0, 0], [0, -2, 0]], float)  # the face turns over, at every step
