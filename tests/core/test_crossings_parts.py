@@ -108,7 +108,7 @@ def ball_under_the_cap():
     """A sphere without its cap above z = 0.8 and a small closed ball where the cap was, beyond the hole's rings."""
     Va, Fa = generated("create_sphere", radius=1.0, subdiv=4)
     Vb, Fb = generated("create_sphere", radius=0.03, subdiv=2)
-    return merged([(Va, Fa[Va[Fa, 2].max(axis=1) < 0.8]), (Vb + [0.1, 0.0, 0.95], Fb)])
+    return merged([(Va, Fa[Va[Fa, 2].max(axis=1) < 0.8]), (Vb + [0.1, 0.0, 0.96], Fb)])
 
 
 @pytest.mark.parametrize("algorithm", ALGORITHMS)

@@ -54,6 +54,7 @@ from .poisson_reconstruction import SLIVER_QUALITY, poisson_solves, reposition
 __all__ = ["fill", "PARAMS", "RINGS", "PREPARE", "prepare_boundary", "WARM_UP", "warm_up"]
 
 MAX_LAYERS = 5
+BOUNDARY_WEIGHT = 2.0  # poisson_reconstruction.poisson_reposition says how it was chosen
 RINGS = MAX_LAYERS + 1  # vertices of depth <= RINGS - 1 have complete 1-rings in the HoleContext
 PARAMS = [
     ParamSpec("split_boundary", "bool", True,
@@ -100,6 +101,11 @@ PARAMS = [
               "too; the system, then overdetermined, is solved in the least-squares sense, as Sec. 2.3 and 3.4 "
               "describe) or 'dirichlet' (the boundary fixed, one equation per inner vertex: the patch meets the "
               "mesh at an angle).", choices=("laplacian", "dirichlet")),
+    ParamSpec("boundary_weight", "float", BOUNDARY_WEIGHT,
+              "With poisson_boundary='laplacian': the weight of each boundary vertex's Laplacian equation "
+              "against an inner vertex's in the least-squares solve (Sec. 3.4; the paper leaves it open). Larger "
+              "values make the patch continue the surrounding surface's slope more closely.",
+              minimum=0.01, maximum=100.0),
     ParamSpec("laplacian_prediction", "enum", "lssvm",
               "Right-hand side of the Poisson equation: 'lssvm' (the paper) or 'zero' (with "
               "poisson_boundary='dirichlet' the membrane fill of Zhao et al. 2007, the paper's Table 1 "
@@ -210,7 +216,8 @@ def _poorer(X, F, X_unshaped, F_unshaped):
 @_one_blas_thread
 def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1, gamma=10.0,
          kernel_width=0.5, poisson_iterations=1, laplacian_prediction="lssvm", relax=True,
-         laplacian_frame="global", model_selection="fixed", poisson_boundary="laplacian"):
+         laplacian_frame="global", model_selection="fixed", poisson_boundary="laplacian",
+         boundary_weight=BOUNDARY_WEIGHT):
     """Fill one hole by Xu et al.'s steps (Sec. 3.2-3.4); Sec. 3.1 ran before as ``PREPARE``.
 
     The training set and regression (Sec. 3.3, 2.2) come first; then the initial patches of
@@ -246,6 +253,8 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
     poisson_boundary : {'laplacian', 'dirichlet'}
         The Poisson system's boundary condition (:func:`.poisson_reconstruction.poisson_reposition`): the boundary's
         Laplacian rows by least squares (Sec. 2.3), or the square Dirichlet system.
+    boundary_weight : float
+        The weight of those boundary rows against the inner rows (:func:`.poisson_reconstruction.solve_poisson`).
 
     Returns
     -------
@@ -295,11 +304,11 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
     for X0, F0, stats, layout in initial_patches(ctx, merge_factor, failures):
         t2 = time.perf_counter()
         solves = poisson_solves(stats, poisson_iterations)
-        X, F, pinfo = reposition(ctx, X0, F0, regressors, solves, relax, poisson_boundary, layout)
+        X, F, pinfo = reposition(ctx, X0, F0, regressors, solves, relax, poisson_boundary, layout, boundary_weight)
         if solves > poisson_iterations:
             X, F, pinfo = _less_bent(ctx, (X, F, pinfo),
                                      reposition(ctx, X0, F0, regressors, poisson_iterations, relax, poisson_boundary,
-                                                layout))
+                                                layout, boundary_weight))
         seconds = (t1 - t0, t2 - t1, time.perf_counter() - t2)
         if X is None:
             failures.append(f"{stats['domain']} patch: intersects the surrounding mesh")

@@ -56,3 +56,36 @@ def test_without_boundary_rows_the_square_dirichlet_system_is_solved():
     got = solve_poisson(X, F, free, rhs)
     L = normalized_cotangent_laplacian(X, F).toarray()
     assert np.abs(L[free][:, free] @ got + L[free][:, ~free] @ X[~free]).max() < 1e-9
+
+
+def _inconsistent_rows():
+    """The sphere cap's rows with random right-hand sides, which no positions satisfy all at once."""
+    allV, allF, F, n, free, rows = _sphere_with_patch()
+    rng = np.random.default_rng(1)
+    rhs, rhs_rows = rng.normal(size=(free.sum(), 3)) * 1e-2, rng.normal(size=(len(rows), 3)) * 1e-2
+    return allV, allF, F, n, free, rows, rhs, rhs_rows
+
+
+def test_weighted_boundary_rows_solve_the_weighted_least_squares_problem():
+    allV, allF, F, n, free, rows, rhs, rhs_rows = _inconsistent_rows()
+    got = solve_poisson(allV[:n].copy(), F, free, rhs, (rows, allV, allF, rhs_rows), boundary_weight=3.0)
+    L = normalized_cotangent_laplacian(allV, allF).toarray()
+    free_idx = np.flatnonzero(free)
+    known = np.setdiff1d(np.arange(len(allV)), free_idx)
+    R = np.concatenate([free_idx, rows])
+    B = np.concatenate([rhs, rhs_rows]) - L[np.ix_(R, known)] @ allV[known]
+    w = np.concatenate([np.ones(len(free_idx)), np.full(len(rows), 3.0)])[:, None]
+    want = np.linalg.lstsq(w * L[np.ix_(R, free_idx)], w * B, rcond=None)[0]
+    assert np.abs(got - want).max() < 1e-9
+
+
+def test_a_heavier_boundary_weight_brings_the_boundary_laplacians_closer_to_their_prediction():
+    allV, allF, F, n, free, rows, rhs, rhs_rows = _inconsistent_rows()
+    L = normalized_cotangent_laplacian(allV, allF)
+    residuals = []
+    for weight in (0.5, 1.0, 2.0, 8.0):
+        X = allV.copy()
+        X[np.flatnonzero(free)] = solve_poisson(allV[:n].copy(), F, free, rhs, (rows, allV, allF, rhs_rows),
+                                                boundary_weight=weight)
+        residuals.append(np.linalg.norm(L[rows] @ X - rhs_rows))
+    assert all(a > b for a, b in zip(residuals, residuals[1:])), residuals
