@@ -127,14 +127,21 @@ def poisson_reposition(X, F, fixed, regressors=None, iterations=1, update_rhs=Fa
     ``scripts/unseen_holes.py`` (LS-SVM alone through ``evaluation.comparison.run_comparison``;
     closed, creased and CAD groups seeds 1-3, 157 holes, and real-size seeds 1-6, 18 holes):
     2.0, with 3.183 / 2.901 / 2.911 / 3.017 / 3.105 for the five weights. Per group, 1 -> 2:
-    closed, creased and CAD 3.408 -> 3.108 (CGAL's Liepa fill 4.252; holes under 30 edges
-    0.863 -> 0.749), real-size 1.219 -> 1.098 (CGAL 1.130; 17 of the 18 holes closer, bunny_212k
-    s3's 152-edge hole 1.03 -> 0.89, s5's 251-edge 2.58 -> 1.98), noisy cow seeds 1-4 1.653 -> 1.726 (CGAL 1.300: the
-    boundary Laplacians of a noisy mesh are noise, and a heavier row follows it), range scans
-    seeds 1-2 0.035 either way; the benchmark's 49 cut holes 1.868 -> 1.744 (CGAL 2.844);
-    ``scripts/large_holes.py`` 3.137 -> 2.886, ``scripts/strip_holes.py`` 0.292 -> 0.260. Weights
-    that make the rows constraints (30) give 1.128 on the real-size holes. No hole in those groups
-    has a triangle below 0.1 or a face crossing the mesh with either weight.
+
+    - closed, creased and CAD 3.408 -> 3.108 (CGAL's Liepa fill 4.252; holes under 30 edges
+      0.863 -> 0.749); seeds 4-6, which the choice did not see (153 holes), 4.132 -> 3.946
+      (CGAL 5.425);
+    - real-size 1.219 -> 1.098 (CGAL 1.130; 17 of the 18 holes closer, bunny_212k s3's
+      152-edge hole 1.03 -> 0.89, s5's 251-edge 2.58 -> 1.98);
+    - noisy cow seeds 1-4, 1.801 -> 1.803 (CGAL 1.447; 9 of 15 holes farther: the boundary
+      Laplacians of a noisy mesh are noise, and a heavier row follows it); range scans seeds
+      1-2, 0.035 either way;
+    - the benchmark's 49 cut holes 1.868 -> 1.744 (CGAL 2.844); ``scripts/large_holes.py``
+      3.137 -> 2.886; ``scripts/strip_holes.py`` 0.292 -> 0.260.
+
+    Rows made constraints (weight 30) give 1.128 on the real-size holes. With either weight no
+    hole of these has a face crossing the mesh, and none but one noisy-cow hole (0.067 both
+    times) a triangle below 0.1.
 
     L_Vn of the first solve is the Laplacian of the triangles the advancing front made. Where
     it made them in a plane (the developed or projected fallback of
