@@ -15,7 +15,9 @@ Plain numpy arrays in and out; nothing here imports the core, the algorithms or 
 * :mod:`.intersections`: topology-aware triangle-triangle intersection queries.
 * :mod:`.development`: a border loop laid out in the plane with its edge lengths and surface angles.
 * :mod:`.sets`: np.unique, np.isin and np.setdiff1d of integer arrays, by sorting.
+* :mod:`.sparse_lu`: SuperLU in its symmetric mode, for symmetric systems with a dominant diagonal.
 """
 
 __all__ = ["quality", "topology", "laplacian", "flips", "refine", "pca",
-           "triangulate", "dihedral_triangulation", "caps", "segments", "intersections", "development", "sets"]
+           "triangulate", "dihedral_triangulation", "caps", "segments", "intersections", "development", "sets",
+           "sparse_lu"]

@@ -1,18 +1,18 @@
-"""The umbrella operator U of Brunton et al. 2009, Sec. 3.3, and the sparse LU its systems are solved with.
+"""The umbrella operator U of Brunton et al. 2009, Sec. 3.3.
 
 :mod:`.embedding` builds the energies E_AREA and E_DF from U; :mod:`.tangential_relaxation` moves
-the interior vertices where U has no tangential part. Both factorise with :func:`symmetric_lu`.
+the interior vertices where U has no tangential part. Both factorise with
+:func:`meshlab_holefill.geometry.sparse_lu.symmetric_lu`.
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ...geometry.laplacian import uniform_laplacian
 from ...geometry.quality import unique_edges
 
-__all__ = ["umbrella_operator", "SYMMETRIC_LU", "symmetric_lu"]
+__all__ = ["umbrella_operator"]
 
 
 def umbrella_operator(F, n):
@@ -60,29 +60,3 @@ def _umbrella_from_edges(E, n):
     W = sp.csr_matrix((values[order], cols[order].astype(np.int32), indptr.astype(np.int32)), shape=(n, n))
     W.has_sorted_indices = False
     return W
-
-
-SYMMETRIC_LU = dict(permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1, options=dict(SymmetricMode=True))
-
-
-def symmetric_lu(A):
-    """Sparse LU of a matrix with symmetric structure and a dominant diagonal (SuperLU's symmetric mode).
-
-    The normal equations of E_AREA are symmetric positive definite and the tangential
-    relaxation's system is block diagonally dominant with a symmetric pattern; SuperLU's
-    default (COLAMD on A^T A, partial pivoting) treats them as general matrices. Ordered by
-    minimum degree on A + A^T and preferring diagonal pivots (a pivot is taken off the
-    diagonal only below 0.1 of its column's largest entry), the factors have 20-40 % fewer
-    entries and take 1.5-2 times less time on the benchmark's large holes (3000-6400
-    unknowns). The solutions change in the last bits only (relative 3e-13 for E_AREA, 3e-15
-    for the tangential system on the 264-edge real-size hole; tested).
-
-    Parameters
-    ----------
-    A : (n, n) sparse
-
-    Returns
-    -------
-    scipy.sparse.linalg.SuperLU
-    """
-    return spla.splu(A.tocsc(), **SYMMETRIC_LU)

@@ -14,6 +14,7 @@ import scipy.sparse.linalg as spla
 
 from ...core.holes import boundary_halfedges
 from ...geometry.laplacian import cotangent_weights, tangential_umbrella_smoothing
+from ...geometry.sparse_lu import symmetric_lu
 from .laplacian_regression import patch_laplacians
 from .poisson_patch import (context_hits, normalized_cotangent_laplacian, relax_patch, repair_slivers,
                             solve_folds)
@@ -81,17 +82,7 @@ def solve_poisson(X, F, free, rhs, boundary=None, cotangents=None, boundary_weig
     if boundary_weight != 1.0:
         row_weights = np.concatenate([np.ones(len(free_idx)), np.full(len(rows), float(boundary_weight) ** 2)])
         At = At @ sp.diags(row_weights)  # A^T W A x = A^T W B: the weighted normal equations
-    return _symmetric_lu(At @ A).solve(At @ B)
-
-
-def _symmetric_lu(M):
-    """SuperLU of a symmetric positive definite matrix (the normal equations): symmetric ordering, diagonal pivots.
-
-    The minimum-degree ordering of M + M^T with the diagonal as pivots (SuperLU still pivots
-    where a diagonal entry is zero) keeps the symmetry that a column ordering and threshold pivoting
-    break; on the benchmark's Poisson systems it factorises in half the time.
-    """
-    return spla.splu(M.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    return symmetric_lu(At @ A).solve(At @ B)  # At @ A is symmetric positive definite
 
 
 def poisson_reposition(X, F, fixed, regressors=None, iterations=1, update_rhs=False, relax_ctx=None, boundary_ctx=None,

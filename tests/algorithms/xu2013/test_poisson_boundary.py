@@ -90,16 +90,3 @@ def test_a_heavier_boundary_weight_brings_the_boundary_laplacians_closer_to_thei
         residuals.append(np.linalg.norm(L[rows] @ X - rhs_rows))
     assert all(a > b for a, b in zip(residuals, residuals[1:])), residuals
 
-
-def test_the_normal_equations_factorisation_solves_definite_systems_and_zero_diagonals():
-    import scipy.sparse as sp
-    from meshlab_holefill.algorithms.xu2013.poisson_reconstruction import _symmetric_lu
-
-    allV, allF, F, n, free, rows, rhs, rhs_rows = _inconsistent_rows()
-    inner = np.flatnonzero(free)
-    L = normalized_cotangent_laplacian(allV, allF)[np.concatenate([inner, rows])][:, inner]
-    M = (L.T @ L).tocsc()  # symmetric positive definite
-    b = np.random.default_rng(2).normal(size=(M.shape[0], 3))
-    assert np.abs(M @ _symmetric_lu(M).solve(b) - b).max() < 1e-9 * np.abs(b).max()
-    swap = sp.csc_matrix(np.array([[0.0, 1.0], [1.0, 0.0]]))  # symmetric, a zero on the diagonal
-    assert np.allclose(_symmetric_lu(swap).solve(np.array([1.0, 2.0])), [2.0, 1.0])
