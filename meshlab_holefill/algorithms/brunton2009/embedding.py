@@ -30,10 +30,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ...errors import HoleFillError
+from ...geometry.sparse_lu import symmetric_lu
 from ._embedding_kernels import area_normal_equations
 from .recent_solves import RecentSolves
 from .tangential_relaxation import tangential_relaxation
-from ...geometry.sparse_lu import symmetric_lu
 from .umbrella import umbrella_operator
 
 __all__ = ["energy_rows", "embedding_energy", "minimise_embedding_energy", "minimise_area_energy", "embed_patch",

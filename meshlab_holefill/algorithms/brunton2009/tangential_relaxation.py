@@ -10,9 +10,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...geometry.quality import corner_sums, cross_rows
+from ...geometry.sparse_lu import symmetric_lu
 from ._tangential_kernels import face_cross, faces_touching, frame_pairs, free_frames, free_umbrella, rows_times
 from .recent_solves import RecentSolves
-from ...geometry.sparse_lu import symmetric_lu
 from .umbrella import umbrella_operator
 
 __all__ = ["vertex_normals", "tangent_frames", "tangential_system", "tangential_relaxation"]
