@@ -42,8 +42,13 @@ def rbf_kernel(X, Z, width):
     """
     X = np.asarray(X, np.float64).reshape(len(X), -1)
     Z = np.asarray(Z, np.float64).reshape(len(Z), -1)
-    diff = X[:, None, :] - Z[None, :, :]  # (l, r, d)
-    d2 = np.einsum("lrd,lrd->lr", diff, diff)
+    if X.shape[1] == 1:
+        # Scalar inputs (the filter's regressions): the squares einsum sums, without its (l, r, 1) pass.
+        diff = X[:, 0, None] - Z[None, :, 0]  # (l, r)
+        d2 = diff * diff
+    else:
+        diff = X[:, None, :] - Z[None, :, :]  # (l, r, d)
+        d2 = np.einsum("lrd,lrd->lr", diff, diff)
     return np.exp(-d2 / (2.0 * width * width))
 
 

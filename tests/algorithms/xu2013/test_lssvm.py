@@ -39,6 +39,18 @@ def test_rbf_kernel_depends_on_differences_only(offset, width):
     lssvm_fit(x[:, 0] + offset, np.sin(x[:, 0]), gamma=10.0, width=width)  # H stays positive definite
 
 
+@settings(max_examples=40, deadline=None)
+@given(st.integers(1, 60), st.integers(1, 60), st.floats(-6.0, 6.0), st.floats(-1e6, 1e6), st.floats(0.05, 3.0))
+def test_rbf_kernel_of_scalar_inputs_has_the_bits_of_the_general_sum(l, r, log_scale, offset, width):
+    # Scalar inputs skip the (l, r, d) array: the same squares as the sum over d, bit for bit, so
+    # the filter's regressions do not change.
+    rng = np.random.default_rng(l * 61 + r)
+    x, z = offset + 10.0 ** log_scale * rng.normal(size=l), offset + 10.0 ** log_scale * rng.normal(size=r)
+    diff = x[:, None, None] - z[None, :, None]  # (l, r, 1)
+    general = np.exp(-np.einsum("lrd,lrd->lr", diff, diff) / (2.0 * width * width))
+    assert np.array_equal(rbf_kernel(x, z, width), general)
+    assert np.array_equal(rbf_kernel(x[:, None], z[:, None], width), general)
+
 def test_lssvm_learns_a_known_function():
     x = np.linspace(-2, 2, 80)
     model = lssvm_fit(x, np.sin(2 * x), gamma=1e4, width=0.3)
