@@ -45,11 +45,12 @@ def rbf_kernel(X, Z, width):
     if X.shape[1] == 1:
         # Scalar inputs (the filter's regressions): the squares einsum sums, without its (l, r, 1) pass.
         diff = X[:, 0, None] - Z[None, :, 0]  # (l, r)
-        d2 = diff * diff
+        d2 = np.multiply(diff, diff, out=diff)
     else:
         diff = X[:, None, :] - Z[None, :, :]  # (l, r, d)
         d2 = np.einsum("lrd,lrd->lr", diff, diff)
-    return np.exp(-d2 / (2.0 * width * width))
+    d2 /= -2.0 * width * width  # -(d2 / (2 width^2)): a sign changes no other bit
+    return np.exp(d2, out=d2)
 
 
 @dataclass

@@ -41,15 +41,18 @@ def test_rbf_kernel_depends_on_differences_only(offset, width):
 
 @settings(max_examples=40, deadline=None)
 @given(st.integers(1, 60), st.integers(1, 60), st.floats(-6.0, 6.0), st.floats(-1e6, 1e6), st.floats(0.05, 3.0))
-def test_rbf_kernel_of_scalar_inputs_has_the_bits_of_the_general_sum(l, r, log_scale, offset, width):
-    # Scalar inputs skip the (l, r, d) array: the same squares as the sum over d, bit for bit, so
-    # the filter's regressions do not change.
+def test_rbf_kernel_has_the_bits_of_the_kernel_as_written(l, r, log_scale, offset, width):
+    # Scalar inputs skip the (l, r, d) array and the scaling is done in place: the same numbers as
+    # exp(-|x - z|^2 / (2 width^2)) written out, bit for bit, so the filter's regressions do not change.
     rng = np.random.default_rng(l * 61 + r)
     x, z = offset + 10.0 ** log_scale * rng.normal(size=l), offset + 10.0 ** log_scale * rng.normal(size=r)
     diff = x[:, None, None] - z[None, :, None]  # (l, r, 1)
     general = np.exp(-np.einsum("lrd,lrd->lr", diff, diff) / (2.0 * width * width))
     assert np.array_equal(rbf_kernel(x, z, width), general)
     assert np.array_equal(rbf_kernel(x[:, None], z[:, None], width), general)
+    X, Z = np.c_[x, x[::-1]], np.c_[z, z[::-1]]  # vector inputs: the sum over d as written
+    diff = X[:, None, :] - Z[None, :, :]
+    assert np.array_equal(rbf_kernel(X, Z, width), np.exp(-np.einsum("lrd,lrd->lr", diff, diff) / (2.0 * width * width)))
 
 def test_lssvm_learns_a_known_function():
     x = np.linspace(-2, 2, 80)
