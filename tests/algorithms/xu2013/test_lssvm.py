@@ -52,7 +52,9 @@ def test_rbf_kernel_has_the_bits_of_the_kernel_as_written(l, r, log_scale, offse
     assert np.array_equal(rbf_kernel(x[:, None], z[:, None], width), general)
     X, Z = np.c_[x, x[::-1]], np.c_[z, z[::-1]]  # vector inputs: the sum over d as written
     diff = X[:, None, :] - Z[None, :, :]
-    assert np.array_equal(rbf_kernel(X, Z, width), np.exp(-np.einsum("lrd,lrd->lr", diff, diff) / (2.0 * width * width)))
+    general = np.exp(-np.einsum("lrd,lrd->lr", diff, diff) / (2.0 * width * width))
+    assert np.array_equal(rbf_kernel(X, Z, width), general)
+
 
 def test_lssvm_learns_a_known_function():
     x = np.linspace(-2, 2, 80)
