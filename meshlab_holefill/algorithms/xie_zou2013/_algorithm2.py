@@ -238,7 +238,7 @@ def _bends_more_than_loop_only(ctx, patch, name, reasons, loop_only):
     is made too and kept where its :func:`meshlab_holefill.core.border_bend.border_bend` is
     smaller, the criterion that already chooses between the development and the disc. Only after
     a failed paper layout: against every first clean patch the coarse loop-only patch won on small
-    holes by its coarseness alone (README, "HPDE (Xie & Zou)", tried and not kept). ``name``
+    holes by its coarseness alone (docs/notes/xie_zou2013_hpde.md, tried and not kept). ``name``
     is the attempt's label, ``reasons`` the attempts that failed before it (the loop-only patch's
     report names them and this one); ``loop_only(reasons)`` makes the loop-only patch or None.
     """

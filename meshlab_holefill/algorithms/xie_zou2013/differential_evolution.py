@@ -59,7 +59,7 @@ Readings of passages the paper leaves open (each documented at the function that
   dropped for up to 2 rounds. A loop-only triangulation with Liepa's weights is the last
   resort; where it is the result, it is refined and faired as Liepa's fill is where that bends
   less against the surface, else refined alone where that is clean
-  (``_loop_only_patch.faired_where_less_bent``; README, "HPDE (Xie & Zou)": seeds 1-3 of the
+  (``_loop_only_patch.faired_where_less_bent``; docs/notes/xie_zou2013_hpde.md: seeds 1-3 of the
   unseen groups 3.910 -> 3.854 per mille, 5 holes changed). Where the paper's layout failed and
   a fallback layout gave the patch, the loop-only patch is made too and kept if it bends less
   against the surface across the border
@@ -73,7 +73,7 @@ Readings of passages the paper leaves open (each documented at the function that
   0.729 -> 0.348; ``scripts/large_holes.py`` 3.714 -> 3.762; the benchmark suite and
   ``scripts/cad_tessellation_holes.py`` unchanged; 5-30 % more time on those groups. Made after
   every first clean patch instead, the coarse loop-only patch won on small holes by its
-  coarseness alone (README, "HPDE (Xie & Zou)", tried and not kept). A chord duplicating a mesh
+  coarseness alone (docs/notes/xie_zou2013_hpde.md, tried and not kept). A chord duplicating a mesh
   edge is split at its midpoint.
 * Sec. 4.7. NumSmooth = 60 passes of Taubin's non-shrinking lambda|mu filter (ref. [26]: the
   paper names no operator for step 7, and Taubin's filter does not shrink the patch) on the new vertices, loop fixed,

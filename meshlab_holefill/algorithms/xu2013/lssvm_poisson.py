@@ -227,7 +227,7 @@ def fill(ctx, split_boundary=True, split_factor=1.5, merge_factor=0.75, layers=1
     positions) is the initial triangulation alone, without the Sec. 3.4 step that gives the
     patch its shape: the later initial patches are tried for one the solve does shape, and it
     is kept only when none is, or when the shaped one has a poor triangle it has not
-    (:func:`_poorer`; measured in README, "LS-SVM Laplacian + Poisson (Xu et al.)").
+    (:func:`_poorer`; measured in docs/notes/xu2013_lssvm_poisson.md).
 
     Parameters
     ----------

@@ -26,8 +26,8 @@ __all__ = ["with_context", "boundary_rows", "solve_poisson", "poisson_reposition
 # minimum triangle quality from 0.11 to 0.48 without changing the distance to the ground truth.
 TANGENTIAL_ITERATIONS = 3
 # Beyond the paper: triangles still below this quality after the smoothing get local tangential
-# steps (repair_slivers); 0.3 is the minimum quality below which a triangle counts as poor (README,
-# "How each paper is implemented").
+# steps (repair_slivers); 0.3 is the minimum quality below which a triangle counts as poor
+# (docs/notes/xu2013_lssvm_poisson.md).
 SLIVER_QUALITY = 0.3
 
 
@@ -141,7 +141,7 @@ def poisson_reposition(X, F, fixed, regressors=None, iterations=1, update_rhs=Fa
     its triangles shrunk and sheared towards the middle of a curved hole, while the planar
     triangles are the front's well-shaped ones and, on a developable surface, congruent to
     the surface's own. Measured on the benchmark's 45 holes with ground truth (6 of them on
-    the developed fallback; command in README, "How each paper is implemented"): mean
+    the developed fallback; command in docs/notes/xu2013_lssvm_poisson.md): mean
     patch-to-ground-truth distance 1.967 -> 1.849 per mille of the bounding-box diagonal
     (creased 3.883 -> 3.507; the real-size bunny's 3 holes 1.164 -> 0.914, CGAL's Liepa
     fill 0.877; large 2.017 -> 2.211; medium 1.982 -> 2.096): creased_box's 93-edge hole
