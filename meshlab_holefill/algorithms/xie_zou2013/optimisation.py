@@ -12,13 +12,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...geometry.flips import relax_edges
-from ...geometry.quality import corner_angles, cross_rows, face_normals, unique_edges
+from ...geometry.quality import corner_angles, cross_rows, face_normals, triangle_quality, unique_edges, vertex_normals
 from ...geometry.topology import edge_pair_set, interior_edges, vertex_face_runs
 from ._optimisation_kernels import edge_adjacency, faces_around_edges, independent_link_edges
+from ._worst_vertex_kernels import worst_vertex_moves
 
 __all__ = ["split_obtuse_edges", "remove_valence_three", "compact_vertices", "sorted_edges", "adjacency",
            "decimate_short_edges",
-           "swap_edges_min_angle", "improve_worst_vertices"]
+           "swap_edges_min_angle", "improve_worst_vertices", "improve_worst_vertices_numpy"]
 
 # A collapse may turn no surrounding face by more than this (cosine of 60 degrees); a swap
 # may turn its two faces no further from their former mean normal.
@@ -356,7 +357,9 @@ def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5,
     (the apex of an equilateral triangle on that edge, in the tangent plane, on the side the
     triangle's orientation puts the vertex); the candidate raising the
     smallest quality of the vertex's triangles most is taken, if no triangle turns by more
-    than 60 degrees from the vertex normal. Rounds repeat while anything moves.
+    than 60 degrees from the vertex normal. Rounds repeat while anything moves. Each round's
+    moves are compiled (:func:`._worst_vertex_kernels.worst_vertex_moves`, the bits of
+    :func:`improve_worst_vertices_numpy`), the vertices taken worst first, as numpy's argsort orders them.
 
     Parameters
     ----------
@@ -372,8 +375,36 @@ def improve_worst_vertices(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5,
     V : (n, 3) float64
     moved : int  accepted moves
     """
-    from ...geometry.quality import triangle_quality, vertex_normals
+    V = np.array(V, np.float64)
+    F = np.asarray(F, np.int64)
+    n = len(V)
+    if len(F) == 0 or n <= n_fixed:
+        return V, 0
+    if F.min() < 0 or F.max() >= n:
+        return improve_worst_vertices_numpy(V, F, n_fixed, target, rounds, steps)  # raises numpy's IndexError
+    faces_at, start = vertex_face_runs(F, n)
+    F = np.ascontiguousarray(F)
+    steps = np.asarray(steps, np.float64)
+    moved = 0
+    for _ in range(rounds):
+        q = triangle_quality(V, F)
+        verts = np.unique(F[q < target].ravel())
+        verts = verts[verts >= n_fixed]
+        if len(verts) == 0:
+            break
+        N = vertex_normals(V, F, n)
+        worst = np.full(n, np.inf)  # each vertex's worst face, as q[its faces].min() gives it
+        np.minimum.at(worst, F.ravel(), np.repeat(q, 3))
+        changed = worst_vertex_moves(V, F, faces_at, start, verts[np.argsort(worst[verts])], N, float(target), steps,
+                                     COLLAPSE_MIN_COS)
+        moved += changed
+        if changed == 0:
+            break
+    return V, moved
 
+
+def improve_worst_vertices_numpy(V, F, n_fixed, target=0.5, rounds=5, steps=(1.0, 0.5, 0.25)):
+    """:func:`improve_worst_vertices` in numpy (the reference of the compiled moves)."""
     V = np.array(V, np.float64)
     F = np.asarray(F, np.int64)
     n = len(V)
