@@ -4,10 +4,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ._laplacian_kernels import tangential_umbrella_rounds
 from .quality import corner_angles, unique_edges, vertex_normals
 
-__all__ = ["adjacency_matrix", "tangential_umbrella_smoothing", "uniform_laplacian", "cotangent_weights",
-           "cotangent_laplacian", "lowest_dirichlet_frequency", "vertices_near"]
+__all__ = ["adjacency_matrix", "tangential_umbrella_smoothing", "tangential_umbrella_smoothing_numpy",
+           "uniform_laplacian", "cotangent_weights", "cotangent_laplacian", "lowest_dirichlet_frequency", "vertices_near"]
 
 
 def adjacency_matrix(F, n):
@@ -35,7 +36,26 @@ def tangential_umbrella_smoothing(V, F, fixed, iterations, step=0.5):
     Returns
     -------
     (n, 3) float64  a copy
+
+    The rounds are compiled (:func:`._laplacian_kernels.tangential_umbrella_rounds`, the bits of
+    :func:`tangential_umbrella_smoothing_numpy`).
     """
+    V = np.array(V, np.float64)
+    free = ~np.asarray(fixed, bool)
+    if iterations <= 0 or not free.any():
+        return V
+    F = np.asarray(F)
+    shaped = F.ndim == 2 and F.shape[1] == 3 and F.dtype.kind in "iu"
+    if not shaped or (len(F) and (F.min() < 0 or F.max() >= len(V))):
+        return tangential_umbrella_smoothing_numpy(V, F, fixed, iterations, step)  # numpy's errors, other shapes
+    A = adjacency_matrix(F, len(V))
+    tangential_umbrella_rounds(V, np.ascontiguousarray(F, np.int64), A.indptr.astype(np.int64),
+                               A.indices.astype(np.int64), np.flatnonzero(free), int(iterations), float(step))
+    return V
+
+
+def tangential_umbrella_smoothing_numpy(V, F, fixed, iterations, step=0.5):
+    """:func:`tangential_umbrella_smoothing` in numpy and scipy (the reference of the compiled rounds)."""
     V = np.array(V, np.float64)
     free = ~np.asarray(fixed, bool)
     if iterations <= 0 or not free.any():

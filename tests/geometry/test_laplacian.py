@@ -1,7 +1,11 @@
 """Laplacians and tangential umbrella smoothing of geometry.laplacian."""
 import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from meshlab_holefill.geometry.laplacian import cotangent_laplacian, tangential_umbrella_smoothing, uniform_laplacian
+from meshlab_holefill.geometry.laplacian import (cotangent_laplacian, tangential_umbrella_smoothing,
+                                                 tangential_umbrella_smoothing_numpy, uniform_laplacian)
 from conftest import grid
 
 
@@ -48,3 +52,27 @@ def test_tangential_umbrella_smoothing_keeps_a_sphere_round_to_first_order():
     moved = np.linalg.norm(out - V, axis=1)
     assert moved[~fixed].max() > 1e-3  # the sphere's triangulation is not the umbrella's fixed point
     assert np.abs(radius - 1).max() < 0.05 * moved.max()  # radial drift is second order
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10_000), rows=st.integers(3, 12), iterations=st.integers(1, 6),
+       step=st.sampled_from([0.25, 0.5, 1.0]), shake=st.floats(0.0, 0.2))
+def test_compiled_tangential_rounds_have_the_bits_of_the_numpy_rounds(seed, rows, iterations, step, shake):
+    rng = np.random.default_rng(seed)
+    V, F = grid(rows, rows + 1, z=lambda x, y: 0.4 * np.sin(3 * x) * y)
+    V[:, :2] += shake * rng.uniform(-1.0, 1.0, size=(len(V), 2)) / rows
+    fixed = rng.random(len(V)) < 0.3
+    out = tangential_umbrella_smoothing(V, F, fixed, iterations, step=step)
+    np.testing.assert_array_equal(out, tangential_umbrella_smoothing_numpy(V, F, fixed, iterations, step=step))
+    assert not np.array_equal(out[~fixed], V[~fixed]) or not (~fixed).any()
+
+
+@pytest.mark.parametrize("index", [-1, 16])
+def test_tangential_smoothing_with_a_face_out_of_range_raises_as_the_numpy_code_does(index):
+    V, F = grid(4, 4)
+    F = F.copy()
+    F[0, 0] = index
+    with pytest.raises(ValueError) as ref:
+        tangential_umbrella_smoothing_numpy(V, F, np.zeros(len(V), bool), 2)
+    with pytest.raises(ref.type, match="index"):
+        tangential_umbrella_smoothing(V, F, np.zeros(len(V), bool), 2)
