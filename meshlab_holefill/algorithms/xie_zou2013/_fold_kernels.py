@@ -1,11 +1,11 @@
-"""Compiled kernel of the fold repair's swap score (numba): the agreement of face pairs.
+"""Compiled kernels of the fold tests (numba): the agreement of face pairs, and the folded faces.
 
-:func:`pair_agreements` does, element by element, the IEEE operations of the numpy
+:func:`pair_agreements` and :func:`folded_faces` do, element by element, the IEEE operations of the numpy
 ``folds._pair_agreement`` in the same order (no fastmath): the unit normals of
 ``geometry.quality.face_normals`` (row cross product, norm, division; zero rows for
 degenerate faces), the einsum dots of :mod:`meshlab_holefill.geometry._vector_kernels` and
-numpy's ``minimum`` (NaN propagates). tests/algorithms/xie_zou2013/test_fold_kernels.py checks
-it against the numpy code.
+numpy's ``minimum`` (NaN propagates); :func:`folded_faces` is ``folds.local_folds_numpy``'s test on
+those normals. tests/algorithms/xie_zou2013/test_fold_kernels.py checks them against the numpy code.
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from numba import njit
 from ...geometry._flip_kernels import _find, _interior_edges, apply_scored_swaps, sorted_contains
 from ...geometry._vector_kernels import cross3, dot3, norm3, npmin, sub3
 
-__all__ = ["pair_agreements", "fold_swap_scores", "fold_swap_rounds"]
+__all__ = ["pair_agreements", "fold_swap_scores", "fold_swap_rounds", "folded_faces"]
 
 
 @njit(cache=True)
@@ -195,3 +195,41 @@ def fold_swap_rounds(V, F, fixed, border_normals, max_rounds):
             new2[i, 0], new2[i, 1], new2[i, 2] = b[i], c[i], d[i]
         swaps += apply_scored_swaps(F, f1, f2, cand, priority, new_key, new1, new2)
     return swaps, max_rounds, False
+
+
+@njit(cache=True)
+def folded_faces(V, F, border_normals, limit):
+    """(bad, ok): ``folds.local_folds`` of V (n, 3) float64 and F (m, 3) int64 with the cosine ``limit``.
+
+    A face is folded where its unit normal is zero (degenerate), where its normal and a neighbour's
+    across an interior edge have a dot below ``limit``, or, on a loop edge (i, i + 1) of the k rows of
+    ``border_normals`` (k = 0: no loop test), where its normal and row i have. ok is False where an
+    index is out of range or a directed edge repeats (the numpy code decides then).
+    """
+    n, m = V.shape[0], F.shape[0]
+    bad = np.zeros(m, np.bool_)
+    for f in range(m):
+        for c in range(3):
+            if F[f, c] < 0 or F[f, c] >= n:
+                return bad, False
+    he, tw, _, _, _, fine = _interior_edges(F, n)
+    if not fine:
+        return bad, False
+    N = np.empty((m, 3))
+    for f in range(m):
+        N[f, 0], N[f, 1], N[f, 2] = _unit_normal(V, F[f])
+        bad[f] = N[f, 0] == 0 and N[f, 1] == 0 and N[f, 2] == 0
+    for e in range(he.shape[0]):
+        f1, f2 = he[e] // 3, tw[e] // 3
+        if dot3((N[f1, 0], N[f1, 1], N[f1, 2]), (N[f2, 0], N[f2, 1], N[f2, 2])) < limit:
+            bad[f1] = True
+            bad[f2] = True
+    k = border_normals.shape[0]
+    for f in range(m):
+        for c in range(3):
+            a, b = F[f, c], F[f, (c + 1) % 3]
+            if a < k and b == (a + 1) % k:
+                across = (border_normals[a, 0], border_normals[a, 1], border_normals[a, 2])
+                if dot3((N[f, 0], N[f, 1], N[f, 2]), across) < limit:
+                    bad[f] = True
+    return bad, True

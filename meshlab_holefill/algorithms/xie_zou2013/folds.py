@@ -19,11 +19,12 @@ from ...geometry.dihedral_triangulation import least_bend_splits, split_triangle
 from ...geometry.intersections import faces_intersecting
 from ...geometry.quality import face_normals
 from ...geometry.topology import interior_edges
-from ._fold_kernels import fold_swap_rounds, fold_swap_scores
+from ._fold_kernels import fold_swap_rounds, fold_swap_scores, folded_faces
 from .optimisation import adjacency
 
-__all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_folds", "unfold_by_swaps", "unfold_by_swaps_numpy",
-           "repair_folds", "intersects_surroundings", "boundary_ears", "border_normals"]
+__all__ = ["crossing_triangles", "loop_triangulation", "fold_overs", "local_folds", "local_folds_numpy",
+           "unfold_by_swaps", "unfold_by_swaps_numpy", "repair_folds", "intersects_surroundings", "boundary_ears",
+           "border_normals"]
 
 # Neighbouring patch faces whose normals differ by more than this are a fold-over.
 FOLD_ANGLE = np.radians(150.0)
@@ -111,7 +112,22 @@ def local_folds(V, F, border_normals=None, max_angle=FOLD_ANGLE):
     Returns
     -------
     (m,) bool
+
+    Compiled (:func:`._fold_kernels.folded_faces`, the answer of :func:`local_folds_numpy`).
     """
+    across = np.zeros((0, 3)) if border_normals is None else np.ascontiguousarray(border_normals, np.float64)
+    V_arr, F_arr = np.asarray(V, np.float64), np.asarray(F)
+    shaped = V_arr.ndim == 2 and V_arr.shape[1] == 3 and F_arr.ndim == 2 and F_arr.shape[1] == 3
+    if shaped and F_arr.dtype.kind in "iu" and across.ndim == 2 and across.shape[1] == 3:
+        bad, ok = folded_faces(np.ascontiguousarray(V_arr), np.ascontiguousarray(F_arr, np.int64), across,
+                               float(np.cos(max_angle)))
+        if ok:
+            return bad
+    return local_folds_numpy(V, F, border_normals, max_angle)
+
+
+def local_folds_numpy(V, F, border_normals=None, max_angle=FOLD_ANGLE):
+    """:func:`local_folds` in numpy (the reference of the compiled test)."""
     N = face_normals(V, F)
     bad = ~np.any(N != 0, axis=1)
     limit = np.cos(max_angle)

@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 import pytest
 
-from meshlab_holefill.algorithms.xie_zou2013._fold_kernels import pair_agreements
+from meshlab_holefill.algorithms.xie_zou2013._fold_kernels import folded_faces, pair_agreements
 from meshlab_holefill.geometry.quality import face_normals
 
 
@@ -120,3 +120,42 @@ def test_compiled_fold_swap_rounds_make_the_numpy_rounds_swaps(seed, fold, forbi
     want, want_swaps = unfold_by_swaps_numpy(V, F, chords, normals, max_rounds=rounds)
     np.testing.assert_array_equal(got, want)
     assert got_swaps == want_swaps
+
+
+def _crumpled_disc(seed, k, inner, crumple):
+    """A Delaunay disc, k loop vertices first, lifted by random heights of amplitude ``crumple`` (folds where large)."""
+    from scipy.spatial import Delaunay
+
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 2.0 * np.pi, k, endpoint=False)
+    XY = np.concatenate([np.stack([np.cos(t), np.sin(t)], axis=1),
+                         0.9 * np.sqrt(rng.random((inner, 1))) * np.exp(1j * 2 * np.pi * rng.random((inner, 1)))
+                         .view(np.float64).reshape(inner, 2)])
+    F = Delaunay(XY).simplices.astype(np.int64)
+    V = np.column_stack([XY, crumple * rng.normal(size=len(XY))])
+    return V, F, rng
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), k=st.integers(3, 20), inner=st.integers(0, 40), crumple=st.floats(0.0, 2.0),
+       border=st.booleans(), angle=st.sampled_from([90.0, 150.0, 175.0]))
+def test_compiled_local_folds_give_the_numpy_answer(seed, k, inner, crumple, border, angle):
+    from meshlab_holefill.algorithms.xie_zou2013.folds import local_folds, local_folds_numpy
+
+    V, F, rng = _crumpled_disc(seed, k, inner, crumple)
+    F[::5] = F[::5, ::-1]  # some faces turned over
+    normals = None
+    if border:
+        normals = rng.normal(size=(k, 3))
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    ref = local_folds_numpy(V, F, normals, np.radians(angle))
+    np.testing.assert_array_equal(local_folds(V, F, normals, np.radians(angle)), ref)
+
+
+def test_local_folds_of_a_face_list_with_a_repeated_directed_edge_are_the_numpy_ones():
+    from meshlab_holefill.algorithms.xie_zou2013.folds import local_folds, local_folds_numpy
+
+    V, F, _ = _crumpled_disc(1, 8, 10, 0.5)
+    F = np.concatenate([F, F[:1]])  # a face stored twice: its directed edges repeat
+    assert not folded_faces(V, F, np.zeros((0, 3)), -0.5)[1]  # the compiled table refuses it
+    np.testing.assert_array_equal(local_folds(V, F), local_folds_numpy(V, F))
