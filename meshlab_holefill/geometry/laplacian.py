@@ -4,15 +4,29 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ._laplacian_kernels import tangential_umbrella_rounds
+from ._laplacian_kernels import adjacency_arrays, tangential_umbrella_rounds
 from .quality import corner_angles, unique_edges, vertex_normals
 
-__all__ = ["adjacency_matrix", "tangential_umbrella_smoothing", "tangential_umbrella_smoothing_numpy",
-           "uniform_laplacian", "cotangent_weights", "cotangent_laplacian", "lowest_dirichlet_frequency", "vertices_near"]
+__all__ = ["adjacency_matrix", "adjacency_matrix_numpy", "tangential_umbrella_smoothing",
+           "tangential_umbrella_smoothing_numpy", "uniform_laplacian", "cotangent_weights", "cotangent_laplacian",
+           "lowest_dirichlet_frequency", "vertices_near"]
 
 
 def adjacency_matrix(F, n):
-    """Symmetric vertex adjacency (1 where an edge exists), (n, n) CSR."""
+    """Symmetric vertex adjacency (1 where an edge exists), (n, n) CSR.
+
+    Built compiled (:func:`._laplacian_kernels.adjacency_arrays`: the arrays of :func:`adjacency_matrix_numpy`).
+    """
+    F = np.asarray(F)
+    if F.ndim == 2 and F.shape[1] == 3 and F.dtype.kind in "iu" and len(F) and F.min() >= 0 and F.max() < n \
+            and n < np.iinfo(np.int32).max // 4:
+        data, indices, indptr = adjacency_arrays(np.ascontiguousarray(F, np.int64), int(n))
+        return sp.csr_matrix((data, indices.astype(np.int32), indptr.astype(np.int32)), shape=(n, n))
+    return adjacency_matrix_numpy(F, n)  # no faces, other shapes and types, numpy's errors
+
+
+def adjacency_matrix_numpy(F, n):
+    """:func:`adjacency_matrix` by scipy's COO-to-CSR conversion (the reference of the compiled arrays)."""
     E = unique_edges(np.asarray(F))
     data = np.ones(2 * len(E))
     A = sp.coo_matrix((data, (np.r_[E[:, 0], E[:, 1]], np.r_[E[:, 1], E[:, 0]])), shape=(n, n))
@@ -49,7 +63,7 @@ def tangential_umbrella_smoothing(V, F, fixed, iterations, step=0.5):
     if not shaped or (len(F) and (F.min() < 0 or F.max() >= len(V))):
         return tangential_umbrella_smoothing_numpy(V, F, fixed, iterations, step)  # numpy's errors, other shapes
     A = adjacency_matrix(F, len(V))
-    tangential_umbrella_rounds(V, np.ascontiguousarray(F, np.int64), A.indptr.astype(np.int64),
+    tangential_umbrella_rounds(V, np.ascontiguousarray(F, np.int64), A.data, A.indptr.astype(np.int64),
                                A.indices.astype(np.int64), np.flatnonzero(free), int(iterations), float(step))
     return V
 

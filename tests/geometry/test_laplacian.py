@@ -4,8 +4,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshlab_holefill.geometry.laplacian import (cotangent_laplacian, tangential_umbrella_smoothing,
-                                                 tangential_umbrella_smoothing_numpy, uniform_laplacian)
+from meshlab_holefill.geometry.laplacian import (adjacency_matrix, adjacency_matrix_numpy, cotangent_laplacian,
+                                                 tangential_umbrella_smoothing, tangential_umbrella_smoothing_numpy,
+                                                 uniform_laplacian)
 from conftest import grid
 
 
@@ -62,6 +63,9 @@ def test_compiled_tangential_rounds_have_the_bits_of_the_numpy_rounds(seed, rows
     V, F = grid(rows, rows + 1, z=lambda x, y: 0.4 * np.sin(3 * x) * y)
     V[:, :2] += shake * rng.uniform(-1.0, 1.0, size=(len(V), 2)) / rows
     fixed = rng.random(len(V)) < 0.3
+    F = F.copy()
+    repeated = rng.random(len(F)) < 0.05
+    F[repeated, 2] = F[repeated, 0]  # degenerate faces: their edge to themselves counts twice
     out = tangential_umbrella_smoothing(V, F, fixed, iterations, step=step)
     np.testing.assert_array_equal(out, tangential_umbrella_smoothing_numpy(V, F, fixed, iterations, step=step))
     assert not np.array_equal(out[~fixed], V[~fixed]) or not (~fixed).any()
@@ -76,3 +80,16 @@ def test_tangential_smoothing_with_a_face_out_of_range_raises_as_the_numpy_code_
         tangential_umbrella_smoothing_numpy(V, F, np.zeros(len(V), bool), 2)
     with pytest.raises(ref.type, match="index"):
         tangential_umbrella_smoothing(V, F, np.zeros(len(V), bool), 2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10_000), m=st.integers(1, 40), n=st.integers(3, 30), spare=st.integers(0, 3))
+def test_compiled_adjacency_has_the_arrays_of_scipys_conversion(seed, m, n, spare):
+    rng = np.random.default_rng(seed)
+    F = rng.integers(0, n, size=(m, 3))  # repeated corners too: self-loops count twice, as scipy sums them
+    A, ref = adjacency_matrix(F, n + spare), adjacency_matrix_numpy(F, n + spare)
+    for name in ("data", "indices", "indptr"):
+        got, want = getattr(A, name), getattr(ref, name)
+        assert got.dtype == want.dtype
+        np.testing.assert_array_equal(got, want)
+    assert A.has_canonical_format and A.shape == ref.shape
