@@ -17,6 +17,7 @@ from numba import njit
 
 from ...geometry._quality_kernels import face_quality
 from ...geometry._vector_kernels import cross3, dot3, npmin
+from ._fold_kernels import _unit_normal
 
 __all__ = ["worst_vertex_moves"]
 
@@ -41,19 +42,6 @@ def _unit_or_small(a):
 @njit(cache=True)
 def _row(V, v):
     return (V[v, 0], V[v, 1], V[v, 2])
-
-
-@njit(cache=True)
-def _unit_normal(V, F, f):
-    """``face_normals(V, F[[f]])[0]``: the unit cross product, a zero row for a degenerate face."""
-    i, j, k = F[f, 0], F[f, 1], F[f, 2]
-    u0, u1, u2 = V[j, 0] - V[i, 0], V[j, 1] - V[i, 1], V[j, 2] - V[i, 2]
-    w0, w1, w2 = V[k, 0] - V[i, 0], V[k, 1] - V[i, 1], V[k, 2] - V[i, 2]
-    x = (u1 * w2 - u2 * w1, u2 * w0 - u0 * w2, u0 * w1 - u1 * w0)
-    length = math.sqrt((x[0] * x[0] + x[1] * x[1]) + x[2] * x[2])
-    if length > 0:
-        return (x[0] / length, x[1] / length, x[2] / length)
-    return (0.0, 0.0, 0.0)
 
 
 @njit(cache=True)
@@ -133,7 +121,7 @@ def worst_vertex_moves(V, F, faces_at, start, order, N, target, steps, min_cos):
         goals = _goals(V, F, faces, v, nv, target)
         old = np.empty((faces.shape[0], 3))
         for r in range(faces.shape[0]):
-            old[r, 0], old[r, 1], old[r, 2] = _unit_normal(V, F, faces[r])
+            old[r, 0], old[r, 1], old[r, 2] = _unit_normal(V, F[faces[r]])
         here = _row(V, v)
         best = here
         moved = False
@@ -149,7 +137,7 @@ def worst_vertex_moves(V, F, faces_at, start, order, N, target, steps, min_cos):
                     continue
                 turned = False
                 for r in range(faces.shape[0]):
-                    fn = _unit_normal(V, F, faces[r])
+                    fn = _unit_normal(V, F[faces[r]])
                     if dot3(fn, nv) <= min_cos or dot3(fn, (old[r, 0], old[r, 1], old[r, 2])) <= min_cos:
                         turned = True
                         break
