@@ -15,7 +15,7 @@ from ._incidence_kernels import set_add, set_discard, set_items
 from ._quality_pass_kernels import _triangle_terms
 from ...geometry._vector_kernels import cross3, norm3, sub3
 
-__all__ = ["context", "EDGE_BASE", "TRIPLE_BASE"]
+__all__ = ["context", "link_vertices", "EDGE_BASE", "TRIPLE_BASE"]
 
 EDGE_BASE = 1 << 31  # forbidden edge (a, b), a <= b: key a EDGE_BASE + b
 TRIPLE_BASE = 1 << 21  # blocked triple (a, b, c) sorted: key (a TRIPLE_BASE + b) TRIPLE_BASE + c
@@ -107,7 +107,12 @@ def _has_edge(pool, tab, F, a, b):
 @njit(cache=True)
 def _neighbours(pool, tab, F, v):
     """_Patch.neighbours as a sorted array."""
-    faces = _faces_of(pool, tab, v)
+    return link_vertices(F, _faces_of(pool, tab, v), v)
+
+
+@njit(cache=True)
+def link_vertices(F, faces, v):
+    """The corners of ``faces`` (rows of F) other than v, distinct and ascending: v's link when they are its faces."""
     out = np.empty(3 * faces.shape[0], np.int64)
     count = 0
     for f in faces:

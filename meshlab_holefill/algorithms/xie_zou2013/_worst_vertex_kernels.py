@@ -18,6 +18,7 @@ from numba import njit
 from ...geometry._quality_kernels import face_quality
 from ...geometry._vector_kernels import cross3, dot3, npmin
 from ._fold_kernels import _unit_normal
+from ._patch_kernels import link_vertices
 
 __all__ = ["worst_vertex_moves"]
 
@@ -58,14 +59,7 @@ def _worst_quality(V, F, faces):
 def _goals(V, F, faces, v, nv, target):
     """The candidate targets of vertex v, (g, 3): the centroid of its link, then for each incident face
     below ``target`` the apex of the equilateral triangle on its opposite edge, in the tangent plane."""
-    others = np.empty(3 * faces.shape[0], np.int64)
-    count = 0
-    for f in faces:
-        for c in range(3):
-            if F[f, c] != v:
-                others[count] = F[f, c]
-                count += 1
-    link = np.unique(others[:count])
+    link = link_vertices(F, faces, v)
     goals = np.empty((1 + faces.shape[0], 3))
     for c in range(3):
         s = V[link[0], c] if link.shape[0] else 0.0
