@@ -59,7 +59,7 @@ def tangential_umbrella_smoothing(V, F, fixed, iterations, step=0.5):
     if iterations <= 0 or not free.any():
         return V
     F = np.asarray(F)
-    shaped = F.ndim == 2 and F.shape[1] == 3 and F.dtype.kind in "iu"
+    shaped = F.ndim == 2 and F.shape[1] == 3 and F.dtype.kind in "iu" and free.shape == (len(V),)
     if not shaped or (len(F) and (F.min() < 0 or F.max() >= len(V))):
         return tangential_umbrella_smoothing_numpy(V, F, fixed, iterations, step)  # numpy's errors, other shapes
     A = adjacency_matrix(F, len(V))

@@ -93,3 +93,12 @@ def test_compiled_adjacency_has_the_arrays_of_scipys_conversion(seed, m, n, spar
         assert got.dtype == want.dtype
         np.testing.assert_array_equal(got, want)
     assert A.has_canonical_format and A.shape == ref.shape
+
+
+def test_tangential_smoothing_with_a_fixed_mask_of_another_length_raises_as_the_numpy_code_does():
+    V, F = grid(4, 4)
+    with pytest.raises(IndexError):
+        tangential_umbrella_smoothing_numpy(V, F, np.zeros(len(V) + 3, bool), 2)
+    with pytest.raises(IndexError):
+        tangential_umbrella_smoothing(V, F, np.zeros(len(V) + 3, bool), 2)
+
