@@ -200,6 +200,7 @@ def warm_up():
     from ...core import examples
     from ...core.holes import hole_context
     from ...geometry.segments import is_simple_polygon
+    from ...geometry.topology import interior_edges
 
     V, F, loop = examples.bowl_with_hole()
     fill(hole_context(V, F, loop, rings=RINGS), seed=1)
@@ -209,6 +210,9 @@ def warm_up():
     raise_min_quality(square, np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]), 4,
                       fold_test=lambda V, F: int(V[4, 0] != 0.9))
     is_simple_polygon(square[:4, :2], 1e-9)  # the development layout's simplicity test
+    # The edge table as Python code reads it: the fold test's compiled call to it, loaded from the cache,
+    # does not load it for the calls from Python.
+    interior_edges(np.array([[0, 1, 4], [1, 2, 4]]), 5)
     _WARM.append(True)
 
 
