@@ -8,8 +8,8 @@ the edge a degenerate face has from a vertex to itself).
 
 Each round does, element by element, that code's IEEE operations in its order: the vertex normals of
 :func:`._quality_kernels.unit_vertex_normals`, scipy's CSR product ``A @ V`` (each row's entries summed in
-storage order from 0.0, each stored value times the coordinate), the division by the degree, the normal part removed with
-np.einsum's row dot (:func:`._vector_kernels.dot3`) and the step added to the free rows.
+storage order from 0.0, each stored value times the coordinate), the division by the degree, the normal part
+removed with np.einsum's row dot (:func:`._vector_kernels.dot3`) and the step added to the free rows.
 tests/geometry/test_laplacian.py checks it against the numpy code.
 """
 from __future__ import annotations
@@ -71,19 +71,21 @@ def tangential_umbrella_rounds(V, F, data, indptr, indices, free, iterations, st
     step : float
     """
     n = V.shape[0]
+    degree = np.ones(n)  # max(A.sum(axis=1), 1): whole numbers
+    for v in free:
+        total = 0.0
+        for p in range(indptr[v], indptr[v + 1]):
+            total += data[p]
+        degree[v] = max(total, 1.0)
     D = V.copy()  # only the free rows are written and read
     for _ in range(iterations):
         N = unit_vertex_normals(V, F, n)
         for v in free:
-            degree = 0.0  # A.sum(axis=1), whole numbers
-            for p in range(indptr[v], indptr[v + 1]):
-                degree += data[p]
-            degree = max(degree, 1.0)
             for c in range(3):
                 s = 0.0
                 for p in range(indptr[v], indptr[v + 1]):
                     s += data[p] * V[indices[p], c]
-                D[v, c] = s / degree - V[v, c]
+                D[v, c] = s / degree[v] - V[v, c]
             along = dot3((D[v, 0], D[v, 1], D[v, 2]), (N[v, 0], N[v, 1], N[v, 2]))
             for c in range(3):
                 D[v, c] = D[v, c] - along * N[v, c]

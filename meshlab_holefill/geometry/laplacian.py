@@ -12,14 +12,18 @@ __all__ = ["adjacency_matrix", "adjacency_matrix_numpy", "tangential_umbrella_sm
            "lowest_dirichlet_frequency", "vertices_near"]
 
 
+def _faces_within(F, n):
+    """Whether F is an (m, 3) integer array with every index in [0, n): what the kernels index without checks."""
+    return F.ndim == 2 and F.shape[1] == 3 and F.dtype.kind in "iu" and (not len(F) or (F.min() >= 0 and F.max() < n))
+
+
 def adjacency_matrix(F, n):
     """Symmetric vertex adjacency (1 where an edge exists), (n, n) CSR.
 
     Built compiled (:func:`._laplacian_kernels.adjacency_arrays`: the arrays of :func:`adjacency_matrix_numpy`).
     """
     F = np.asarray(F)
-    if F.ndim == 2 and F.shape[1] == 3 and F.dtype.kind in "iu" and len(F) and F.min() >= 0 and F.max() < n \
-            and n < np.iinfo(np.int32).max // 4:
+    if len(F) and _faces_within(F, n) and n < np.iinfo(np.int32).max // 4:
         data, indices, indptr = adjacency_arrays(np.ascontiguousarray(F, np.int64), int(n))
         return sp.csr_matrix((data, indices.astype(np.int32), indptr.astype(np.int32)), shape=(n, n))
     return adjacency_matrix_numpy(F, n)  # no faces, other shapes and types, numpy's errors
@@ -59,8 +63,7 @@ def tangential_umbrella_smoothing(V, F, fixed, iterations, step=0.5):
     if iterations <= 0 or not free.any():
         return V
     F = np.asarray(F)
-    shaped = F.ndim == 2 and F.shape[1] == 3 and F.dtype.kind in "iu" and free.shape == (len(V),)
-    if not shaped or (len(F) and (F.min() < 0 or F.max() >= len(V))):
+    if free.shape != (len(V),) or not _faces_within(F, len(V)):
         return tangential_umbrella_smoothing_numpy(V, F, fixed, iterations, step)  # numpy's errors, other shapes
     A = adjacency_matrix(F, len(V))
     tangential_umbrella_rounds(V, np.ascontiguousarray(F, np.int64), A.data, A.indptr.astype(np.int64),
