@@ -1,7 +1,8 @@
 """CAD-like test cases: meshes with sharp creases and holes a crease runs through, and interpenetrating parts.
 
 Built with MeshLab's generators, booleans and isotropic remeshing (through
-:mod:`meshlab_holefill.meshlab.mesh_files`), with creases kept by the remeshing:
+:mod:`meshlab_holefill.meshlab.mesh_files`), with creases kept by the remeshing; each is the same
+mesh in every run (the booleans' faces put in a fixed order, the remeshing run in a new process):
 
 - ``creased_box``: a unit cube; holes centred on edges and on a corner (90 degree creases);
 - ``bevelled_box``: the cube intersected with a rotated, larger cube, which bevels its four vertical

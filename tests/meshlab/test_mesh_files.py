@@ -1,4 +1,8 @@
 """meshlab.mesh_files: arrays to and from pymeshlab, and MeshLab's point-to-surface distance."""
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -41,3 +45,41 @@ def test_a_cad_tessellation_keeps_the_faces_asked_for_and_refuses_a_count_out_of
     for faces in (0, len(F)):
         with pytest.raises(ValueError, match="faces must be between 1 and"):
             cad_tessellation(V, F, faces)
+
+
+
+
+# The union of a box and a cylinder (the arrays' file) remeshed, in a new process: by MeshLab in
+# that process ("meshlab"), or by remeshed ("remeshed"); the vertex count is printed.
+_REMESH_IN_A_PROCESS = """
+import sys, numpy as np, pymeshlab
+from meshlab_holefill.meshlab.mesh_files import meshset_from_arrays, mesh_arrays, remeshed
+given = np.load(sys.argv[1])
+if sys.argv[2] == "meshlab":
+    ms = meshset_from_arrays(given["V"], given["F"])
+    ms.meshing_surface_subdivision_midpoint(iterations=8, threshold=pymeshlab.PureValue(0.2))
+    ms.meshing_isotropic_explicit_remeshing(iterations=10, targetlen=pymeshlab.PureValue(0.1), featuredeg=30.0,
+                                            maxsurfdist=pymeshlab.PureValue(0.005))
+    V = mesh_arrays(ms)[0]
+else:
+    V = remeshed(given["V"], given["F"], 0.1)[0]
+print(len(V))
+"""
+
+
+def test_remeshing_does_not_depend_on_the_memory_the_calling_process_leaves(tmp_path):
+    from meshlab_holefill.evaluation.creased import _box, _cylinder
+    from meshlab_holefill.meshlab.mesh_files import boolean_mesh, remeshed
+
+    V, F = boolean_mesh("union", _box(), _cylinder(0.3, 1.3))
+    np.savez(tmp_path / "union.npz", V=V, F=F)
+
+    def vertices(how, pattern):
+        """Vertex count of the remeshing in a process whose new memory glibc fills with ``pattern``."""
+        run = subprocess.run([sys.executable, "-c", _REMESH_IN_A_PROCESS, str(tmp_path / "union.npz"), how],
+                             capture_output=True, check=True, env={**os.environ, "MALLOC_PERTURB_": pattern})
+        return int(run.stdout)
+
+    # MeshLab's remeshing reads memory it has not set: the pattern changes its mesh.
+    assert vertices("meshlab", "0") != vertices("meshlab", "255")
+    assert vertices("remeshed", "255") == vertices("meshlab", "0") == len(remeshed(V, F, 0.1)[0])
