@@ -115,6 +115,19 @@ class FilledMesh:
             vertex_selected=s.vertex_selected)
 
 
+class _StageClock:
+    """Seconds by stage of a run: ``stage(name)`` ends the stage ``name`` (its time adds up) and starts the next."""
+
+    def __init__(self):
+        self.seconds = {}
+        self._last = time.perf_counter()
+
+    def __call__(self, name):
+        now = time.perf_counter()
+        self.seconds[name] = self.seconds.get(name, 0.0) + now - self._last
+        self._last = now
+
+
 def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepare=None, warm_up=None,
                     seconds_per_edge=None, progress=None):
     """Run one hole-filling algorithm on every eligible hole of a mesh given as arrays.
@@ -155,18 +168,25 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
         The filled mesh and its attributes.
     result : dict
         ``closed_holes``, ``new_faces``, ``new_vertices``, ``skipped_holes``,
-        ``failed_holes``, ``holes`` (per-hole dicts) and ``seconds``; with ``prepare`` also
+        ``failed_holes``, ``holes`` (per-hole dicts), ``seconds`` and ``stage_seconds`` (the run's
+        seconds by stage: "edge table" (each edge's faces, the mesh's edges checked), "boundary
+        loops", "hole selection" (each loop's measures and class), "kernels", "holes" (filled,
+        checked and merged), "attributes"); with ``prepare`` also
         ``split_boundary_edges`` (new faces and vertices then count the patches only; the
         split faces' second children are rows m .. m + split_boundary_edges - 1).
     """
     t_start = time.perf_counter()
+    stage = _StageClock()
     V, F = arrays.V, arrays.F
     he, he_faces, bad_edges = edge_summary(F)
     check_manifold_edges(F, arrays.label, bad_edges)
     check_faces_joined(F, len(he), arrays.label)
+    stage("edge table")
     loops = boundary_loops(F, (he, he_faces))
+    stage("boundary loops")
     incidence = vertex_face_incidence(F, len(V)) if len(loops) else None
     report, todo = _select_holes(V, F, loops, params, arrays.face_attrs["selected"].ravel() > 0, incidence)
+    stage("hole selection")
     fill_kwargs = {name: params[name] for name in algorithm_params}
     base = (arrays, list(loops), [dict(entry) for entry in report], incidence)
     fills = {}  # hole -> outcome of its fill, reused by a later pass while its surroundings are the same
@@ -175,6 +195,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
         load_validation_kernel()
         if warm_up is not None:
             warm_up()
+    stage("kernels")
     while True:
         arrays, V, F, V2, F2, done_loops, patches, refinement, report = _fill_holes(
             base, todo, params, fill, fill_kwargs, rings, prepare, fills, seconds_per_edge, progress)
@@ -187,6 +208,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
             base[2][i] = dict(report[i], split_boundary_edges=0)
         todo = [i for i in todo if i not in undo]
     explain_folded_surroundings(base[0].V, base[0].F, base[1], report, incidence)
+    stage("holes")
     n_new_faces = len(F2) - len(F)
     if n_new_faces:
         vattrs, fattrs, wedge = extend_attributes(arrays, V2, F2, done_loops, [len(p.vertices) for p in patches])
@@ -195,6 +217,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
     select = np.arange(len(F), len(F2)) if params["newfaceselected"] else None
     filled = FilledMesh(arrays, V2, F2, vattrs, fattrs, wedge, select,
                         changed=bool(n_new_faces) or refinement is not None)
+    stage("attributes")
     statuses = [h["status"] for h in report]
     result = {
         "closed_holes": statuses.count("closed"),
@@ -204,6 +227,7 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
         "failed_holes": statuses.count("failed"),
         "holes": report,
         "seconds": time.perf_counter() - t_start,
+        "stage_seconds": stage.seconds,
     }
     if prepare is not None:
         result["split_boundary_edges"] = int(len(refinement.edge_weights)) if refinement is not None else 0

@@ -114,6 +114,8 @@ def evaluate_run(case, filler, reply, resolved_params, full_metrics=True):
         V1 = np.concatenate([V0, np.asarray(reply["V_new"], np.float64).reshape(-1, 3)])
         F1 = np.concatenate([F0, np.asarray(reply["F_new"], np.int64).reshape(-1, 3)])
     result = reply.get("result") or {}
+    if result.get("stage_seconds"):
+        run["stage_seconds"] = result["stage_seconds"]
     if full_metrics:
         checks, hits = mesh_checks(V0, F0, V1, F1, return_hits=True)
     else:

@@ -23,7 +23,8 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None,
     Returns
     -------
     dict
-        The pipeline's result; ``seconds`` includes reading and writing the layer; ``mesh_id``
+        The pipeline's result; ``seconds`` includes reading and writing the layer, and so does
+        ``stage_seconds`` ("read layer" first, "write layer" last); ``mesh_id``
         is the filled layer's id: the current layer's, which keeps its place too (see
         :func:`.meshset_io.replace_current_mesh`), except in a MeshSet holding rasters, where the
         filled layer gets a new id, goes last and ``layer_note`` says why (and where another layer's own
@@ -39,12 +40,14 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None,
     """
     t_start = time.perf_counter()
     arrays = current_mesh_arrays(ms)
+    read = time.perf_counter() - t_start
     filled, result = fill_mesh_holes(arrays, fill, params, algorithm_params=algorithm_params, rings=rings,
                                      prepare=prepare, warm_up=warm_up, seconds_per_edge=seconds_per_edge,
                                      progress=current_callback())
     mesh_id = arrays.mesh_id
     del arrays  # the filled arrays begin with the originals: one copy of the mesh is enough from here on
     filled.release_source()
+    t_write = time.perf_counter()
     if filled.changed:
         mesh_id, note = replace_current_mesh(ms, filled.source, filled.V, filled.F, filled.vertex_attrs,
                                        filled.face_attrs, filled.wedge_texcoords, select_faces=filled.select_faces)
@@ -52,4 +55,6 @@ def close_holes(ms, fill, params, *, algorithm_params=(), rings=3, prepare=None,
             result["layer_note"] = note
     result["mesh_id"] = int(mesh_id)
     result["seconds"] = time.perf_counter() - t_start
+    result["stage_seconds"] = {"read layer": read, **result["stage_seconds"],
+                               "write layer": time.perf_counter() - t_write}
     return result

@@ -62,7 +62,7 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALIN
                          "closed": run.get("closed_holes"),
                          "hole_edges": [h.boundary_edges for h in prepared.holes],
                          "hole_seconds": per_hole if len(per_hole) == len(hole_rows) else None,
-                         "cut_seconds": cut_seconds})
+                         "stage_seconds": run.get("stage_seconds"), "cut_seconds": cut_seconds})
         if level == levels - 1 and repeats > 1:
             _repeat_whole_runs(rows, prepared, fillers, repeats, timeout)
         print(f"# scaling: {len(prepared.F0)} faces done", file=sys.stderr)
@@ -142,4 +142,22 @@ def scaling_table(rows):
                       "–" if fill is None else f"{fill:.3f}", f"{r['run_seconds']:.2f}",
                       "–" if fill is None else f"{r['run_seconds'] - fill:.2f}",
                       "–" if memory is None else f"{memory:.0f}"])
+    return header, table
+
+
+#: Whole-mesh stages of a filter's run (``stage_seconds`` of its result) that the stage table lists.
+STAGES = ("read layer", "edge table", "boundary loops", "hole selection", "kernels", "holes", "attributes",
+          "write layer")
+
+
+def stage_table(rows, filler=WHOLE_RUN_PAIR[0]):
+    """Where ``filler``'s whole run goes at each mesh size: seconds of each of :data:`STAGES`, then the whole run."""
+    header = ["faces"] + list(STAGES) + ["whole run"]
+    table = []
+    for r in rows:
+        stages = r.get("stage_seconds")
+        if r["filler"] != filler or not stages:
+            continue
+        table.append([f"{r['faces']:,}"] + [f"{stages.get(name, 0.0):.3f}" for name in STAGES]
+                     + [f"{r['run_seconds']:.2f}"])
     return header, table

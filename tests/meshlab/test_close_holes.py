@@ -129,6 +129,22 @@ def test_every_closed_loop_reports_where_it_is_and_how_large():
         assert h["perimeter"] >= 2 * h["diameter"] - 1e-9
 
 
+def test_the_run_reports_its_seconds_by_stage_in_order_adding_up_to_the_whole():
+    from meshlab_holefill import fill_holes
+
+    V, F, _ = sphere_with_holes(subdiv=3)
+    res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral()
+    assert list(res["stage_seconds"]) == ["read layer", "edge table", "boundary loops", "hole selection", "kernels",
+                                          "holes", "attributes", "write layer"]
+    assert all(t >= 0 for t in res["stage_seconds"].values())
+    assert sum(res["stage_seconds"].values()) == pytest.approx(res["seconds"], abs=0.01)
+    # On arrays there is no layer to read or write.
+    result = fill_holes(V, F, "meshing_close_holes_min_angle_bilateral")[2]
+    assert list(result["stage_seconds"]) == ["edge table", "boundary loops", "hole selection", "kernels", "holes",
+                                             "attributes"]
+    assert sum(result["stage_seconds"].values()) <= result["seconds"]
+
+
 def test_a_diameter_bound_skips_wider_holes_as_a_length_or_a_percentage():
     V, F, _ = sphere_with_holes(subdiv=3)
     diameters = sorted(h["diameter"] for h in meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral(
