@@ -14,7 +14,7 @@ from numba import njit
 from ..geometry.quality import cross_rows
 
 __all__ = ["loop_measures", "OUTLINE_RATIO", "outline_ratios", "vector_area", "outlines_one_face", "loop_class",
-           "is_outline", "outline_ratio", "hole_measures"]
+           "loop_classes", "is_outline", "outline_ratio", "hole_measures", "holes_measures"]
 
 
 def loop_measures(points):
@@ -120,6 +120,32 @@ def loop_class(V, F, loop, incidence):
     return "outline" if outlines_one_face(loop) or is_outline(V, F, loop, incidence) else "hole"
 
 
+def loop_classes(V, F, loops, incidence, enclosed=None):
+    """:func:`loop_class` of many loops at once: the components grown in one compiled call.
+
+    Parameters
+    ----------
+    V : (n, 3) float, F : (m, 3) int
+    loops : sequence of BoundaryLoop  closed, of at least 3 vertices
+    incidence : (n, m) sparse  :func:`.holes.vertex_face_incidence` of (F, n)
+    enclosed : (len(loops),) float, optional  their vector areas (:func:`hole_measures`' ``area``)
+
+    Returns
+    -------
+    list of str  'outline' or 'hole', per loop
+    """
+    if not len(loops):
+        return []
+    if enclosed is None:
+        enclosed = [vector_area(V[np.asarray(loop.vertices, np.int64)]) for loop in loops]
+    starts = [np.unique(np.asarray(loop.border_faces, np.int64)) for loop in loops]
+    offsets = np.cumsum([0] + [len(start) for start in starts])
+    areas = _grown_areas(incidence.indptr, incidence.indices, np.asarray(V, np.float64), np.asarray(F),
+                         np.concatenate(starts) if starts else np.zeros(0, np.int64), offsets,
+                         np.asarray(enclosed, np.float64) / OUTLINE_RATIO)
+    return ["outline" if outlines_one_face(loop) or area >= 0 else "hole" for loop, area in zip(loops, areas)]
+
+
 def is_outline(V, F, loop, incidence):
     """Whether a loop outlines its whole connected component: :func:`outline_ratios` >= OUTLINE_RATIO.
 
@@ -201,14 +227,64 @@ def _grown_area(indptr, indices, V, F, start, budget):
     """
     seen = np.zeros(F.shape[0], np.bool_)
     reached = np.zeros(V.shape[0], np.bool_)
+    return _grow(indptr, indices, V, F, start, budget, seen, reached, np.empty(16, np.int64))[0]
+
+
+@njit(cache=True)
+def _grown_areas(indptr, indices, V, F, starts, offsets, budgets):
+    """:func:`_grown_area` of many loops (loop i's faces ``starts[offsets[i]:offsets[i + 1]]``), (L,) float64.
+
+    The flags are allocated once and only the entries a loop's growth set are cleared after
+    it: a mesh with many small islands (a range scan's debris) costs what their growths cost,
+    not one pass over the mesh per island.
+    """
+    seen = np.zeros(F.shape[0], np.bool_)
+    reached = np.zeros(V.shape[0], np.bool_)
+    grown = np.empty(16, np.int64)
+    areas = np.empty(len(offsets) - 1)
+    touched = np.empty(16, np.int64)  # the faces seen by one growth, to clear
+    for i in range(len(offsets) - 1):
+        areas[i], grown, touched, count = _grow_tracked(indptr, indices, V, F, starts[offsets[i]:offsets[i + 1]],
+                                                         budgets[i], seen, reached, grown, touched)
+        for t in range(count):
+            f = touched[t]
+            seen[f] = False
+            for c in range(3):
+                reached[F[f, c]] = False
+    return areas
+
+
+@njit(cache=True)
+def _grow(indptr, indices, V, F, start, budget, seen, reached, grown):
+    """The growth of :func:`_grown_area` on flags given clear: (area or -1, the faces buffer)."""
+    area, grown, _, _ = _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, np.empty(0, np.int64))
+    return area, grown
+
+
+@njit(cache=True)
+def _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, touched):
+    """The growth of :func:`_grown_area`; with a non-empty ``touched`` buffer the faces it sees are listed there.
+
+    Every vertex it reaches belongs to a face it has seen (it reads only seen faces' corners),
+    so clearing the listed faces' flags and their corners' clears every flag it set.
+
+    Returns
+    -------
+    area : float  or -1 once over the budget
+    grown, touched : the buffers (enlarged as needed)
+    count : int  faces listed in ``touched`` (0 when it was empty)
+    """
+    track = len(touched) > 0
+    count = 0
     ring = start.copy()
     area = 0.0
     for f in ring:
         seen[f] = True
+        if track:
+            touched, count = _listed(touched, count, f)
         area += _triangle_area(V, F, f)
-    grown = np.empty(16, np.int64)
     while area <= budget:
-        count = 0
+        size = 0
         for f in ring:
             for c in range(3):
                 v = F[f, c]
@@ -220,18 +296,26 @@ def _grown_area(indptr, indices, V, F, start, budget):
                     if seen[g]:
                         continue
                     seen[g] = True
-                    if count == len(grown):
-                        larger = np.empty(2 * len(grown), np.int64)
-                        larger[:count] = grown[:count]
-                        grown = larger
-                    grown[count] = g
-                    count += 1
-        if count == 0:  # the whole component, and no larger than the budget
-            return area
-        ring = grown[:count].copy()
+                    if track:
+                        touched, count = _listed(touched, count, g)
+                    grown, size = _listed(grown, size, g)
+        if size == 0:  # the whole component, and no larger than the budget
+            return area, grown, touched, count
+        ring = grown[:size].copy()
         for f in ring:
             area += _triangle_area(V, F, f)
-    return -1.0
+    return -1.0, grown, touched, count
+
+
+@njit(cache=True)
+def _listed(buffer, count, value):
+    """``value`` appended at ``count`` (the buffer doubled when full): (buffer, count + 1)."""
+    if count == len(buffer):
+        larger = np.empty(2 * len(buffer), np.int64)
+        larger[:count] = buffer[:count]
+        buffer = larger
+    buffer[count] = value
+    return buffer, count + 1
 
 
 def hole_measures(V, loop):
@@ -254,3 +338,54 @@ def hole_measures(V, loop):
     return {"centroid": points.mean(axis=0).tolist(), "perimeter": float(measures["perimeter"]),
             "diameter": float(measures["diameter"]), "area": vector_area(points),
             "planarity": float(measures["planarity"])}
+
+
+# Loops of up to this many vertices get their diameters from one pairwise-distance array per
+# length; longer ones one at a time (:func:`loop_measures`).
+_BATCHED_DIAMETER = 64
+
+
+def holes_measures(V, loops):
+    """:func:`hole_measures` of many loops at once: the same entries, in one pass of array operations.
+
+    A range scan can have tens of thousands of border loops (the outlines of its debris);
+    measured one by one, each cost about 0.1 ms of small numpy calls. Sums over a loop's
+    vertices are taken in their order, so a measure can differ from :func:`hole_measures`' in
+    its last bits.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+    loops : sequence of BoundaryLoop  closed, of at least 3 vertices
+
+    Returns
+    -------
+    list of dict  per loop, as :func:`hole_measures`
+    """
+    if not len(loops):
+        return []
+    ids = [np.asarray(loop.vertices, np.int64) for loop in loops]
+    k = np.array([len(i) for i in ids])
+    first = np.concatenate([[0], np.cumsum(k)[:-1]])
+    owner = np.repeat(np.arange(len(loops)), k)
+    P = np.asarray(V, np.float64)[np.concatenate(ids)]  # (K, 3): the loops' points, loop after loop
+    following = np.arange(len(P)) + 1
+    following[first + k - 1] = first  # each point's successor along its loop
+    centroid = np.add.reduceat(P, first) / k[:, None]
+    perimeter = np.add.reduceat(np.linalg.norm(P[following] - P, axis=1), first)
+    R = P - P[first][owner]  # relative to the loop's first point, as vector_area takes them
+    area = 0.5 * np.linalg.norm(np.add.reduceat(cross_rows(R, R[following]), first), axis=1)
+    C = P - centroid[owner]
+    covariance = np.add.reduceat(C[:, :, None] * C[:, None, :], first) / k[:, None, None]  # (L, 3, 3)
+    smallest = np.linalg.eigvalsh(covariance)[:, 0]
+    diameter = np.empty(len(loops))
+    for size in np.unique(k):
+        which = np.flatnonzero(k == size)
+        if size > _BATCHED_DIAMETER:
+            diameter[which] = [loop_measures(P[first[i]:first[i] + size])["diameter"] for i in which]
+            continue
+        X = P[first[which][:, None] + np.arange(size)]  # (w, size, 3)
+        diameter[which] = np.linalg.norm(X[:, :, None, :] - X[:, None, :, :], axis=3).max(axis=(1, 2))
+    planarity = np.where(diameter > 0, np.sqrt(np.maximum(smallest, 0.0)) / np.where(diameter > 0, diameter, 1.0), 0.0)
+    return [{"centroid": centroid[i].tolist(), "perimeter": float(perimeter[i]), "diameter": float(diameter[i]),
+             "area": float(area[i]), "planarity": float(planarity[i])} for i in range(len(loops))]

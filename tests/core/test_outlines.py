@@ -76,6 +76,42 @@ def test_grown_area_is_the_component_area_within_the_budget():
     assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 0.5 * area) == -1.0
 
 
+def _scan_with_debris(seed, islands):
+    """A grid with holes and ``islands`` small square fragments (a range scan's debris) around it."""
+    rng = np.random.default_rng(seed)
+    V, F = grid(14, 14)
+    _, F, _ = cut_disks(V, F, [(0.3, 0.3, 0), (0.7, 0.65, 0)], 0.1 + 0.05 * rng.random())
+    Vi, Fi = grid(2 + seed % 3, 2 + seed % 3)
+    parts_V, parts_F = [V], [F]
+    count = len(V)
+    for corner in rng.uniform(1.2, 3.0, (islands, 3)):
+        parts_V.append(Vi * rng.uniform(0.05, 0.2) + corner)
+        parts_F.append(Fi + count)
+        count += len(Vi)
+    return np.concatenate(parts_V), np.concatenate(parts_F)
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), islands=st.integers(0, 40))
+def test_loops_measured_and_classed_at_once_as_one_by_one(seed, islands):
+    from meshlab_holefill.core.outlines import hole_measures, holes_measures, loop_class, loop_classes
+
+    V, F = _scan_with_debris(seed, islands)
+    loops = [loop for loop in boundary_loops(F) if loop.closed and len(loop) >= 3]
+    incidence = vertex_face_incidence(F, len(V))
+    together = holes_measures(V, loops)
+    classes = loop_classes(V, F, loops, incidence, [m["area"] for m in together])
+    assert classes == [loop_class(V, F, loop, incidence) for loop in loops]
+    assert classes.count("hole") == 2 and classes.count("outline") == islands + 1  # the grid's rim too
+    for loop, measures in zip(loops, together):
+        alone = hole_measures(V, loop)
+        assert list(measures) == list(alone)
+        for key in ("centroid", "perimeter", "diameter", "area"):
+            np.testing.assert_allclose(measures[key], alone[key], rtol=1e-12, atol=1e-15)
+        assert measures["planarity"] == pytest.approx(alone["planarity"], abs=1e-7)  # 0 but for rounding
+    assert holes_measures(V, []) == [] and loop_classes(V, F, [], incidence) == []
+
+
 def test_vector_area_has_np_cross_bits_and_is_exact_for_a_planar_square():
     from meshlab_holefill.core.outlines import vector_area
 

@@ -124,7 +124,7 @@ def test_every_closed_loop_reports_where_it_is_and_how_large():
     res = meshset_from_arrays(V, F).meshing_close_holes_min_angle_bilateral()
     for h in res["holes"]:
         loop_points = V[[lp for lp in boundary_loops(F)][h["hole"]].vertices]
-        np.testing.assert_allclose(h["centroid"], loop_points.mean(axis=0))
+        np.testing.assert_allclose(h["centroid"], loop_points.mean(axis=0), rtol=1e-12, atol=1e-15)
         assert h["size_class"] == "hole" and 0 < h["area"] < np.pi * h["diameter"] ** 2 / 4 + 1e-9
         assert h["perimeter"] >= 2 * h["diameter"] - 1e-9
 
