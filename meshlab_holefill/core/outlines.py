@@ -227,7 +227,8 @@ def _grown_area(indptr, indices, V, F, start, budget):
     """
     seen = np.zeros(F.shape[0], np.bool_)
     reached = np.zeros(V.shape[0], np.bool_)
-    return _grow(indptr, indices, V, F, start, budget, seen, reached, np.empty(16, np.int64))[0]
+    return _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, np.empty(16, np.int64),
+                         np.empty(0, np.int64))[0]
 
 
 @njit(cache=True)
@@ -252,13 +253,6 @@ def _grown_areas(indptr, indices, V, F, starts, offsets, budgets):
             for c in range(3):
                 reached[F[f, c]] = False
     return areas
-
-
-@njit(cache=True)
-def _grow(indptr, indices, V, F, start, budget, seen, reached, grown):
-    """The growth of :func:`_grown_area` on flags given clear: (area or -1, the faces buffer)."""
-    area, grown, _, _ = _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, np.empty(0, np.int64))
-    return area, grown
 
 
 @njit(cache=True)
