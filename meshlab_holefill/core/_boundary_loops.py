@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ._boundary_walk_kernels import walk_loops
+
 
 @njit(cache=True)
 def _group_halfedges(F, n, other, code):
@@ -222,6 +224,44 @@ def edge_summary(F):
 
 def boundary_loops(F, halfedges=None):
     """Split the boundary edges of a mesh into simple closed loops.
+
+    The boundary half-edges are found vectorised; tracing walks each boundary edge once, in
+    one compiled call (:func:`._boundary_walk_kernels.walk_loops`; a scan's debris can have
+    hundreds of thousands of border edges). Where a vertex carries several boundary edges (a
+    pinched vertex, as in range scans), the walk cuts a loop off as soon as it returns to a
+    vertex already on the current path, so every loop is simple.
+
+    Parameters
+    ----------
+    F : (m, 3) int
+    halfedges : tuple, optional
+        ``boundary_halfedges(F)`` when already computed.
+
+    Returns
+    -------
+    loops : list of BoundaryLoop
+        Sorted by decreasing number of edges.
+    """
+    he, faces = boundary_halfedges(F) if halfedges is None else halfedges
+    if len(he) == 0:
+        return []
+    # Patch orientation: the patch runs each border half-edge backwards.
+    src, dst = np.ascontiguousarray(he[:, 1], np.int64), np.ascontiguousarray(he[:, 0], np.int64)
+    order = np.argsort(src, kind="stable")
+    vertices, edges, vertex_offsets, edge_offsets, closed, pinched = walk_loops(order, src, dst,
+                                                                                int(max(src.max(), dst.max())) + 1)
+    faces = np.asarray(faces, np.int64)
+    loops = [BoundaryLoop(vertices=vertices[vertex_offsets[i]:vertex_offsets[i + 1]].copy(),
+                          border_faces=faces[edges[edge_offsets[i]:edge_offsets[i + 1]]],
+                          pinched=bool(pinched[i]), closed=bool(closed[i])) for i in range(len(closed))]
+    loops.sort(key=len, reverse=True)
+    return loops
+
+
+def boundary_loops_python(F, halfedges=None):
+    """:func:`boundary_loops` walked in Python: the reference the compiled walk is tested against.
+
+    Split the boundary edges of a mesh into simple closed loops.
 
     The boundary half-edges are found vectorised; tracing walks each boundary edge once
     (a Python loop over boundary edges only). Where a vertex carries several boundary

@@ -61,6 +61,23 @@ def test_bunny_scan_has_its_five_natural_holes():
     assert [len(lp) for lp in boundary_loops(F)] == [38, 22, 22, 19, 8]
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 100_000), n=st.integers(3, 40), m=st.integers(1, 60))
+def test_compiled_walk_gives_the_python_walks_loops(seed, n, m):
+    # Random faces over few vertices: pinched vertices, non-manifold edges and faces of either
+    # orientation (open chains), as the Python walk splits them.
+    from meshlab_holefill.core._boundary_loops import boundary_loops_python
+
+    F = np.random.default_rng(seed).integers(0, n, (m, 3))
+    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
+    compiled, python = boundary_loops(F), boundary_loops_python(F)
+    assert len(compiled) == len(python)
+    for a, b in zip(compiled, python):
+        assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.border_faces, b.border_faces)
+        assert a.vertices.dtype == b.vertices.dtype == a.border_faces.dtype == np.int64
+        assert (a.pinched, a.closed) == (b.pinched, b.closed)
+
+
 def test_face_range_scan_loops_are_simple_and_cover_every_boundary_edge():
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(sample("rangemaps/face000.ply"))
