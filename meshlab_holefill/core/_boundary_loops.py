@@ -259,31 +259,12 @@ def boundary_loops(F, halfedges=None):
 
 
 def boundary_loops_python(F, halfedges=None):
-    """:func:`boundary_loops` walked in Python: the reference the compiled walk is tested against.
-
-    Split the boundary edges of a mesh into simple closed loops.
-
-    The boundary half-edges are found vectorised; tracing walks each boundary edge once
-    (a Python loop over boundary edges only). Where a vertex carries several boundary
-    edges (a pinched vertex, as in range scans), the walk cuts a loop off as soon as it
-    returns to a vertex already on the current path, so every loop is simple.
-
-    Parameters
-    ----------
-    F : (m, 3) int
-    halfedges : tuple, optional
-        ``boundary_halfedges(F)`` when already computed.
-
-    Returns
-    -------
-    loops : list of BoundaryLoop
-        Sorted by decreasing number of edges.
-    """
+    """:func:`boundary_loops` (same parameters and loops) walked in Python, a dict lookup per boundary edge:
+    the reference the compiled walk is tested against."""
     he, faces = boundary_halfedges(F) if halfedges is None else halfedges
     if len(he) == 0:
         return []
-    # Patch orientation: the patch runs each border half-edge backwards.
-    src, dst = he[:, 1], he[:, 0]
+    src, dst = he[:, 1], he[:, 0]  # patch orientation, as in boundary_loops
     order = np.argsort(src, kind="stable")
     src_sorted = src[order]
     verts, starts, counts = np.unique(src_sorted, return_index=True, return_counts=True)
