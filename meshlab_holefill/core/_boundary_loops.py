@@ -245,11 +245,14 @@ def boundary_loops(F, halfedges=None):
     he, faces = boundary_halfedges(F) if halfedges is None else halfedges
     if len(he) == 0:
         return []
-    # Patch orientation: the patch runs each border half-edge backwards.
-    src, dst = np.ascontiguousarray(he[:, 1], np.int64), np.ascontiguousarray(he[:, 0], np.int64)
+    # The border vertices numbered 0 .. b - 1 (in the mesh's order), so the walk's tables are sized by the
+    # border, not the mesh; the patch runs each border half-edge backwards (patch orientation).
+    border, numbered = np.unique(np.asarray(he, np.int64), return_inverse=True)
+    numbered = numbered.reshape(-1, 2)
+    src, dst = np.ascontiguousarray(numbered[:, 1]), np.ascontiguousarray(numbered[:, 0])
     order = np.argsort(src, kind="stable")
-    vertices, edges, vertex_offsets, edge_offsets, closed, pinched = walk_loops(order, src, dst,
-                                                                                int(max(src.max(), dst.max())) + 1)
+    vertices, edges, vertex_offsets, edge_offsets, closed, pinched = walk_loops(order, src, dst, len(border))
+    vertices = border[vertices]
     faces = np.asarray(faces, np.int64)
     loops = [BoundaryLoop(vertices=vertices[vertex_offsets[i]:vertex_offsets[i + 1]].copy(),
                           border_faces=faces[edges[edge_offsets[i]:edge_offsets[i + 1]]],

@@ -228,7 +228,7 @@ def _grown_area(indptr, indices, V, F, start, budget):
     seen = np.zeros(F.shape[0], np.bool_)
     reached = np.zeros(V.shape[0], np.bool_)
     return _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, np.empty(16, np.int64),
-                         np.empty(0, np.int64))[0]
+                         np.empty(0, np.int64), False)[0]
 
 
 @njit(cache=True)
@@ -246,7 +246,7 @@ def _grown_areas(indptr, indices, V, F, starts, offsets, budgets):
     touched = np.empty(16, np.int64)  # the faces seen by one growth, to clear
     for i in range(len(offsets) - 1):
         areas[i], grown, touched, count = _grow_tracked(indptr, indices, V, F, starts[offsets[i]:offsets[i + 1]],
-                                                         budgets[i], seen, reached, grown, touched)
+                                                         budgets[i], seen, reached, grown, touched, True)
         for t in range(count):
             f = touched[t]
             seen[f] = False
@@ -256,8 +256,8 @@ def _grown_areas(indptr, indices, V, F, starts, offsets, budgets):
 
 
 @njit(cache=True)
-def _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, touched):
-    """The growth of :func:`_grown_area`; with a non-empty ``touched`` buffer the faces it sees are listed there.
+def _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, touched, track):
+    """The growth of :func:`_grown_area`; with ``track`` the faces it sees are listed in the ``touched`` buffer.
 
     Every vertex it reaches belongs to a face it has seen (it reads only seen faces' corners),
     so clearing the listed faces' flags and their corners' clears every flag it set.
@@ -266,9 +266,8 @@ def _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, to
     -------
     area : float  or -1 once over the budget
     grown, touched : the buffers (enlarged as needed)
-    count : int  faces listed in ``touched`` (0 when it was empty)
+    count : int  faces listed in ``touched`` (0 without ``track``)
     """
-    track = len(touched) > 0
     count = 0
     ring = start.copy()
     area = 0.0
