@@ -47,8 +47,6 @@ def test_a_cad_tessellation_keeps_the_faces_asked_for_and_refuses_a_count_out_of
             cad_tessellation(V, F, faces)
 
 
-
-
 # The union of a box and a cylinder (the arrays' file) remeshed, in a new process: by MeshLab in
 # that process ("meshlab"), or by remeshed ("remeshed"); the vertex count is printed.
 _REMESH_IN_A_PROCESS = """
@@ -80,6 +78,8 @@ def test_remeshing_does_not_depend_on_the_memory_the_calling_process_leaves(tmp_
                              capture_output=True, check=True, env={**os.environ, "MALLOC_PERTURB_": pattern})
         return int(run.stdout)
 
-    # MeshLab's remeshing reads memory it has not set: the pattern changes its mesh.
-    assert vertices("meshlab", "0") != vertices("meshlab", "255")
-    assert vertices("remeshed", "255") == vertices("meshlab", "0") == len(remeshed(V, F, 0.1)[0])
+    # MeshLab's remeshing reads memory it has not set, so on some machines the pattern changes its mesh (on one
+    # machine 739 vertices instead of 764 under 255); whether it does depends on the machine's allocator, so only the
+    # fixed remeshing's side is asserted.
+    clean = vertices("meshlab", "0")
+    assert vertices("remeshed", "255") == vertices("remeshed", "90") == clean == len(remeshed(V, F, 0.1)[0])
