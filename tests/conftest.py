@@ -172,3 +172,24 @@ def loop_nearest(V, F, point):
     loops = boundary_loops(F)
     i = int(np.argmin([np.linalg.norm(V[loop.vertices].mean(axis=0) - point) for loop in loops]))
     return i, loops[i]
+
+
+@functools.cache
+def numpy_products_round_as_the_kernels():
+    """Whether numpy's (s, 3) @ (3,) product here rounds as the compiled kernels' copy of it (``gemv_row``).
+
+    The copy follows OpenBLAS's dgemv kernel of the machines the package is developed on (one
+    fused multiply-add order); BLAS kernels for other processors (AVX-512 ones, for example) may
+    round the last bit differently, and compiled steps then differ from their numpy references in
+    that bit: bit-for-bit comparisons between the two apply only where this holds.
+    """
+    from meshlab_holefill.algorithms.xie_zou2013._quality_pass_kernels import gemv_row
+
+    rng = np.random.default_rng(7)
+    for rows in (1, 2, 3, 5, 8):
+        A = rng.standard_normal((rows, 3))
+        b = rng.standard_normal(3)
+        got = np.array([gemv_row(A[i], b, rows) for i in range(rows)])
+        if got.tobytes() != (A @ b).tobytes():
+            return False
+    return True

@@ -13,27 +13,10 @@ from meshlab_holefill.algorithms.xie_zou2013._quality_pass_numpy import _Patch, 
 from meshlab_holefill.algorithms.xie_zou2013.folds import local_folds
 from meshlab_holefill.geometry.quality import face_normals
 
-from conftest import random_planar_patch
+from conftest import numpy_products_round_as_the_kernels, random_planar_patch
 
 
-def _numpy_matmul_rounds_as_gemv_row():
-    """Whether numpy's (s, 3) @ (3,) product here rounds as the kernels' copy of it (``gemv_row``).
-
-    The copy follows OpenBLAS's dgemv kernel of the machines the package is developed on (one
-    fused multiply-add order); BLAS kernels for other processors may round the last bit
-    differently, and the compiled pass then differs from the numpy reference in that bit.
-    """
-    rng = np.random.default_rng(7)
-    for rows in (1, 2, 3, 5, 8):
-        A = rng.standard_normal((rows, 3))
-        b = rng.standard_normal(3)
-        got = np.array([KQ.gemv_row(A[i], b, rows) for i in range(rows)])
-        if got.tobytes() != (A @ b).tobytes():
-            return False
-    return True
-
-
-SAME_GEMV = _numpy_matmul_rounds_as_gemv_row()
+SAME_GEMV = numpy_products_round_as_the_kernels()
 bitwise = pytest.mark.skipif(not SAME_GEMV, reason="numpy's matrix-vector product on this machine rounds in "
                              "another order than the kernels' copy: bit-for-bit comparisons do not apply")
 
@@ -225,9 +208,11 @@ def test_compass_search_is_optimise_position(energy):
         want = p.optimise_position(T, P, mask, ref, nv, x0.copy(), h, "energy" if energy else "min", floor_min)
         got = KQ.compass_search(T, P, np.argmax(mask, axis=1), ref, nv, x0, h, energy, floor_min,
                                 context(k, border))
-        assert got[0].tobytes() == np.asarray(want[0], np.float64).tobytes()
-        assert got[1] == want[1] or (np.isnan(got[1]) and np.isnan(want[1]))
-        assert got[2] == want[2] or (np.isnan(got[2]) and np.isnan(want[2]))
+        if SAME_GEMV:  # elsewhere the two differ in last bits, and a step taken or not can follow from one
+            assert got[0].tobytes() == np.asarray(want[0], np.float64).tobytes()
+            assert got[1] == want[1] or (np.isnan(got[1]) and np.isnan(want[1]))
+            assert got[2] == want[2] or (np.isnan(got[2]) and np.isnan(want[2]))
+        assert not np.isfinite(got[1]) or got[2] >= floor_min  # a position found keeps the minimum above its floor
         found += bool(np.isfinite(got[1]) and not np.array_equal(got[0], x0))
     assert found > 50  # most searches move: positions are compared, not only failures
 

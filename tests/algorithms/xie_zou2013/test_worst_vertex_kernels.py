@@ -9,6 +9,8 @@ from meshlab_holefill.algorithms.xie_zou2013.optimisation import (improve_worst_
                                                                   improve_worst_vertices_numpy)
 from meshlab_holefill.geometry.quality import triangle_quality
 
+from conftest import numpy_products_round_as_the_kernels
+
 
 def bumpy_disc(seed, k=16, inner=30, jitter=0.3, bump=0.3):
     """A triangulated disc on a bumpy height field: k loop vertices first, then ``inner`` jittered inner ones.
@@ -38,8 +40,9 @@ def test_compiled_moves_have_the_bits_of_the_numpy_moves(seed, inner, jitter, bu
     V, F, k = bumpy_disc(seed, inner=inner, jitter=jitter, bump=bump)
     W, moved = improve_worst_vertices(V, F, k, target=target)
     W_ref, moved_ref = improve_worst_vertices_numpy(V, F, k, target=target)
-    assert moved == moved_ref
-    np.testing.assert_array_equal(W, W_ref)
+    if numpy_products_round_as_the_kernels():  # elsewhere last bits differ, and a move made or not can follow
+        assert moved == moved_ref
+        np.testing.assert_array_equal(W, W_ref)
     np.testing.assert_array_equal(W[:k], V[:k])  # the loop stays
     assert triangle_quality(W, F).min() >= triangle_quality(V, F).min()
 
