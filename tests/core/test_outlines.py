@@ -1,5 +1,6 @@
 """core.outlines: island outlines against holes, and a loop's measures."""
 import numpy as np
+import scipy.sparse as sp
 import pymeshlab
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -102,6 +103,8 @@ def test_loops_measured_and_classed_at_once_as_one_by_one(seed, islands):
     together = holes_measures(V, loops)
     classes = loop_classes(V, F, loops, incidence, [m["area"] for m in together])
     assert classes == [loop_class(V, F, loop, incidence) for loop in loops]
+    # every growth stopped at once: the loops decided on the labelled components' areas
+    assert loop_classes(V, F, loops, incidence, [m["area"] for m in together], growth_cap=0) == classes
     assert classes.count("hole") == 2 and classes.count("outline") == islands + 1  # the grid's rim too
     for loop, measures in zip(loops, together):
         alone = hole_measures(V, loop)
@@ -157,3 +160,26 @@ def test_a_three_edge_loop_outlines_one_face_only_when_one_face_holds_all_its_ed
     (hole,) = boundary_loops(np.delete(Fs, 0, axis=0))  # one face removed: its three neighbours hold the edges
     assert len(hole) == 3 and not outlines_one_face(hole)
     assert not any(outlines_one_face(lp) for lp in boundary_loops(F))
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), islands=st.integers(0, 12))
+def test_component_areas_are_those_of_the_vertex_connected_components(seed, islands):
+    from scipy.sparse.csgraph import connected_components
+
+    from meshlab_holefill.core.outlines import _component_areas
+    from meshlab_holefill.geometry.quality import face_areas
+
+    V, F = _scan_with_debris(seed, islands)
+    V = np.concatenate([V, [[9.0, 9.0, 9.0]]])  # a vertex of no face: its own component, of no area
+    root, area = _component_areas(V, F)
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]]])
+    count, label = connected_components(sp.coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(len(V),) * 2),
+                                        directed=False)
+    # the same partition, each set's root its smallest vertex
+    assert len(np.unique(root)) == count
+    assert np.array_equal(label[root], label) and np.all(root <= np.arange(len(V)))
+    assert np.array_equal(root[np.unique(root)], np.unique(root))
+    expected = np.bincount(label[F[:, 0]], weights=face_areas(V, F), minlength=count)
+    np.testing.assert_allclose(area[np.unique(root)], expected[label[np.unique(root)]], rtol=1e-12)
+    assert area[len(V) - 1] == 0.0 and root[len(V) - 1] == len(V) - 1
