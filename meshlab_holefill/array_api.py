@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .algorithms import ALGORITHMS, find_algorithm
+from .core._attribute_kernels import idw_interpolated
 from .core.attributes import MeshArrays
 from .core.face_grid import load_face_grid_kernels
 from .core.kernel_cache import refresh_kernel_cache
@@ -148,9 +149,11 @@ def _compile_one(algorithm, params):
         if result["closed_holes"] == 0:
             raise RuntimeError(f"{algorithm}: the kernel example closed no hole ({result['holes']})")
         load_face_grid_kernels(face_dtype)  # built before workers fork, which the example does not
-    # The jagged-border fallback's programme, which the example's smooth holes never reach.
+    # The jagged-border fallback's programme, which the example's smooth holes never reach, and the
+    # interpolation of new vertices' attributes, which the example (no attributes) does not need.
     square = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
     dihedral_triangulation(square, np.tile([0.0, 0.0, 1.0], (4, 1)))
+    idw_interpolated(square, square.mean(axis=0, keepdims=True), np.ones((4, 1)))
     return time.process_time() - start
 
 

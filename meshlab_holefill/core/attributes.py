@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MeshTopologyError
+from ._attribute_kernels import idw_interpolated
 from .holes import nonmanifold_edges
 
 __all__ = ["MeshArrays", "check_manifold_edges", "check_faces_joined", "extend_attributes", "refine_mesh_arrays"]
@@ -103,20 +104,6 @@ def check_faces_joined(F, border_halfedges, label=""):
             "its own and there is no hole to fill; run meshing_merge_close_vertices (Merge Close Vertices) first")
 
 
-def _idw_weights(sources, targets):
-    """Inverse-squared-distance weights (t, s) of source points for target points, rows sum to 1.
-
-    The squared distances are summed a coordinate at a time on (t, s) arrays, in the order
-    ``((targets[:, None] - sources[None]) ** 2).sum(axis=2)`` adds them (the same bits), without
-    its (t, s, 3) temporaries: 3-5 times faster on holes of a few hundred new vertices.
-    """
-    d2 = np.square(targets[:, 0, None] - sources[None, :, 0])  # (t, s)
-    for axis in (1, 2):
-        d2 += np.square(targets[:, axis, None] - sources[None, :, axis])
-    w = 1.0 / np.maximum(d2, 1e-300)
-    return w / w.sum(axis=1, keepdims=True)
-
-
 def _new_values(name, values):
     """Interpolated attribute values as stored: colours on MeshLab's 8-bit grid, the rest as computed.
 
@@ -130,8 +117,11 @@ def _new_values(name, values):
 def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
     """Per-element attributes for the filled mesh: originals unchanged, new ones interpolated.
 
-    A new vertex gets the inverse-distance interpolation of its hole's loop-vertex values;
-    a new face gets the mean value of its hole's border faces, each counted once (colours,
+    A new vertex gets the inverse-distance interpolation of its hole's loop-vertex values
+    (:func:`._attribute_kernels.idw_interpolated`, every column of a hole in one pass; its sums
+    run in loop order, so against a numpy product of the (t, s) weights an interpolated value
+    differs in its last bits: face000.ply's vertex quality by at most 2.6e-12 on values up to
+    808); a new face gets the mean value of its hole's border faces, each counted once (colours,
     quality), and is unselected; wedge texture coordinates of new corners come from the loop
     vertex's coordinate in a border face, or the interpolation above for new vertices.
 
@@ -142,15 +132,21 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
     """
     n, m = len(arrays.V), len(arrays.F)
     new_v_owner = np.repeat(np.arange(len(loops)), new_vertex_counts)
-    weights = []
-    if arrays.vertex_attrs or arrays.wedge_texcoords is not None:  # nothing to interpolate otherwise
+    per_vertex = None  # each vertex's wedge texture coordinate, where the mesh has them
+    if arrays.wedge_texcoords is not None:
+        per_vertex = np.zeros((len(V2), 2))
+        # Any original corner's coordinate is a valid one for its vertex (seams aside).
+        per_vertex[arrays.F.ravel()] = arrays.wedge_texcoords.reshape(-1, 2)
+    sources = list(arrays.vertex_attrs.values()) + ([] if per_vertex is None else [per_vertex])
+    widths = np.cumsum([0] + [A.shape[1] for A in sources])
+    new_values = np.zeros((len(V2) - n, widths[-1]))  # every interpolated column of every new vertex
+    if widths[-1]:  # nothing to interpolate otherwise
         for h, loop in enumerate(loops):
-            targets = V2[n:][new_v_owner == h]
-            weights.append(_idw_weights(arrays.V[loop], targets) if len(targets) else np.zeros((0, len(loop))))
-    vertex_attrs = {}
-    for name, A in arrays.vertex_attrs.items():
-        parts = [A] + [_new_values(name, W @ A[loop]) for W, loop in zip(weights, loops)]
-        vertex_attrs[name] = np.concatenate(parts) if parts else A
+            rows = np.flatnonzero(new_v_owner == h)
+            columns = np.ascontiguousarray(np.concatenate([A[loop] for A in sources], axis=1), np.float64)
+            new_values[rows] = idw_interpolated(arrays.V[loop], V2[n:][rows], columns)
+    vertex_attrs = {name: np.concatenate([A, _new_values(name, new_values[:, widths[i]:widths[i + 1]])])
+                    for i, (name, A) in enumerate(arrays.vertex_attrs.items())}
     new_faces = F2[m:]
     # Hole of each new face: the loop or new vertex it touches.
     face_owner = np.full(len(new_faces), -1)
@@ -168,13 +164,8 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
         means = np.array([A[b].mean(axis=0) if len(b) else A.mean(axis=0) for b in border]).reshape(len(loops), -1)
         face_attrs[name] = np.concatenate([A, _new_values(name, means[face_owner])]) if len(new_faces) else A
     wedge = None
-    if arrays.wedge_texcoords is not None:
-        W0 = arrays.wedge_texcoords.reshape(m, 3, 2)
-        per_vertex = np.zeros((len(V2), 2))
-        # Any original corner's coordinate is a valid one for its vertex (seams aside).
-        per_vertex[arrays.F.ravel()] = W0.reshape(-1, 2)
-        for h, (W, loop) in enumerate(zip(weights, loops)):
-            per_vertex[n:][new_v_owner == h] = W @ per_vertex[loop]
+    if per_vertex is not None:
+        per_vertex[n:] = new_values[:, widths[-2]:]
         wedge = np.concatenate([arrays.wedge_texcoords, per_vertex[new_faces].reshape(-1, 2)])
     return vertex_attrs, face_attrs, wedge
 
