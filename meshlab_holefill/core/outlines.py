@@ -35,11 +35,7 @@ def loop_measures(points):
 
     P = np.asarray(points, dtype=np.float64)
     perimeter = polygon_perimeter(P)
-    if len(P) <= 2000:
-        D = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=2)
-        diameter = float(D.max())
-    else:
-        diameter = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
+    diameter = _diameter(P)
     _, _, w, _ = fit_plane(P)
     planarity = float(np.sqrt(max(w[0], 0.0)) / diameter) if diameter > 0 else 0.0
     return {"edges": len(P), "perimeter": perimeter, "diameter": diameter, "planarity": planarity}
@@ -382,6 +378,29 @@ def _listed(buffer, count, value):
     return buffer, count + 1
 
 
+def _diameter(P):
+    """:func:`loop_measures`' diameter of the points P (k, 3) float64: the largest distance of two of
+    them up to 2000 points, else their bounding box's diagonal."""
+    if len(P) > 2000:
+        return float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
+    # sqrt is monotone and correctly rounded: the root of the largest square is the largest root
+    return float(np.sqrt(_largest_squared_distance(np.ascontiguousarray(P))))
+
+
+@njit(cache=True)
+def _largest_squared_distance(P):
+    """The largest |P[a] - P[b]|^2 (0 for fewer than two points), its terms added x, y, z: the
+    squares np.linalg.norm(P[:, None] - P[None], axis=2) takes the roots of, without its (k, k, 3) array."""
+    best = 0.0
+    for a in range(P.shape[0]):
+        for b in range(a + 1, P.shape[0]):
+            dx, dy, dz = P[a, 0] - P[b, 0], P[a, 1] - P[b, 1], P[a, 2] - P[b, 2]
+            d = (dx * dx + dy * dy) + dz * dz
+            if d > best:
+                best = d
+    return best
+
+
 def hole_measures(V, loop):
     """Where a hole is and how large: the per-hole entries of a filter's result.
 
@@ -405,7 +424,7 @@ def hole_measures(V, loop):
 
 
 # Loops of up to this many vertices get their diameters from one pairwise-distance array per
-# length; longer ones one at a time (:func:`loop_measures`).
+# length; longer ones one at a time (:func:`_diameter`).
 _BATCHED_DIAMETER = 64
 
 
@@ -446,7 +465,7 @@ def holes_measures(V, loops):
     for size in np.unique(k):
         which = np.flatnonzero(k == size)
         if size > _BATCHED_DIAMETER:
-            diameter[which] = [loop_measures(P[first[i]:first[i] + size])["diameter"] for i in which]
+            diameter[which] = [_diameter(P[first[i]:first[i] + size]) for i in which]
             continue
         X = P[first[which][:, None] + np.arange(size)]  # (w, size, 3)
         diameter[which] = np.linalg.norm(X[:, :, None, :] - X[:, None, :, :], axis=3).max(axis=(1, 2))

@@ -183,3 +183,22 @@ def test_component_areas_are_those_of_the_vertex_connected_components(seed, isla
     expected = np.bincount(label[F[:, 0]], weights=face_areas(V, F), minlength=count)
     np.testing.assert_allclose(area[np.unique(root)], expected[label[np.unique(root)]], rtol=1e-12)
     assert area[len(V) - 1] == 0.0 and root[len(V) - 1] == len(V) - 1
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10**6), k=st.integers(1, 300), scale=st.sampled_from([1e-3, 1.0, 1e5]),
+       offset=st.sampled_from([0.0, 1e7]))
+def test_diameter_has_the_bits_of_the_largest_pairwise_norm(seed, k, scale, offset):
+    from meshlab_holefill.core.outlines import _diameter
+
+    P = np.random.default_rng(seed).normal(size=(k, 3)) * scale + offset
+    want = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=2).max()
+    assert _diameter(P) == want and loop_measures(P)["diameter"] == want
+
+
+def test_diameter_of_more_than_2000_points_is_their_box_diagonal():
+    from meshlab_holefill.core.outlines import _diameter
+
+    t = np.linspace(0.0, 2.0 * np.pi, 2001, endpoint=False)
+    P = np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], axis=1)
+    assert _diameter(P) == np.linalg.norm(P.max(axis=0) - P.min(axis=0)) and _diameter(P[:2000]) <= 2.0
