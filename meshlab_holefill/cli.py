@@ -190,7 +190,7 @@ def _hole_status_table(result):
 
 def cmd_holes(args, extra):
     from .core.holes import boundary_loops, vertex_face_incidence
-    from .core.outlines import holes_measures, loop_classes, outlines_one_face
+    from .core.outlines import loops_measured, outlines_one_face
 
     ms = load_meshset(args.input)
     m = ms.current_mesh()
@@ -200,9 +200,7 @@ def cmd_holes(args, extra):
     print(f"{m.label()}: {m.vertex_number()} vertices, {m.face_number()} faces, {len(loops)} boundary loops")
     print(f"{'hole':>4} {'edges':>6} {'class':>7} {'perimeter':>11} {'diameter':>10} {'area':>10} {'planarity':>9} "
           f"{'centroid':>32}  notes")
-    measured = [loop for loop in loops if loop.closed and len(loop) >= 3]
-    measures = iter(holes_measures(V, measured))
-    classes = iter(loop_classes(V, F, measured, incidence))
+    measured = loops_measured(V, F, loops, incidence)
     for i, loop in enumerate(loops):
         notes = []
         if loop.pinched:
@@ -211,8 +209,8 @@ def cmd_holes(args, extra):
             notes.append("open chain" if not loop.closed else "degenerate loop")
             print(f"{i:>4} {loop.edge_count:>6} {'':>7} {'':>11} {'':>10} {'':>10} {'':>9} {'':>32}  {', '.join(notes)}")
             continue
-        meas = next(measures)
-        outline = next(classes) == "outline"
+        meas, size_class = measured[i]
+        outline = size_class == "outline"
         if outlines_one_face(loop):
             notes.append("outline of a single face (its three edges are border edges, not a hole)")
         elif outline:

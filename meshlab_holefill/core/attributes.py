@@ -149,7 +149,6 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
                     for i, (name, A) in enumerate(arrays.vertex_attrs.items())}
     new_faces = F2[m:]
     # Hole of each new face: the loop or new vertex it touches.
-    face_owner = np.full(len(new_faces), -1)
     vert_owner = np.full(len(V2), -1)
     for h, loop in enumerate(loops):
         vert_owner[loop] = h

@@ -14,7 +14,7 @@ from numba import njit
 from ..geometry.quality import cross_rows
 
 __all__ = ["loop_measures", "OUTLINE_RATIO", "outline_ratios", "vector_area", "outlines_one_face", "loop_class",
-           "loop_classes", "is_outline", "outline_ratio", "hole_measures", "holes_measures"]
+           "loop_classes", "loops_measured", "is_outline", "outline_ratio", "hole_measures", "holes_measures"]
 
 
 def loop_measures(points):
@@ -165,6 +165,26 @@ def loop_classes(V, F, loops, incidence, enclosed=None, growth_cap=None):
             area = component_area[root[F[starts[i][0], 0]]]
             areas[i] = area if area <= budgets[i] else -1.0
     return ["outline" if outlines_one_face(loop) or area >= 0 else "hole" for loop, area in zip(loops, areas)]
+
+
+def loops_measured(V, F, loops, incidence):
+    """Each measurable loop's :func:`hole_measures` entries and its class, all at once (a scan's debris can
+    give tens of thousands of loops).
+
+    Parameters
+    ----------
+    V : (n, 3) float, F : (m, 3) int
+    loops : sequence of BoundaryLoop
+    incidence : (n, m) sparse  :func:`.holes.vertex_face_incidence` of (F, n)
+
+    Returns
+    -------
+    dict  loop index -> (measures dict, 'outline' or 'hole'), for the closed loops of at least 3 vertices
+    """
+    measured = [i for i, loop in enumerate(loops) if loop.closed and len(loop) >= 3]
+    measures = holes_measures(V, [loops[i] for i in measured])
+    classes = loop_classes(V, F, [loops[i] for i in measured], incidence, [m["area"] for m in measures])
+    return dict(zip(measured, zip(measures, classes)))
 
 
 def is_outline(V, F, loop, incidence):

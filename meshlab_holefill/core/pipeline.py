@@ -25,7 +25,7 @@ from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .kernel_cache import refresh_kernel_cache_once
 from .holes import boundary_loops, edge_summary, hole_context, vertex_face_incidence
 from .failure_reasons import explain_folded_surroundings, explain_outlines
-from .outlines import holes_measures, loop_classes, outlines_one_face
+from .outlines import loops_measured, outlines_one_face
 from .parameters import ParamSpec, Percentage
 from .patch import load_validation_kernel, merge_patches
 
@@ -243,16 +243,12 @@ def fill_mesh_holes(arrays, fill, params, *, algorithm_params=(), rings=3, prepa
 def _select_holes(V, F, loops, params, selected_faces, incidence):
     """Per-hole report entries with their measures, and the holes to fill (by the filter's parameters)."""
     report, todo = [], []
-    # Measured and classed all at once: a scan's debris can give tens of thousands of loops.
-    measured = [i for i, loop in enumerate(loops) if loop.closed and len(loop) >= 3]
-    measures = dict(zip(measured, holes_measures(V, [loops[i] for i in measured])))
-    classes = dict(zip(measured, loop_classes(V, F, [loops[i] for i in measured], incidence,
-                                              [measures[i]["area"] for i in measured])))
+    measured = loops_measured(V, F, loops, incidence)
     for i, loop in enumerate(loops):
         entry = {"hole": i, "boundary_edges": loop.edge_count, "pinched": bool(loop.pinched)}
-        if i in measures:
-            entry.update(measures[i])
-            entry["size_class"] = classes[i]
+        if i in measured:
+            entry.update(measured[i][0])
+            entry["size_class"] = measured[i][1]
         if not loop.closed:
             entry.update(status="skipped", reason="open boundary chain (inconsistent face orientation): run "
                                                   "meshing_re_orient_faces_coherently first")

@@ -10,7 +10,7 @@ from meshlab_holefill.evaluation.comparison import MeshCase, prepare_case, run_c
 from meshlab_holefill.evaluation.report.labels import short_label
 from meshlab_holefill.meshlab.mesh_files import mesh_arrays
 from .cases import SAMPLES
-from .scaling import STAGES, WHOLE_RUN_PAIR
+from .scaling import STAGES, WHOLE_RUN_PAIR, whole_run_pair
 
 
 def large_scan_case(iterations=2):
@@ -39,7 +39,7 @@ def large_scan_run(fillers, repeats=3, timeout=600.0):
     (faces, rows) : rows per filler (of ``fillers``, those of :data:`.scaling.WHOLE_RUN_PAIR`) with
     ``seconds`` and ``memory_mb`` (one per run), ``closed`` and the first run's ``stage_seconds``
     """
-    pair = [f for f in fillers if (f.filter == WHOLE_RUN_PAIR[0] and not f.params) or f.label == WHOLE_RUN_PAIR[1]]
+    pair = whole_run_pair(fillers)
     prepared = prepare_case(large_scan_case(), maxholesize=2000)
     rows = {f.label: {"filler": f.label, "seconds": [], "memory_mb": []} for f in pair}
     for _ in range(repeats):

@@ -74,10 +74,16 @@ def scaling_run(fillers, seed=0, levels=4, timeout=600.0, out=None, sizes=SCALIN
 WHOLE_RUN_PAIR = ("meshing_close_holes_min_angle_bilateral", f"{BASELINE} (all holes)")
 
 
+def whole_run_pair(fillers):
+    """The fillers of :data:`WHOLE_RUN_PAIR` among ``fillers``: the min-angle filter at its defaults, MeshLab's
+    Close Holes (all holes)."""
+    return [f for f in fillers if (f.filter == WHOLE_RUN_PAIR[0] and not f.params) or f.label == WHOLE_RUN_PAIR[1]]
+
+
 def _repeat_whole_runs(rows, prepared, fillers, repeats, timeout):
     """Run the min-angle filter and MeshLab's Close Holes (all holes) again on ``prepared``, alternating;
     each one's whole-run seconds are added to its row as ``repeat_seconds`` (the first run included)."""
-    pair = [f for f in fillers if (f.filter == WHOLE_RUN_PAIR[0] and not f.params) or f.label == WHOLE_RUN_PAIR[1]]
+    pair = whole_run_pair(fillers)
     level_rows = {r["filler"]: r for r in rows if r["faces"] == len(prepared.F0)}
     for f in pair:
         level_rows[f.label]["repeat_seconds"] = [level_rows[f.label]["run_seconds"]]

@@ -95,7 +95,7 @@ def _scan_with_debris(seed, islands):
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 10_000), islands=st.integers(0, 40))
 def test_loops_measured_and_classed_at_once_as_one_by_one(seed, islands):
-    from meshlab_holefill.core.outlines import hole_measures, holes_measures, loop_class, loop_classes
+    from meshlab_holefill.core.outlines import hole_measures, holes_measures, loop_class, loop_classes, loops_measured
 
     V, F = _scan_with_debris(seed, islands)
     loops = [loop for loop in boundary_loops(F) if loop.closed and len(loop) >= 3]
@@ -105,6 +105,11 @@ def test_loops_measured_and_classed_at_once_as_one_by_one(seed, islands):
     assert classes == [loop_class(V, F, loop, incidence) for loop in loops]
     # every growth stopped at once: the loops decided on the labelled components' areas
     assert loop_classes(V, F, loops, incidence, [m["area"] for m in together], growth_cap=0) == classes
+    # and as the pipeline asks for them, by loop index, the measurable loops only
+    every = boundary_loops(F)
+    measured = loops_measured(V, F, every, incidence)
+    assert sorted(measured) == [i for i, loop in enumerate(every) if loop.closed and len(loop) >= 3]
+    assert [measured[i] for i in sorted(measured)] == list(zip(together, classes))
     assert classes.count("hole") == 2 and classes.count("outline") == islands + 1  # the grid's rim too
     for loop, measures in zip(loops, together):
         alone = hole_measures(V, loop)
