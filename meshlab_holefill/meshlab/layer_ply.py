@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["PLY_BLOCK_ROWS", "write_layer_ply", "has_repeated_corners", "unit_range"]
+__all__ = ["PLY_BLOCK_ROWS", "SELECTED_FLAG", "layer_ply_bytes", "write_layer_ply", "has_repeated_corners",
+           "unit_range"]
 
 
 def unit_range(colors):
@@ -21,8 +22,18 @@ def unit_range(colors):
 
 PLY_BLOCK_ROWS = 1 << 18  # rows of a PLY element written at once: the file's copy of the mesh never exists whole
 
+# The selection bit of VCG's per-vertex and per-face flags: pymeshlab's PLY reader takes a ``flags``
+# property as the element's flags, so a selection written there needs no conditional selection after loading.
+SELECTED_FLAG = 0x20
 
-def _vertex_fields(vertex_attrs):
+
+def _flags_field(lines, fields, selected):
+    if selected is not None:
+        lines.append("property int flags")
+        fields.append(("flags", "<i4"))
+
+
+def _vertex_fields(vertex_attrs, selected=None):
     """(PLY header lines, numpy fields) of the vertex element.
 
     Colour and quality are always written (white and 0 when the layer has none): a mesh built
@@ -40,10 +51,11 @@ def _vertex_fields(vertex_attrs):
     if "texcoord" in vertex_attrs:
         lines += ["property float texture_u", "property float texture_v"]
         fields += [("texture_u", "<f4"), ("texture_v", "<f4")]
+    _flags_field(lines, fields, selected)
     return lines, fields
 
 
-def _face_fields(face_attrs, wedge):
+def _face_fields(face_attrs, wedge, selected=None):
     """(PLY header lines, numpy fields) of the face element (colour, quality, wedge texture coordinates when present)."""
     lines, fields = ["property list uchar int vertex_indices"], [("corners", "u1"), ("vertex_indices", "<i4", 3)]
     if "color" in face_attrs:
@@ -56,6 +68,7 @@ def _face_fields(face_attrs, wedge):
     if wedge is not None:
         lines += ["property list uchar float texcoord", "property int texnumber"]
         fields += [("texcoords", "u1"), ("texcoord", "<f4", 6), ("texnumber", "<i4")]
+    _flags_field(lines, fields, selected)
     return lines, fields
 
 
@@ -64,7 +77,12 @@ def _color_bytes(colors):
     return (unit_range(colors) * 255.0).astype(np.uint8)
 
 
-def _vertex_block(fields, V, vertex_attrs, rows):
+def _flags(block, selected, rows):
+    if selected is not None:
+        block["flags"] = np.where(selected[rows], SELECTED_FLAG, 0)
+
+
+def _vertex_block(fields, V, vertex_attrs, selected, rows):
     block = np.empty(rows.stop - rows.start, dtype=fields)
     for k, axis in enumerate("xyz"):
         block[axis] = V[rows, k]
@@ -74,10 +92,11 @@ def _vertex_block(fields, V, vertex_attrs, rows):
     block["quality"] = vertex_attrs["quality"][rows].ravel() if "quality" in vertex_attrs else 0.0
     if "texcoord" in vertex_attrs:
         block["texture_u"], block["texture_v"] = vertex_attrs["texcoord"][rows].T
+    _flags(block, selected, rows)
     return block
 
 
-def _face_block(fields, F, face_attrs, wedge, rows):
+def _face_block(fields, F, face_attrs, wedge, selected, rows):
     block = np.empty(rows.stop - rows.start, dtype=fields)
     block["corners"] = 3
     block["vertex_indices"] = F[rows]
@@ -91,27 +110,38 @@ def _face_block(fields, F, face_attrs, wedge, rows):
         block["texcoords"] = 6
         block["texcoord"] = wedge[3 * rows.start:3 * rows.stop].reshape(-1, 6)
         block["texnumber"] = 0  # the one texture index pymeshlab.Mesh gives wedge coordinates
+    _flags(block, selected, rows)
     return block
 
 
-def write_layer_ply(path, V, F, vertex_attrs, face_attrs, wedge):
+def layer_ply_bytes(n_vertices, n_faces, vertex_attrs, face_attrs, wedge, vertex_selected=None, face_selected=None):
+    """The size in bytes of the file :func:`write_layer_ply` writes, less its header (under a kilobyte)."""
+    vertex_row = np.dtype(_vertex_fields(vertex_attrs, vertex_selected)[1]).itemsize
+    face_row = np.dtype(_face_fields(face_attrs, wedge, face_selected)[1]).itemsize
+    return n_vertices * vertex_row + n_faces * face_row
+
+
+def write_layer_ply(path, V, F, vertex_attrs, face_attrs, wedge, vertex_selected=None, face_selected=None):
     """Write a mesh and its attributes as a binary PLY that ``load_new_mesh`` reads into the layer
     ``pymeshlab.Mesh(...)`` + ``add_mesh`` would build from the same arrays (see :func:`.meshset_io._new_mesh`).
 
     Doubles stay doubles (positions, quality); colours are the bytes pymeshlab.Mesh makes of
     them; texture coordinates are single precision as pymeshlab stores them. Written in blocks
-    of PLY_BLOCK_ROWS rows.
+    of PLY_BLOCK_ROWS rows. ``vertex_selected`` (n_vertices,) and ``face_selected`` (n_faces,),
+    boolean, when given, are written as the elements' flags: the loaded layer has that selection.
     """
-    vertex_lines, vertex_fields = _vertex_fields(vertex_attrs)
-    face_lines, face_fields = _face_fields(face_attrs, wedge)
+    vertex_lines, vertex_fields = _vertex_fields(vertex_attrs, vertex_selected)
+    face_lines, face_fields = _face_fields(face_attrs, wedge, face_selected)
     header = (["ply", "format binary_little_endian 1.0", f"element vertex {len(V)}"] + vertex_lines
               + [f"element face {len(F)}"] + face_lines + ["end_header"])
     with open(path, "wb") as fh:
         fh.write(("\n".join(header) + "\n").encode("ascii"))
         for start in range(0, len(V), PLY_BLOCK_ROWS):
-            _vertex_block(vertex_fields, V, vertex_attrs, slice(start, min(start + PLY_BLOCK_ROWS, len(V)))).tofile(fh)
+            rows = slice(start, min(start + PLY_BLOCK_ROWS, len(V)))
+            _vertex_block(vertex_fields, V, vertex_attrs, vertex_selected, rows).tofile(fh)
         for start in range(0, len(F), PLY_BLOCK_ROWS):
-            _face_block(face_fields, F, face_attrs, wedge, slice(start, min(start + PLY_BLOCK_ROWS, len(F)))).tofile(fh)
+            rows = slice(start, min(start + PLY_BLOCK_ROWS, len(F)))
+            _face_block(face_fields, F, face_attrs, wedge, face_selected, rows).tofile(fh)
 
 
 def has_repeated_corners(F):

@@ -10,7 +10,7 @@ import numpy as np
 import pymeshlab
 
 from ..core.attributes import MeshArrays
-from .layer_ply import has_repeated_corners, unit_range, write_layer_ply
+from .layer_ply import has_repeated_corners, layer_ply_bytes, unit_range, write_layer_ply
 from .selection import set_selection
 
 
@@ -111,7 +111,11 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
     before the old layer is touched and removed once the layer is in place; where it cannot
     be written (no temporary folder, disk full) the layer is built with ``pymeshlab.Mesh``.
     One trace of the file stays: a project saved later (``ms.save_project``) names it as the
-    layer's file, where a layer built from arrays names none.
+    layer's file, where a layer built from arrays names none. The file goes to MEMORY_FOLDER
+    (``/dev/shm``, held in memory) where that has room for it twice over, else to the temporary
+    folder: at 2.7M faces writing it takes 0.08 s there and 0.27 s on this machine's disk. The
+    layer's selections go into the file as the elements' flags (:data:`.layer_ply.SELECTED_FLAG`)
+    rather than as a conditional selection after loading (0.1 s at 2.7M faces).
 
     Memory: the file is written in blocks of rows; the old layer goes before the filled one
     is loaded; the other layers are held twice while they are copied (a MeshSet of one layer
@@ -121,8 +125,10 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
     target = arrays.mesh_id
     record = filter_record(ms)
     visible = bool(ms.is_mesh_visible(target))
-    with _scratch_folder() as tmp:
-        source = _layer_source(tmp, V2, F2, vertex_attrs, face_attrs, wedge)
+    selections = _selections(arrays, face_attrs, select_faces, len(V2), len(F2))
+    size = layer_ply_bytes(len(V2), len(F2), vertex_attrs, face_attrs, wedge, *selections)
+    with _scratch_folder(size) as tmp:
+        source = _layer_source(tmp, V2, F2, vertex_attrs, face_attrs, wedge, selections)
         ms.set_current_mesh(target)
         ms.delete_current_mesh()
         try:
@@ -131,32 +137,70 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
             _restore_filter_record(ms, record)
 
 
-@contextlib.contextmanager
-def _scratch_folder():
-    """A temporary folder for the layer file, removed afterwards; None where none can be made."""
+# A folder held in memory: the layer file never reaches a disk. Used when it has room for the file twice over.
+MEMORY_FOLDER = "/dev/shm"
+
+
+def _memory_folder_room(folder):
+    """Bytes free in ``folder`` when it is a writable folder, else 0."""
     try:
-        folder = tempfile.TemporaryDirectory(prefix="holefill-", ignore_cleanup_errors=True)
-    except OSError:  # no usable temporary folder
-        yield None
+        if not (os.path.isdir(folder) and os.access(folder, os.W_OK | os.X_OK)):
+            return 0
+        stats = os.statvfs(folder)
+    except (OSError, AttributeError):  # no statvfs off POSIX
+        return 0
+    return stats.f_bavail * stats.f_frsize
+
+
+@contextlib.contextmanager
+def _scratch_folder(size=0):
+    """A temporary folder for a layer file of ``size`` bytes, removed afterwards; None where none can be made.
+
+    In MEMORY_FOLDER when it has room for twice ``size``, else in the temporary folder.
+    """
+    places = ([MEMORY_FOLDER] if _memory_folder_room(MEMORY_FOLDER) > 2 * size else []) + [None]
+    for place in places:
+        try:
+            folder = tempfile.TemporaryDirectory(prefix="holefill-", dir=place, ignore_cleanup_errors=True)
+        except OSError:  # not usable after all: the next place, or none
+            continue
+        with folder as path:
+            yield path
         return
-    with folder as path:
-        yield path
+    yield None
 
 
-def _layer_source(folder, V, F, vertex_attrs, face_attrs, wedge):
+def _layer_source(folder, V, F, vertex_attrs, face_attrs, wedge, selections):
     """What the filled layer is built from: a PLY file in ``folder`` (its path), else the arrays themselves.
 
     The arrays when there is no folder, and when a face repeats a vertex: pymeshlab's PLY reader
     drops such faces, which ``pymeshlab.Mesh`` keeps (and the originals must stay as they are).
+    ``selections`` (:func:`_selections`) go into the file; from arrays they are set after building the layer.
     """
     if folder is None or has_repeated_corners(F):
         return (V, F, vertex_attrs, face_attrs, wedge)
     path = os.path.join(folder, "filled.ply")
     try:
-        write_layer_ply(path, V, F, vertex_attrs, face_attrs, wedge)
+        write_layer_ply(path, V, F, vertex_attrs, face_attrs, wedge, *selections)
     except OSError:  # no space, or no temporary folder: pymeshlab.Mesh builds the layer instead
         return (V, F, vertex_attrs, face_attrs, wedge)
     return path
+
+
+def _selections(arrays, face_attrs, select_faces, n_vertices, n_faces):
+    """(vertex mask, face mask) of the filled layer, each None when nothing is selected.
+
+    The old layer's selected vertices and faces, new vertices unselected, and ``select_faces`` selected.
+    """
+    vertex_mask = None
+    if arrays.vertex_selected is not None and arrays.vertex_selected.any():
+        vertex_mask = np.zeros(n_vertices, bool)
+        vertex_mask[:len(arrays.vertex_selected)] = arrays.vertex_selected
+    face_mask = face_attrs.get("selected", np.zeros((n_faces, 1))).ravel() > 0
+    if select_faces is not None and len(select_faces):
+        face_mask = face_mask.copy()
+        face_mask[np.asarray(select_faces)] = True
+    return vertex_mask, (face_mask if face_mask.any() else None)
 
 
 def layer_kept_note(ms):
@@ -360,17 +404,13 @@ def _add_layer(ms, arrays, source, face_attrs, select_faces=None):
     if not np.array_equal(arrays.transform, np.eye(4)):
         # the layer's placement in the scene (V is in the layer's own frame)
         ms.set_matrix(transformmatrix=arrays.transform, compose=False, freeze=False)
-    n_vertices, n_faces = mesh.vertex_number(), mesh.face_number()
-    if arrays.vertex_selected is not None and arrays.vertex_selected.any():
-        keep = np.zeros(n_vertices, bool)
-        keep[:len(arrays.vertex_selected)] = arrays.vertex_selected  # new vertices unselected
-        set_selection(ms, keep, "vertex")
-    selected = face_attrs.get("selected", np.zeros((n_faces, 1))).ravel() > 0
-    if select_faces is not None and len(select_faces):
-        selected = selected.copy()
-        selected[np.asarray(select_faces)] = True
-    if selected.any():
-        set_selection(ms, selected)
+    if not isinstance(source, str):  # a file carries its selections
+        vertex_mask, face_mask = _selections(arrays, face_attrs, select_faces, mesh.vertex_number(),
+                                             mesh.face_number())
+        if vertex_mask is not None:
+            set_selection(ms, vertex_mask, "vertex")
+        if face_mask is not None:
+            set_selection(ms, face_mask)
     return ms.current_mesh_id()
 
 

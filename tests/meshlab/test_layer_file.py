@@ -1,10 +1,14 @@
 """layer_ply.write_layer_ply: a filled layer loaded from its PLY file is the layer pymeshlab.Mesh + add_mesh builds."""
+import os
+
 import numpy as np
 import pymeshlab
 import pytest
 
-from meshlab_holefill.meshlab.layer_ply import write_layer_ply
+from meshlab_holefill.meshlab import meshset_io
+from meshlab_holefill.meshlab.layer_ply import layer_ply_bytes, write_layer_ply
 from meshlab_holefill.meshlab.meshset_io import _new_mesh, load_layer_file
+from meshlab_holefill.meshlab.selection import set_selection
 
 GETTERS = ("vertex_matrix", "face_matrix", "vertex_color_matrix", "face_color_matrix", "vertex_scalar_array",
            "face_scalar_array", "vertex_tex_coord_matrix", "wedge_tex_coord_matrix", "vertex_normal_matrix",
@@ -54,15 +58,22 @@ def _matrices(m):
     return out
 
 
+@pytest.mark.parametrize("selected", [False, True])
 @pytest.mark.parametrize("kind", ["plain", "vertex", "face", "texture", "all"])
-def test_the_loaded_layer_equals_the_built_one_bit_for_bit(tmp_path, kind):
+def test_the_loaded_layer_equals_the_built_one_bit_for_bit(tmp_path, kind, selected):
     V, F = _grid()
-    vertex, face, wedge = _attributes(kind, V, F, np.random.default_rng(1))
+    rng = np.random.default_rng(1)
+    vertex, face, wedge = _attributes(kind, V, F, rng)
+    masks = (rng.random(len(V)) < 0.3, rng.random(len(F)) < 0.5) if selected else (None, None)
     built = pymeshlab.MeshSet()
     built.add_mesh(_new_mesh(V, F, vertex, face, wedge), "layer")
+    if selected:  # the way a layer built from arrays gets its selections
+        set_selection(built, masks[0], "vertex")
+        set_selection(built, masks[1])
     loaded = pymeshlab.MeshSet()
     path = str(tmp_path / "filled.ply")
-    write_layer_ply(path, V, F, vertex, face, wedge)
+    write_layer_ply(path, V, F, vertex, face, wedge, *masks)
+    assert os.path.getsize(path) - layer_ply_bytes(len(V), len(F), vertex, face, wedge, *masks) < 1024
     load_layer_file(loaded, path, "layer")
     a, b = built.current_mesh(), loaded.current_mesh()
     assert b.label() == "layer" and b.vertex_number() == len(V) and b.face_number() == len(F)
@@ -81,9 +92,10 @@ def test_a_layer_file_is_written_in_blocks(tmp_path, monkeypatch):
     V, F = _grid(20)
     vertex, face, wedge = _attributes("all", V, F, np.random.default_rng(2))
     whole, blocks = str(tmp_path / "whole.ply"), str(tmp_path / "blocks.ply")
-    write_layer_ply(whole, V, F, vertex, face, wedge)
+    masks = (np.arange(len(V)) % 3 == 0, np.arange(len(F)) % 4 == 1)
+    write_layer_ply(whole, V, F, vertex, face, wedge, *masks)
     monkeypatch.setattr(layer_ply, "PLY_BLOCK_ROWS", 7)  # blocks ending inside both elements
-    write_layer_ply(blocks, V, F, vertex, face, wedge)
+    write_layer_ply(blocks, V, F, vertex, face, wedge, *masks)
     with open(whole, "rb") as a, open(blocks, "rb") as b:
         assert a.read() == b.read()
 
@@ -100,3 +112,19 @@ def test_a_face_naming_a_vertex_twice_keeps_the_layer_built_from_arrays():
     replace_current_mesh(ms, arrays, V, F, arrays.vertex_attrs, arrays.face_attrs, None)
     m = ms.current_mesh()  # PLY's reader would have dropped the last face
     assert m.face_number() == len(F) and np.array_equal(m.face_matrix(), F) and m.label() == "grid"
+
+
+def test_the_layer_file_goes_to_the_memory_folder_only_where_it_has_room(tmp_path, monkeypatch):
+    memory = tmp_path / "memory"
+    memory.mkdir()
+    monkeypatch.setattr(meshset_io, "MEMORY_FOLDER", str(memory))
+    room = meshset_io._memory_folder_room(str(memory))
+    assert room > 0 and meshset_io._memory_folder_room(str(tmp_path / "missing")) == 0
+    with meshset_io._scratch_folder(room // 4) as folder:
+        assert os.path.dirname(folder) == str(memory)
+    assert not os.listdir(memory)  # removed afterwards
+    with meshset_io._scratch_folder(room) as folder:  # not twice the room: the temporary folder
+        assert folder is not None and os.path.dirname(folder) != str(memory)
+    monkeypatch.setattr(meshset_io, "MEMORY_FOLDER", str(tmp_path / "missing"))
+    with meshset_io._scratch_folder(0) as folder:
+        assert folder is not None and os.path.dirname(folder) != str(memory)
