@@ -145,7 +145,7 @@ MEMORY_FOLDER = "/dev/shm"
 def _memory_folder_room(folder):
     """Bytes free in ``folder`` when it is a writable folder, else 0."""
     try:
-        if not (os.path.isdir(folder) and os.access(folder, os.W_OK | os.X_OK)):
+        if not (os.path.isdir(folder) and os.access(folder, os.R_OK | os.W_OK | os.X_OK)):
             return 0
         stats = os.statvfs(folder)
     except (OSError, AttributeError):  # no statvfs off POSIX
