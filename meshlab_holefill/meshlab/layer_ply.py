@@ -36,18 +36,21 @@ def _flags_field(lines, fields, selected):
 def _vertex_fields(vertex_attrs, selected=None):
     """(PLY header lines, numpy fields) of the vertex element.
 
-    Colour and quality are always written (white and 0 when the layer has none): a mesh built
-    by ``pymeshlab.Mesh`` always has them, with those values, and the loaded layer must be the same.
+    Colour and quality are written when the layer has them: the loaded layer has the per-vertex
+    attributes the old one had, as after MeshLab's own filters (a mesh built by ``pymeshlab.Mesh``
+    always has both, white and 0 where it was given none).
     """
     lines, fields = [], []
     for axis in "xyz":
         lines.append(f"property double {axis}")
         fields.append((axis, "<f8"))
-    for channel in ("red", "green", "blue", "alpha"):
-        lines.append(f"property uchar {channel}")
-        fields.append((channel, "u1"))
-    lines.append("property double quality")
-    fields.append(("quality", "<f8"))
+    if "color" in vertex_attrs:
+        for channel in ("red", "green", "blue", "alpha"):
+            lines.append(f"property uchar {channel}")
+            fields.append((channel, "u1"))
+    if "quality" in vertex_attrs:
+        lines.append("property double quality")
+        fields.append(("quality", "<f8"))
     if "texcoord" in vertex_attrs:
         lines += ["property float texture_u", "property float texture_v"]
         fields += [("texture_u", "<f4"), ("texture_v", "<f4")]
@@ -86,10 +89,12 @@ def _vertex_block(fields, V, vertex_attrs, selected, rows):
     block = np.empty(rows.stop - rows.start, dtype=fields)
     for k, axis in enumerate("xyz"):
         block[axis] = V[rows, k]
-    colors = _color_bytes(vertex_attrs["color"][rows]) if "color" in vertex_attrs else np.full((len(block), 4), 255)
-    for k, channel in enumerate(("red", "green", "blue", "alpha")):
-        block[channel] = colors[:, k]
-    block["quality"] = vertex_attrs["quality"][rows].ravel() if "quality" in vertex_attrs else 0.0
+    if "color" in vertex_attrs:
+        colors = _color_bytes(vertex_attrs["color"][rows])
+        for k, channel in enumerate(("red", "green", "blue", "alpha")):
+            block[channel] = colors[:, k]
+    if "quality" in vertex_attrs:
+        block["quality"] = vertex_attrs["quality"][rows].ravel()
     if "texcoord" in vertex_attrs:
         block["texture_u"], block["texture_v"] = vertex_attrs["texcoord"][rows].T
     _flags(block, selected, rows)
@@ -123,7 +128,8 @@ def layer_ply_bytes(n_vertices, n_faces, vertex_attrs, face_attrs, wedge, vertex
 
 def write_layer_ply(path, V, F, vertex_attrs, face_attrs, wedge, vertex_selected=None, face_selected=None):
     """Write a mesh and its attributes as a binary PLY that ``load_new_mesh`` reads into the layer
-    ``pymeshlab.Mesh(...)`` + ``add_mesh`` would build from the same arrays (see :func:`.meshset_io._new_mesh`).
+    ``pymeshlab.Mesh(...)`` + ``add_mesh`` would build from the same arrays (see :func:`.meshset_io._new_mesh`),
+    less the per-vertex colour and quality that ``pymeshlab.Mesh`` adds where ``vertex_attrs`` has none.
 
     Doubles stay doubles (positions, quality); colours are the bytes pymeshlab.Mesh makes of
     them; texture coordinates are single precision as pymeshlab stores them. Written in blocks
