@@ -19,7 +19,7 @@ bunny subdivided to about 50k, 200k, 800k and 3M faces, per-hole seconds against
 largest size the min-angle filter and MeshLab's Close Holes run ``--scaling-repeats`` times,
 alternating, and the ratio of their median whole runs is reported.
 ``--large-scan`` adds face000.ply midpoint-subdivided to 2.8M faces: the min-angle filter against MeshLab's
-Close Holes, whole run and peak memory, alternating three times.
+Close Holes, whole run and peak memory, alternating five times.
 ``--papers`` adds the "papers vs. ours" table (Brunton, Hu, Xu, Xie & Zou Table 1).
 ``--against bench_out/suite/results.csv`` sets the suite beside an earlier run (read before this run
 overwrites it): per filter and hole class, holes closed, distance and removed crease error then and now.
@@ -50,7 +50,7 @@ from benchmark_sections.cases import (CASES, CLOSED, CREASED, NATURAL, NOISE_SIG
 from benchmark_sections.compile_cost import compile_cost
 from benchmark_sections.papers import PAPERS, papers_table, xie_all_fillers
 from benchmark_sections.refusals import debris_times, refusal_times, spherical_cap
-from benchmark_sections.large_scan import large_scan_run, large_scan_summary, large_scan_table
+from benchmark_sections.large_scan import LARGE_SCAN_REPEATS, large_scan_run, large_scan_summary, large_scan_table
 from benchmark_sections.scaling import (SCALING_SIZES, SPEED_CASE_SIZES, scaling_plot, scaling_run, scaling_table,
                                         stage_table, whole_run_ratio)
 from benchmark_sections.speed import one_core_speed, speed_table, workers_speedup
@@ -181,11 +181,12 @@ def main(argv=None):
                      "reference: boundary loops under 0.5 s at 4M faces:\n\n"
                      + markdown_table(header, stages) + "\n")
     if args.large_scan:
-        faces, rows = large_scan_run(plain, repeats=3, timeout=max(args.timeout, 180.0))
+        faces, rows = large_scan_run(plain, repeats=LARGE_SCAN_REPEATS, timeout=max(args.timeout, 180.0))
         text += (f"\n**A scan at scan size** (face000.ply midpoint-subdivided twice, {faces:,} faces: its outer "
                  "rim and island outlines refused, its holes (the largest of 908 boundary edges) filled; each run a "
                  "fresh worker building the MeshSet from arrays, the whole run timed without it, peak resident memory "
-                 "above the worker's before building the MeshSet; the two fillers alternating three times):\n\n"
+                 f"above the worker's before building the MeshSet; the two fillers alternating {LARGE_SCAN_REPEATS} "
+                 "times):\n\n"
                  + markdown_table(*large_scan_table(rows)) + "\n")
         summary = large_scan_summary(faces, rows)
         if summary:
