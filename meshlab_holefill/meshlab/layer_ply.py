@@ -28,6 +28,7 @@ SELECTED_FLAG = 0x20
 
 
 def _flags_field(lines, fields, selected):
+    """Add the ``flags`` property to an element's header lines and fields, where a selection is written."""
     if selected is not None:
         lines.append("property int flags")
         fields.append(("flags", "<i4"))
@@ -81,6 +82,7 @@ def _color_bytes(colors):
 
 
 def _flags(block, selected, rows):
+    """The block's flags: SELECTED_FLAG on the selected ``rows``, 0 elsewhere."""
     if selected is not None:
         block["flags"] = np.where(selected[rows], SELECTED_FLAG, 0)
 

@@ -104,13 +104,14 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
     The filled layer is loaded from a binary PLY file written here (:func:`.layer_ply.write_layer_ply`),
     which gives the layer ``pymeshlab.Mesh(...)`` and ``add_mesh`` would give, bit for bit
     (positions, faces, colours, quality, texture coordinates, and the normals pymeshlab
-    computes), except that it has per-vertex colour and quality only where the old layer had them
-    (as after MeshLab's own filters; ``pymeshlab.Mesh`` always adds both), at about half the cost: ``pymeshlab.Mesh`` builds the mesh and then copies it
-    inside its constructor, and ``add_mesh`` copies it again, while loading builds it once,
-    in its layer. At 3.6M faces that is 1.45 s instead of 2.4 s (process time) and a peak of
-    370 MB instead of 836 MB above the arrays. The file is written
-    before the old layer is touched and removed once the layer is in place; where it cannot
-    be written (no temporary folder, disk full) the layer is built with ``pymeshlab.Mesh``.
+    computes), except that it has per-vertex colour and quality only where the old layer had
+    them (as after MeshLab's own filters; ``pymeshlab.Mesh`` always adds both), at about half
+    the cost: ``pymeshlab.Mesh`` builds the mesh and then copies it inside its constructor,
+    and ``add_mesh`` copies it again, while loading builds it once, in its layer. At 3.6M
+    faces that is 1.45 s instead of 2.4 s (process time) and a peak of 370 MB instead of
+    836 MB above the arrays. The file is written before the old layer is touched and removed
+    once the layer is in place; where it cannot be written (no temporary folder, disk full)
+    the layer is built with ``pymeshlab.Mesh``.
     One trace of the file stays: a project saved later (``ms.save_project``) names it as the
     layer's file, where a layer built from arrays names none. The file goes to MEMORY_FOLDER
     (``/dev/shm``, held in memory) where that has room for it twice over, else to the temporary
