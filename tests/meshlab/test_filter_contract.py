@@ -485,7 +485,7 @@ def test_a_filled_layer_that_cannot_be_written_to_a_file_is_built_from_arrays(bu
 def test_a_filled_layer_without_a_temporary_folder_is_built_from_arrays(bunny_scan, monkeypatch, tmp_path):
     import tempfile
 
-    from meshlab_holefill.meshlab import meshset_io
+    from meshlab_holefill.meshlab import scratch_folder
 
     m = bunny_scan.current_mesh()  # no textures: re-attaching those needs a temporary folder too
     plain = [pymeshlab.MeshSet() for _ in range(2)]
@@ -493,10 +493,10 @@ def test_a_filled_layer_without_a_temporary_folder_is_built_from_arrays(bunny_sc
         ms.add_mesh(pymeshlab.Mesh(vertex_matrix=m.vertex_matrix(), face_matrix=m.face_matrix()), "plain")
     getattr(plain[0], NAME)()
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "missing"))
-    monkeypatch.setattr(meshset_io, "MEMORY_FOLDER", str(tmp_path / "missing"))
+    monkeypatch.setattr(scratch_folder, "MEMORY_FOLDER", str(tmp_path / "missing"))
     with pytest.raises(FileNotFoundError):
         tempfile.TemporaryDirectory()
-    with meshset_io._scratch_folder() as folder:
+    with scratch_folder.scratch_folder() as folder:
         assert folder is None
     getattr(plain[1], NAME)()
     a, b = plain[0].current_mesh(), plain[1].current_mesh()

@@ -5,7 +5,6 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from meshlab_holefill.meshlab import meshset_io
 from meshlab_holefill.meshlab.layer_ply import layer_ply_bytes, write_layer_ply
 from meshlab_holefill.meshlab.meshset_io import _new_mesh, load_layer_file
 from meshlab_holefill.meshlab.selection import set_selection
@@ -119,19 +118,3 @@ def test_a_face_naming_a_vertex_twice_keeps_the_layer_built_from_arrays():
     replace_current_mesh(ms, arrays, V, F, arrays.vertex_attrs, arrays.face_attrs, None)
     m = ms.current_mesh()  # PLY's reader would have dropped the last face
     assert m.face_number() == len(F) and np.array_equal(m.face_matrix(), F) and m.label() == "grid"
-
-
-def test_the_layer_file_goes_to_the_memory_folder_only_where_it_has_room(tmp_path, monkeypatch):
-    memory = tmp_path / "memory"
-    memory.mkdir()
-    monkeypatch.setattr(meshset_io, "MEMORY_FOLDER", str(memory))
-    room = meshset_io._memory_folder_room(str(memory))
-    assert room > 0 and meshset_io._memory_folder_room(str(tmp_path / "missing")) == 0
-    with meshset_io._scratch_folder(room // 4) as folder:
-        assert os.path.dirname(folder) == str(memory)
-    assert not os.listdir(memory)  # removed afterwards
-    with meshset_io._scratch_folder(room) as folder:  # not twice the room: the temporary folder
-        assert folder is not None and os.path.dirname(folder) != str(memory)
-    monkeypatch.setattr(meshset_io, "MEMORY_FOLDER", str(tmp_path / "missing"))
-    with meshset_io._scratch_folder(0) as folder:
-        assert folder is not None and os.path.dirname(folder) != str(memory)
