@@ -34,6 +34,30 @@ def _flags_field(lines, fields, selected):
         fields.append(("flags", "<i4"))
 
 
+_CHANNELS = ("red", "green", "blue", "alpha")
+
+
+def _color_and_quality_fields(lines, fields, attrs):
+    """Add an element's colour and quality properties, those of ``attrs`` (its ``color``, ``quality``)."""
+    if "color" in attrs:
+        for channel in _CHANNELS:
+            lines.append(f"property uchar {channel}")
+            fields.append((channel, "u1"))
+    if "quality" in attrs:
+        lines.append("property double quality")
+        fields.append(("quality", "<f8"))
+
+
+def _color_and_quality(block, attrs, rows):
+    """Fill a block's colour and quality from ``attrs`` (their ``rows``)."""
+    if "color" in attrs:
+        colors = _color_bytes(attrs["color"][rows])
+        for k, channel in enumerate(_CHANNELS):
+            block[channel] = colors[:, k]
+    if "quality" in attrs:
+        block["quality"] = attrs["quality"][rows].ravel()
+
+
 def _vertex_fields(vertex_attrs, selected=None):
     """(PLY header lines, numpy fields) of the vertex element.
 
@@ -45,13 +69,7 @@ def _vertex_fields(vertex_attrs, selected=None):
     for axis in "xyz":
         lines.append(f"property double {axis}")
         fields.append((axis, "<f8"))
-    if "color" in vertex_attrs:
-        for channel in ("red", "green", "blue", "alpha"):
-            lines.append(f"property uchar {channel}")
-            fields.append((channel, "u1"))
-    if "quality" in vertex_attrs:
-        lines.append("property double quality")
-        fields.append(("quality", "<f8"))
+    _color_and_quality_fields(lines, fields, vertex_attrs)
     if "texcoord" in vertex_attrs:
         lines += ["property float texture_u", "property float texture_v"]
         fields += [("texture_u", "<f4"), ("texture_v", "<f4")]
@@ -62,13 +80,7 @@ def _vertex_fields(vertex_attrs, selected=None):
 def _face_fields(face_attrs, wedge, selected=None):
     """(PLY header lines, numpy fields) of the face element (colour, quality, wedge texture coordinates when present)."""
     lines, fields = ["property list uchar int vertex_indices"], [("corners", "u1"), ("vertex_indices", "<i4", 3)]
-    if "color" in face_attrs:
-        for channel in ("red", "green", "blue", "alpha"):
-            lines.append(f"property uchar {channel}")
-            fields.append((channel, "u1"))
-    if "quality" in face_attrs:
-        lines.append("property double quality")
-        fields.append(("quality", "<f8"))
+    _color_and_quality_fields(lines, fields, face_attrs)
     if wedge is not None:
         lines += ["property list uchar float texcoord", "property int texnumber"]
         fields += [("texcoords", "u1"), ("texcoord", "<f4", 6), ("texnumber", "<i4")]
@@ -91,12 +103,7 @@ def _vertex_block(fields, V, vertex_attrs, selected, rows):
     block = np.empty(rows.stop - rows.start, dtype=fields)
     for k, axis in enumerate("xyz"):
         block[axis] = V[rows, k]
-    if "color" in vertex_attrs:
-        colors = _color_bytes(vertex_attrs["color"][rows])
-        for k, channel in enumerate(("red", "green", "blue", "alpha")):
-            block[channel] = colors[:, k]
-    if "quality" in vertex_attrs:
-        block["quality"] = vertex_attrs["quality"][rows].ravel()
+    _color_and_quality(block, vertex_attrs, rows)
     if "texcoord" in vertex_attrs:
         block["texture_u"], block["texture_v"] = vertex_attrs["texcoord"][rows].T
     _flags(block, selected, rows)
@@ -107,12 +114,7 @@ def _face_block(fields, F, face_attrs, wedge, selected, rows):
     block = np.empty(rows.stop - rows.start, dtype=fields)
     block["corners"] = 3
     block["vertex_indices"] = F[rows]
-    if "color" in face_attrs:
-        colors = _color_bytes(face_attrs["color"][rows])
-        for k, channel in enumerate(("red", "green", "blue", "alpha")):
-            block[channel] = colors[:, k]
-    if "quality" in face_attrs:
-        block["quality"] = face_attrs["quality"][rows].ravel()
+    _color_and_quality(block, face_attrs, rows)
     if wedge is not None:
         block["texcoords"] = 6
         block["texcoord"] = wedge[3 * rows.start:3 * rows.stop].reshape(-1, 6)
