@@ -4,7 +4,7 @@
 MeshSet. The file goes to MEMORY_FOLDER (``/dev/shm``, held in memory) where that has room for it
 twice over, else to the system's temporary folder. A process killed while its file exists (by the
 system, out of memory) cannot remove it; in memory it would hold that memory until a reboot, so
-each use first removes such folders of processes that are gone.
+each use first removes such folders of processes that are gone, an hour after they last changed.
 """
 from __future__ import annotations
 
@@ -13,13 +13,18 @@ import os
 import re
 import shutil
 import tempfile
+import time
 
-__all__ = ["MEMORY_FOLDER", "memory_folder_room", "remove_stale_folders", "scratch_folder"]
+__all__ = ["MEMORY_FOLDER", "STALE_SECONDS", "memory_folder_room", "remove_stale_folders", "scratch_folder"]
 
 # A folder held in memory: the layer file never reaches a disk. Used when it has room for the file twice over.
 MEMORY_FOLDER = "/dev/shm"
 
 _PREFIX = "holefill-"
+# A folder is stale only this long after it was last changed: a live process keeps its folder for one layer's
+# loading (seconds), and a process of another PID namespace sharing the folder (containers sharing /dev/shm)
+# looks gone from here while it is not.
+STALE_SECONDS = 3600.0
 _NAME = re.compile(r"holefill-(\d+)-[A-Za-z0-9_]+")  # _PREFIX, the owner's process id, tempfile's random part
 
 
@@ -48,9 +53,11 @@ def remove_stale_folders(folder):
     """Remove the layer-file folders in ``folder`` whose process is gone.
 
     A folder's name carries the id of the process that made it (``holefill-<pid>-...``); only
-    this user's folders are looked at, and one is removed only when no process has its id.
+    this user's folders are looked at, and one is removed only when no process has its id and
+    it has not changed for STALE_SECONDS.
     """
     uid = getattr(os, "getuid", lambda: None)()
+    cutoff = time.time() - STALE_SECONDS
     try:
         entries = list(os.scandir(folder))
     except OSError:
@@ -60,7 +67,8 @@ def remove_stale_folders(folder):
         if match is None:
             continue
         try:
-            if not entry.is_dir(follow_symlinks=False) or entry.stat(follow_symlinks=False).st_uid != uid:
+            stats = entry.stat(follow_symlinks=False)
+            if not entry.is_dir(follow_symlinks=False) or stats.st_uid != uid or stats.st_mtime > cutoff:
                 continue
         except OSError:
             continue
