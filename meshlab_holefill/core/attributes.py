@@ -141,8 +141,9 @@ def extend_attributes(arrays, V2, F2, loops, new_vertex_counts):
     widths = np.cumsum([0] + [A.shape[1] for A in sources])
     new_values = np.zeros((len(V2) - n, widths[-1]))  # every interpolated column of every new vertex
     if widths[-1]:  # nothing to interpolate otherwise
+        first = np.cumsum([0] + list(new_vertex_counts))  # the new vertices come hole after hole
         for h, loop in enumerate(loops):
-            rows = np.flatnonzero(new_v_owner == h)
+            rows = slice(first[h], first[h + 1])
             columns = np.ascontiguousarray(np.concatenate([A[loop] for A in sources], axis=1), np.float64)
             new_values[rows] = idw_interpolated(arrays.V[loop], V2[n:][rows], columns)
     vertex_attrs = {name: np.concatenate([A, _new_values(name, new_values[:, widths[i]:widths[i + 1]])])

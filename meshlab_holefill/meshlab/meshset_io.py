@@ -137,7 +137,7 @@ def replace_current_mesh(ms, arrays, V2, F2, vertex_attrs, face_attrs, wedge, se
         ms.set_current_mesh(target)
         ms.delete_current_mesh()
         try:
-            return _put_layer(ms, arrays, source, face_attrs, select_faces, visible)
+            return _put_layer(ms, arrays, source, selections, visible)
         finally:
             _restore_filter_record(ms, record)
 
@@ -214,12 +214,12 @@ def _next_mesh_id(ms):
     return nxt
 
 
-def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
+def _put_layer(ms, arrays, mesh, selections, visible):
     """Add the filled ``mesh`` back at ``arrays.mesh_id`` (see :func:`replace_current_mesh`)."""
     target = arrays.mesh_id
     note = layer_kept_note(ms)
     if note:
-        new_id, error = _add_filled_layer(ms, arrays, mesh, face_attrs, select_faces, visible)
+        new_id, error = _add_filled_layer(ms, arrays, mesh, selections, visible)
         if error is not None:
             raise error
         return new_id, note
@@ -234,7 +234,7 @@ def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
             note = (f"layer {i} ('{m.label()}') has per-vertex normals that pymeshlab's copy would recompute, so "
                     "the MeshSet could not be rebuilt with the filled layer in its place: it got a new id and was "
                     "put last")
-            new_id, error = _add_filled_layer(ms, arrays, mesh, face_attrs, select_faces, visible)
+            new_id, error = _add_filled_layer(ms, arrays, mesh, selections, visible)
             if error is not None:
                 raise error
             return new_id, note
@@ -245,7 +245,7 @@ def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
     error = None
     for i in range(counter):
         if i == target:
-            _, error = _add_filled_layer(ms, arrays, mesh, face_attrs, select_faces, visible)
+            _, error = _add_filled_layer(ms, arrays, mesh, selections, visible)
         elif i in kept:
             position, label, shown, transform, textures = kept[i]
             ms.add_mesh(scratch.mesh(position), label, set_as_current=True)
@@ -267,7 +267,7 @@ def _put_layer(ms, arrays, mesh, face_attrs, select_faces, visible):
     return target, None
 
 
-def _add_filled_layer(ms, arrays, source, face_attrs, select_faces, visible):
+def _add_filled_layer(ms, arrays, source, selections, visible):
     """(layer id, None) once the filled layer is added; (id, error) when it could not be, the old layer added instead.
 
     The MeshSet is then whole again (the old layer rebuilt from ``arrays`` in the filled one's
@@ -275,14 +275,15 @@ def _add_filled_layer(ms, arrays, source, face_attrs, select_faces, visible):
     """
     layers = ms.mesh_number()
     try:
-        new_id = _add_layer(ms, arrays, source, face_attrs, select_faces)
+        new_id = _add_layer(ms, arrays, source, selections)
         error = None
     except BaseException as exc:  # e.g. out of memory while loading: the user keeps the mesh they had
         error = exc
         if ms.mesh_number() > layers:  # the layer went in and a later step failed
             ms.delete_current_mesh()
         original = (arrays.V, arrays.F, arrays.vertex_attrs, arrays.face_attrs, arrays.wedge_texcoords)
-        new_id = _add_layer(ms, arrays, original, arrays.face_attrs, None)
+        new_id = _add_layer(ms, arrays, original, _selections(arrays, arrays.face_attrs, None, len(arrays.V),
+                                                                  len(arrays.F)))
     if not visible:
         ms.set_current_mesh_visibility(False)
     return new_id, error
@@ -359,11 +360,12 @@ def load_layer_file(ms, path, label):
     ms.current_mesh().set_label(label)
 
 
-def _add_layer(ms, arrays, source, face_attrs, select_faces=None):
+def _add_layer(ms, arrays, source, selections):
     """Add a layer with the old layer's name, textures, matrix and selections, from ``source``.
 
     ``source``: a pymeshlab.Mesh, the path of a file :func:`write_layer_ply` wrote, or
-    (V, F, vertex_attrs, face_attrs, wedge) arrays for :func:`_new_mesh`.
+    (V, F, vertex_attrs, face_attrs, wedge) arrays for :func:`_new_mesh`; ``selections`` the layer's
+    (:func:`_selections`), which a file already carries.
     """
     if isinstance(source, str):
         load_layer_file(ms, source, arrays.label)
@@ -371,14 +373,12 @@ def _add_layer(ms, arrays, source, face_attrs, select_faces=None):
         mesh = source if isinstance(source, pymeshlab.Mesh) else _new_mesh(*source)
         ms.add_mesh(mesh, arrays.label, set_as_current=True)
         del mesh
-    mesh = ms.current_mesh()
     _restore_textures(ms, arrays.textures)
     if not np.array_equal(arrays.transform, np.eye(4)):
         # the layer's placement in the scene (V is in the layer's own frame)
         ms.set_matrix(transformmatrix=arrays.transform, compose=False, freeze=False)
     if not isinstance(source, str):  # a file carries its selections
-        vertex_mask, face_mask = _selections(arrays, face_attrs, select_faces, mesh.vertex_number(),
-                                             mesh.face_number())
+        vertex_mask, face_mask = selections
         if vertex_mask is not None:
             set_selection(ms, vertex_mask, "vertex")
         if face_mask is not None:
