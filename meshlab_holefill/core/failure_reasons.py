@@ -11,16 +11,17 @@ from .outlines import outline_ratio
 __all__ = ["RINGS_SEEN", "explain_folded_surroundings", "explain_outlines"]
 
 
-def explain_outlines(V, F, crossing, report, incidence):
+def explain_outlines(V, F, crossing, report, incidence, pinch=None):
     """Say so when a rejected loop is the outline of a whole island rather than a hole.
 
     Range scans hold small fragments whose only border is their outline; capping it lays a
     second sheet over the fragment, which the intersection check rightly refuses. The
     reason then tells the user it is not a hole (outlines.outline_ratio: grown from the loop,
-    where labelling the whole mesh took 0.06 s of serial time on face000.ply).
+    where labelling the whole mesh took 0.06 s of serial time on face000.ply). ``pinch`` is
+    :func:`.outlines.pinch_vertices` of the mesh's loops.
     """
     for i, loop in crossing:
-        ratio = outline_ratio(V, F, loop, incidence)
+        ratio = outline_ratio(V, F, loop, incidence, pinch)
         if ratio is not None:
             report[i]["reason"] += (f"; the loop outlines its whole component (encloses {ratio:.0%} of its area): "
                                     "an island of the mesh, not a hole")

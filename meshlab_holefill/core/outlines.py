@@ -1,9 +1,14 @@
 """What a boundary loop is and how large: an island's outline or a hole, and its measures.
 
 A loop that outlines its whole connected component (an island of a range scan, a lone
-triangle) is not a hole: capping it would fold a second sheet over the island, so the
-filters refuse it (:func:`loop_class`). The per-hole entries of a filter's result
-(:func:`hole_measures`) are here too.
+triangle, a scan's own rim) is not a hole: capping it would fold a second sheet over the
+island, so the filters refuse it (:func:`loop_class`). The per-hole entries of a filter's
+result (:func:`hole_measures`) are here too.
+
+Components are the faces joined through shared vertices, except at a vertex where two
+boundary loops meet (:func:`pinch_vertices`: two fans touching at a point, as a range scan's
+fragments touch its sheet), where only faces sharing an edge are joined: a fragment held to the
+rest by such a point is a component of its own.
 """
 from __future__ import annotations
 
@@ -13,8 +18,9 @@ from numba import njit
 
 from ..geometry.quality import cross_rows
 
-__all__ = ["loop_measures", "OUTLINE_RATIO", "outline_ratios", "vector_area", "outlines_one_face", "loop_class",
-           "loop_classes", "loops_measured", "is_outline", "outline_ratio", "hole_measures", "holes_measures"]
+__all__ = ["loop_measures", "SHEET_RATIO", "FACING_AWAY", "outline_ratios", "outline_mask", "loop_facings",
+           "outline_budgets", "pinch_vertices", "vector_area", "outlines_one_face", "loop_class", "loop_classes",
+           "loops_measured", "is_outline", "outline_ratio", "hole_measures", "holes_measures"]
 
 
 def loop_measures(points):
@@ -41,24 +47,107 @@ def loop_measures(points):
     return {"edges": len(P), "perimeter": perimeter, "diameter": diameter, "planarity": planarity}
 
 
-OUTLINE_RATIO = 0.75
+SHEET_RATIO = 0.5  # the share of its component's area an outline encloses at least
+FACING_AWAY = -0.5  # the facing (:func:`loop_facings`) of an outline at most
 
 
-def outline_ratios(V, F, loops):
+def pinch_vertices(loops, n):
+    """Vertices where two or more boundary loops meet, (n,) bool: fans that touch at a point.
+
+    Parameters
+    ----------
+    loops : sequence of BoundaryLoop or (k,) int arrays  every boundary loop of the mesh
+    n : int  number of vertices
+    """
+    count = np.zeros(n, np.int64)
+    for loop in loops:
+        np.add.at(count, np.asarray(getattr(loop, "vertices", loop), np.int64), 1)
+    return count > 1
+
+
+def loop_facings(V, F, loops):
+    """How each loop's border faces face against a patch closing it: a cosine, (len(loops),) float.
+
+    The cosine of the angle between the loop's vector area, taken in the orientation a patch
+    would have, and the sum of its border faces' area vectors (a face once per border edge it
+    holds). Round a hole the surface goes on the way the patch would (near 1). A loop with the
+    surface inside it, the rim of a sheet or of a fragment, has its border faces turned against
+    the patch (near -1): the patch would fold back over them. 0 for a loop of no vector area.
+
+    Parameters
+    ----------
+    V : (n, 3) float, F : (m, 3) int
+    loops : sequence of BoundaryLoop  closed
+
+    Returns
+    -------
+    (len(loops),) float
+    """
+    if not len(loops):
+        return np.zeros(0)
+    V = np.asarray(V, np.float64)
+    k = np.array([len(loop.vertices) for loop in loops])
+    first = np.concatenate([[0], np.cumsum(k)[:-1]])
+    owner = np.repeat(np.arange(len(loops)), k)
+    P = V[np.concatenate([np.asarray(loop.vertices, np.int64) for loop in loops])]  # (K, 3) loop after loop
+    following = np.arange(len(P)) + 1
+    following[first + k - 1] = first
+    R = P - P[first][owner]  # relative to each loop's first point, as vector_area takes them
+    area = np.add.reduceat(cross_rows(R, R[following]), first)  # (L, 3)
+    border = np.asarray(F)[np.concatenate([np.asarray(loop.border_faces, np.int64) for loop in loops])]  # (K, 3)
+    normals = cross_rows(V[border[:, 1]] - V[border[:, 0]], V[border[:, 2]] - V[border[:, 0]])
+    faces = np.add.reduceat(normals, first)
+    dot = np.einsum("ij,ij->i", area, faces)
+    norms = np.linalg.norm(area, axis=1) * np.linalg.norm(faces, axis=1)
+    return np.where(norms > 0, dot / np.where(norms > 0, norms, 1.0), 0.0)
+
+
+def outline_budgets(enclosed, facings):
+    """The largest component area each loop outlines: its vector area over :data:`SHEET_RATIO`; -1 for a hole.
+
+    A loop outlines its component when the surface lies inside it, so that a patch would fold back
+    over the faces along it (facing at most :data:`FACING_AWAY`, :func:`loop_facings`), and it
+    encloses at least half of the component's area: an island's outline encloses about all of it
+    (face000.ply's 78-125 %), the rim of a curved sheet less (a range scan's outer rim: face000.ply's
+    74 %, the virtual scans' 62-73 %). A hole has the surface going on beyond it, the way its
+    patch would face; where its border faces turn away (a hole round the end of a bone, whose
+    loop twists) it encloses a small share of its surface (at most 24 % in the measured cases).
+    Over the holes and outlines of the benchmark's cases and ``scripts/unseen_holes.py``'s groups
+    (seeds 1-6; range scans 1-4: 658 loops), every island outline faces at most -0.95 and every
+    loop facing away in the range scans encloses 60 % or more. A loop facing the patch's way is
+    a hole however much it encloses: a small fragment round a hole (a ring of seen faces round an
+    unseen patch of a range scan) holds less area than the hole it surrounds.
+
+    Parameters
+    ----------
+    enclosed : (L,) float  the loops' vector areas
+    facings : (L,) float  :func:`loop_facings`
+
+    Returns
+    -------
+    (L,) float
+    """
+    enclosed = np.asarray(enclosed, np.float64)
+    return np.where(np.asarray(facings) <= FACING_AWAY, enclosed / SHEET_RATIO, -1.0)
+
+
+def outline_ratios(V, F, loops, pinch=None):
     """How much of its connected component each loop encloses: |vector area| / component area.
 
     A loop that outlines a whole fragment (an island of a range scan, a lone triangle) encloses
     about as much area as the fragment has (ratio ~1, more for a fragment with holes of its
     own); capping it would fold a second sheet over the fragment, so it is not a hole. Real
     holes enclose a small share of their component (a hemisphere's rim, the worst case of a
-    fillable hole, gives 0.5). On face000.ply the two groups are 0.78-1.25 and <= 0.46;
-    :data:`OUTLINE_RATIO` = 0.75 separates them.
+    fillable hole, gives 0.5). On face000.ply the island outlines enclose 0.78-1.25 and the holes
+    at most 0.46; :func:`outline_budgets` says which loops are outlines. The component of a loop is
+    that of its border faces (all of them, where the loop runs through a pinch vertex between two).
 
     Parameters
     ----------
     V : (n, 3) float
     F : (m, 3) int
-    loops : sequence of BoundaryLoop or (k,) int arrays
+    loops : sequence of BoundaryLoop or (k,) int arrays (with ``border_faces``)
+    pinch : (n,) bool, optional  :func:`pinch_vertices` (default: of ``loops``)
 
     Returns
     -------
@@ -67,18 +156,40 @@ def outline_ratios(V, F, loops):
     from scipy.sparse.csgraph import connected_components
 
     from ..geometry.quality import face_areas
+    from ..geometry.topology import face_adjacency
 
-    n = len(V)
-    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]]])
-    graph = sp.coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(n, n))
+    n, m = len(V), len(F)
+    F = np.asarray(F, np.int64)
+    if pinch is None:
+        pinch = pinch_vertices(loops, n)
+    # Nodes: the vertices, then the faces; a face joins its corners but pinch vertices, and the
+    # faces it shares an edge with.
+    corners = ~pinch[F]
+    rows = np.concatenate([np.repeat(n + np.arange(m), 3)[corners.ravel()], n + face_adjacency(F).tocoo().row])
+    cols = np.concatenate([F.ravel()[corners.ravel()], n + face_adjacency(F).tocoo().col])
+    graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n + m, n + m))
     _, label = connected_components(graph, directed=False)
-    component_area = np.bincount(label[F[:, 0]], weights=face_areas(V, F), minlength=label.max() + 1)
+    face_label = label[n:]
+    component_area = np.bincount(face_label, weights=face_areas(V, F), minlength=label.max() + 1)
     ratios = np.zeros(len(loops))
     for i, loop in enumerate(loops):
         ids = np.asarray(getattr(loop, "vertices", loop), np.int64)
-        area = component_area[label[ids[0]]]
+        area = component_area[np.unique(face_label[np.asarray(loop.border_faces, np.int64)])].sum()
         ratios[i] = vector_area(V[ids]) / area if area > 0 else np.inf
     return ratios
+
+
+def outline_mask(V, F, loops, pinch=None):
+    """Which loops outline their component, (len(loops),) bool: :func:`outline_budgets` on :func:`outline_ratios`,
+    labelling the whole mesh; :func:`loop_classes` grows from the loops instead.
+
+    Parameters
+    ----------
+    V : (n, 3) float, F : (m, 3) int
+    loops : sequence of BoundaryLoop  closed, of at least 3 vertices
+    pinch : (n,) bool, optional  :func:`pinch_vertices` of every loop of the mesh (default: of ``loops``)
+    """
+    return (loop_facings(V, F, loops) <= FACING_AWAY) & (outline_ratios(V, F, loops, pinch) >= SHEET_RATIO)
 
 
 def vector_area(points):
@@ -111,18 +222,19 @@ def outlines_one_face(loop):
     return len(loop) == 3 and loop.closed and len(np.unique(loop.border_faces)) == 1
 
 
-def loop_class(V, F, loop, incidence):
-    """'outline' for a loop round one face (:func:`outlines_one_face`) or its whole component (:func:`is_outline`), else 'hole'."""
-    return "outline" if outlines_one_face(loop) or is_outline(V, F, loop, incidence) else "hole"
+def loop_class(V, F, loop, incidence, pinch=None):
+    """'outline' for a loop round one face (:func:`outlines_one_face`) or its whole component
+    (:func:`is_outline`), else 'hole'."""
+    return "outline" if outlines_one_face(loop) or is_outline(V, F, loop, incidence, pinch) else "hole"
 
 
 # A growth of :func:`loop_classes` that has seen more than this share of the mesh's faces stops: the
-# mesh's components are then labelled at once (:func:`_component_areas`, a union-find over the faces'
-# vertices: about 14 ns a face, where the growth's reads of the incidence rows take about 190).
+# mesh's components are then labelled at once (:func:`_component_areas`, a union-find over the faces and
+# their corners), where the growth's reads of the incidence rows cost about ten times as much a face.
 GROWTH_SHARE = 1 / 64
 
 
-def loop_classes(V, F, loops, incidence, enclosed=None, growth_cap=None):
+def loop_classes(V, F, loops, incidence, enclosed=None, growth_cap=None, pinch=None):
     """:func:`loop_class` of many loops at once: the components grown in one compiled call.
 
     A loop that outlines a large component (a range scan's outer rim) would have its growth read
@@ -130,8 +242,8 @@ def loop_classes(V, F, loops, incidence, enclosed=None, growth_cap=None):
     loop is decided on the area of its component in a labelling of the whole mesh. The answer is
     the growth's, but for the order in which the component's face areas are added up (a loop
     whose component area equals its budget to the last bits could go either way). On
-    face000.ply (166k faces, 45 loops, its outer rim among them) 24 -> 5 ms; the same scan
-    midpoint-subdivided to 2.66M faces 517 -> 76 ms.
+    face000.ply (166k faces, 45 loops, its outer rim among them) 31 -> 8 ms; the same scan
+    midpoint-subdivided to 2.66M faces 625 -> 105 ms.
 
     Parameters
     ----------
@@ -140,6 +252,7 @@ def loop_classes(V, F, loops, incidence, enclosed=None, growth_cap=None):
     incidence : (n, m) sparse  :func:`.holes.vertex_face_incidence` of (F, n)
     enclosed : (len(loops),) float, optional  their vector areas (:func:`hole_measures`' ``area``)
     growth_cap : int, optional  faces a growth may see (default :data:`GROWTH_SHARE` of the mesh's)
+    pinch : (n,) bool, optional  :func:`pinch_vertices` of every loop of the mesh (default: of ``loops``)
 
     Returns
     -------
@@ -153,16 +266,18 @@ def loop_classes(V, F, loops, incidence, enclosed=None, growth_cap=None):
         growth_cap = int(GROWTH_SHARE * len(F))
     V = np.asarray(V, np.float64)
     F = np.asarray(F)
-    budgets = np.asarray(enclosed, np.float64) / OUTLINE_RATIO
+    if pinch is None:
+        pinch = pinch_vertices(loops, len(V))
+    budgets = outline_budgets(enclosed, loop_facings(V, F, loops))
     starts = [np.unique(np.asarray(loop.border_faces, np.int64)) for loop in loops]
     offsets = np.cumsum([0] + [len(start) for start in starts])
-    areas = _grown_areas(incidence.indptr, incidence.indices, V, F,
-                         np.concatenate(starts) if starts else np.zeros(0, np.int64), offsets, budgets, growth_cap)
+    every_start = np.concatenate(starts) if starts else np.zeros(0, np.int64)
+    areas = _grown_areas(incidence.indptr, incidence.indices, V, F, pinch, every_start, offsets, budgets, growth_cap)
     undecided = np.flatnonzero(areas == _UNDECIDED)
     if len(undecided):
-        root, component_area = _component_areas(V, F)
+        roots, component_area = _component_areas(incidence.indptr, incidence.indices, V, F, pinch, every_start)
         for i in undecided:
-            area = component_area[root[F[starts[i][0], 0]]]
+            area = component_area[np.unique(roots[offsets[i]:offsets[i + 1]])].sum()
             areas[i] = area if area <= budgets[i] else -1.0
     return ["outline" if outlines_one_face(loop) or area >= 0 else "hole" for loop, area in zip(loops, areas)]
 
@@ -174,7 +289,7 @@ def loops_measured(V, F, loops, incidence):
     Parameters
     ----------
     V : (n, 3) float, F : (m, 3) int
-    loops : sequence of BoundaryLoop
+    loops : sequence of BoundaryLoop  every boundary loop of the mesh
     incidence : (n, m) sparse  :func:`.holes.vertex_face_incidence` of (F, n)
 
     Returns
@@ -183,21 +298,21 @@ def loops_measured(V, F, loops, incidence):
     """
     measured = [i for i, loop in enumerate(loops) if loop.closed and len(loop) >= 3]
     measures = holes_measures(V, [loops[i] for i in measured])
-    classes = loop_classes(V, F, [loops[i] for i in measured], incidence, [m["area"] for m in measures])
+    classes = loop_classes(V, F, [loops[i] for i in measured], incidence, [m["area"] for m in measures],
+                           pinch=pinch_vertices(loops, len(V)))
     return dict(zip(measured, zip(measures, classes)))
 
 
-def is_outline(V, F, loop, incidence):
-    """Whether a loop outlines its whole connected component: :func:`outline_ratios` >= OUTLINE_RATIO.
+def is_outline(V, F, loop, incidence, pinch=None):
+    """Whether a loop outlines its whole connected component (:func:`outline_budgets` on :func:`outline_ratios`).
 
     The same answer as the ratio, without labelling the whole mesh: the component is grown
-    from the loop's border faces one ring of faces at a time, through shared vertices (the
-    same connectivity as :func:`outline_ratios`), until either it is exhausted (then the
-    ratio is exact) or its area exceeds the loop's vector area / OUTLINE_RATIO (then the loop
-    is a hole). The work is bounded by about 1.3 times the hole's own area of surrounding
-    faces, so a hole in a 4M-face mesh costs what it costs in a small one. The growth and
-    its areas run in one compiled call (:func:`_grown_area`): on face000.ply (45 loops) the
-    per-ring gathers and area arrays took 0.12 s of the filter's serial time.
+    from the loop's border faces one ring of faces at a time (the connectivity of
+    :func:`outline_ratios`), until either it is exhausted (then the ratio is exact) or its area
+    exceeds the loop's budget (then the loop is a hole). The work is bounded by about 1.3 times
+    the hole's own area of surrounding faces, so a hole in a 4M-face mesh costs what it costs in
+    a small one. The growth and its areas run in one compiled call (:func:`_grown_area`): on
+    face000.ply (45 loops) the per-ring gathers and area arrays took 0.12 s of the filter's serial time.
 
     Parameters
     ----------
@@ -206,20 +321,22 @@ def is_outline(V, F, loop, incidence):
     loop : BoundaryLoop
     incidence : (n, m) sparse
         :func:`.holes.vertex_face_incidence` of (F, n).
+    pinch : (n,) bool, optional
+        :func:`pinch_vertices` of every loop of the mesh (default: the loop's own vertices meet no other loop).
 
     Returns
     -------
     bool
     """
-    return outline_ratio(V, F, loop, incidence) is not None
+    return outline_ratio(V, F, loop, incidence, pinch) is not None
 
 
-def outline_ratio(V, F, loop, incidence):
+def outline_ratio(V, F, loop, incidence, pinch=None):
     """The :func:`outline_ratios` entry of a loop that outlines its component, else None.
 
     Grown as in :func:`is_outline`, so it costs what the hole's surroundings cost, not the
     mesh: the ratio of a loop whose component stays within the budget is exact (the whole
-    component's area), and a loop whose growth exceeds it is below OUTLINE_RATIO.
+    component's area), and a loop whose growth exceeds it is a hole.
 
     Parameters
     ----------
@@ -228,17 +345,21 @@ def outline_ratio(V, F, loop, incidence):
     loop : BoundaryLoop
     incidence : (n, m) sparse
         :func:`.holes.vertex_face_incidence` of (F, n).
+    pinch : (n,) bool, optional  as for :func:`is_outline`
 
     Returns
     -------
     float or None
         |vector area| / component area (inf for a component of zero area), or None for a hole.
     """
+    V = np.asarray(V, np.float64)
     ids = np.asarray(loop.vertices, np.int64)
     enclosed = vector_area(V[ids])
+    if pinch is None:
+        pinch = np.zeros(len(V), np.bool_)
+    budget = outline_budgets([enclosed], loop_facings(V, F, [loop]))[0]
     start = np.unique(np.asarray(loop.border_faces, np.int64))
-    area = _grown_area(incidence.indptr, incidence.indices, np.asarray(V, np.float64), np.asarray(F), start,
-                       enclosed / OUTLINE_RATIO)
+    area = _grown_area(incidence.indptr, incidence.indices, V, np.asarray(F), pinch, start, budget)
     if area < 0:
         return None
     return enclosed / area if area > 0 else np.inf
@@ -255,20 +376,32 @@ def _triangle_area(V, F, f):
 
 
 @njit(cache=True)
-def _grown_area(indptr, indices, V, F, start, budget):
+def _share_an_edge(F, f, g):
+    """Whether faces f and g (distinct, sharing a corner) share a second corner: an edge."""
+    shared = 0
+    for i in range(3):
+        for j in range(3):
+            if F[f, i] == F[g, j]:
+                shared += 1
+    return shared >= 2
+
+
+@njit(cache=True)
+def _grown_area(indptr, indices, V, F, pinch, start, budget):
     """Area of the component of faces ``start`` (sorted, unique), or -1 once it exceeds ``budget``.
 
     The growth of :func:`is_outline` in one call: the same rings as gathering the incidence rows of a ring's vertices
-    (the unseen faces sharing a vertex with the last ring), their areas added ring by ring,
+    (the unseen faces sharing a vertex with the last ring; at a ``pinch`` vertex, sharing an edge
+    with the ring face that reached it), their areas added ring by ring,
     stopping as soon as the area is over the budget. Each vertex's incidence row is read
     once, when a ring first reaches it (a vertex reached before had all its faces seen
-    then): on face000.ply's 166k-face outer outline about a sixth of the reads of gathering
-    every ring face's three rows. Only the ``seen`` flags (one byte per face and vertex)
-    are sized by the mesh.
+    then), but a pinch vertex's, read by each ring face at it: on face000.ply's 166k-face outer
+    outline about a sixth of the reads of gathering every ring face's three rows. Only the ``seen``
+    flags (one byte per face and vertex) are sized by the mesh.
     """
     seen = np.zeros(F.shape[0], np.bool_)
     reached = np.zeros(V.shape[0], np.bool_)
-    return _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, np.empty(16, np.int64),
+    return _grow_tracked(indptr, indices, V, F, pinch, start, budget, seen, reached, np.empty(16, np.int64),
                          np.empty(0, np.int64), False, F.shape[0])[0]
 
 
@@ -276,7 +409,7 @@ _UNDECIDED = -2.0  # a growth of _grown_areas stopped at its cap
 
 
 @njit(cache=True)
-def _grown_areas(indptr, indices, V, F, starts, offsets, budgets, cap):
+def _grown_areas(indptr, indices, V, F, pinch, starts, offsets, budgets, cap):
     """:func:`_grown_area` of many loops (loop i's faces ``starts[offsets[i]:offsets[i + 1]]``), (L,) float64;
     ``_UNDECIDED`` for a loop whose growth saw more than ``cap`` faces.
 
@@ -290,8 +423,9 @@ def _grown_areas(indptr, indices, V, F, starts, offsets, budgets, cap):
     areas = np.empty(len(offsets) - 1)
     touched = np.empty(16, np.int64)  # the faces seen by one growth, to clear
     for i in range(len(offsets) - 1):
-        areas[i], grown, touched, count = _grow_tracked(indptr, indices, V, F, starts[offsets[i]:offsets[i + 1]],
-                                                         budgets[i], seen, reached, grown, touched, True, cap)
+        areas[i], grown, touched, count = _grow_tracked(indptr, indices, V, F, pinch,
+                                                         starts[offsets[i]:offsets[i + 1]], budgets[i], seen,
+                                                         reached, grown, touched, True, cap)
         for t in range(count):
             f = touched[t]
             seen[f] = False
@@ -301,7 +435,7 @@ def _grown_areas(indptr, indices, V, F, starts, offsets, budgets, cap):
 
 
 @njit(cache=True)
-def _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, touched, track, cap):
+def _grow_tracked(indptr, indices, V, F, pinch, start, budget, seen, reached, grown, touched, track, cap):
     """The growth of :func:`_grown_area`; with ``track`` the faces it sees are listed in the ``touched`` buffer.
 
     Every vertex it reaches belongs to a face it has seen (it reads only seen faces' corners),
@@ -329,10 +463,11 @@ def _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, to
                 v = F[f, c]
                 if reached[v]:
                     continue
-                reached[v] = True
+                if not pinch[v]:
+                    reached[v] = True
                 for p in range(indptr[v], indptr[v + 1]):
                     g = indices[p]
-                    if seen[g]:
+                    if seen[g] or (pinch[v] and not _share_an_edge(F, f, g)):
                         continue
                     seen[g] = True
                     if track:
@@ -349,16 +484,24 @@ def _grow_tracked(indptr, indices, V, F, start, budget, seen, reached, grown, to
 
 
 @njit(cache=True)
-def _component_areas(V, F):
-    """Each vertex's component root (n,) int64 and each root's component area (n,) float64 (0 elsewhere).
+def _component_areas(indptr, indices, V, F, pinch, faces):
+    """The component of each of ``faces`` (its root, (len(faces),) int64) and each root's area (float64).
 
-    Components of faces joined by shared vertices, the growth's connectivity: a union-find over
-    the faces' corners (the root of a set its smallest vertex), one pass over F, then each
-    face's area added to its first corner's root.
+    Components as the growth joins faces: a union-find over the vertices, each face joining its
+    corners (the face's set is its first corner's; the root of a set its smallest vertex); a face
+    at a pinch vertex is a node of its own (n + its rank among those faces), joined to its other
+    corners and, at the pinch vertex, to the faces there it shares an edge with. Each face's area
+    is added to its root.
     """
-    n = V.shape[0]
-    parent = np.arange(n)
-    for f in range(F.shape[0]):
+    n, m = V.shape[0], F.shape[0]
+    at_pinch = np.zeros(m, np.bool_)
+    for f in range(m):
+        at_pinch[f] = pinch[F[f, 0]] or pinch[F[f, 1]] or pinch[F[f, 2]]
+    held = np.flatnonzero(at_pinch)  # sorted: a face's node is n + its position here
+    parent = np.arange(n + len(held))
+    for f in range(m):
+        if at_pinch[f]:
+            continue
         a = _root(parent, F[f, 0])
         for c in range(1, 3):
             b = _root(parent, F[f, c])
@@ -367,13 +510,40 @@ def _component_areas(V, F):
             elif b < a:
                 parent[a] = b
                 a = b
-    root = np.empty(n, np.int64)
-    for v in range(n):
-        root[v] = _root(parent, v)
-    area = np.zeros(n)
-    for f in range(F.shape[0]):
-        area[root[F[f, 0]]] += _triangle_area(V, F, f)
-    return root, area
+    for i in range(len(held)):
+        f = held[i]
+        for k in range(3):
+            v = F[f, k]
+            if not pinch[v]:
+                _join(parent, n + i, v)
+                continue
+            for p in range(indptr[v], indptr[v + 1]):
+                g = indices[p]
+                if g > f and _share_an_edge(F, f, g):
+                    _join(parent, n + i, _node(F, held, at_pinch, n, g))
+    area = np.zeros(n + len(held))
+    for f in range(m):
+        area[_root(parent, _node(F, held, at_pinch, n, f))] += _triangle_area(V, F, f)
+    roots = np.empty(len(faces), np.int64)
+    for i in range(len(faces)):
+        roots[i] = _root(parent, _node(F, held, at_pinch, n, faces[i]))
+    return roots, area
+
+
+@njit(cache=True)
+def _node(F, held, at_pinch, n, f):
+    """Face f's node in :func:`_component_areas`' union-find: its first corner, or its own past the vertices."""
+    return n + np.searchsorted(held, f) if at_pinch[f] else F[f, 0]
+
+
+@njit(cache=True)
+def _join(parent, a, b):
+    """Join the sets of a and b (the smaller root becomes the root of both)."""
+    a, b = _root(parent, a), _root(parent, b)
+    if a < b:
+        parent[b] = a
+    elif b < a:
+        parent[a] = b
 
 
 @njit(cache=True)

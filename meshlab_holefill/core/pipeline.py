@@ -25,7 +25,7 @@ from .parallel import FILL_ERRORS, fill_one, reason_of, run_jobs, worker_count
 from .kernel_cache import refresh_kernel_cache_once
 from .holes import boundary_loops, edge_summary, hole_context, vertex_face_incidence
 from .failure_reasons import explain_folded_surroundings, explain_outlines
-from .outlines import loops_measured, outlines_one_face
+from .outlines import loops_measured, outlines_one_face, pinch_vertices
 from .parameters import ParamSpec, Percentage
 from .patch import load_validation_kernel, merge_patches
 
@@ -56,8 +56,8 @@ COMMON_PARAMS = [
               mlx_name="SelfIntersection", display="Prevent creation of selfIntersecting faces"),
     ParamSpec("filloutlines", "bool", False,
               "Also cap loops that outline a whole connected component (an island of a range scan, a loose "
-              "fragment): such a loop is not a hole, and its cap would lie over the fragment, so by default it "
-              "is skipped.",
+              "fragment, a fragment held by one vertex, the rim of a scan whose surface lies inside it): such a "
+              "loop is not a hole, and its cap would lie over the fragment, so by default it is skipped.",
               mlx_name="FillOutlines", display="Fill island outlines"),
     ParamSpec("workers", "int", 0,
               "Processes filling holes at once: 0, one per CPU when the holes are worth it (a run of a few "
@@ -425,7 +425,7 @@ def _closed_patches(V, F, filled, checked, loops, report, incidence, selfinterse
         patches.append(patch)
         closed_ids.append(i)
     if crossing:
-        explain_outlines(V, F, crossing, report, incidence)
+        explain_outlines(V, F, crossing, report, incidence, pinch_vertices(loops, len(V)))
     V2, F2 = merge_patches(V, F, done_loops, patches)
     # Patches checked one by one can still meet one another: withdraw the later ones.
     checks = ([crossing_patches] if selfintersection else []) + [clashing_patches]

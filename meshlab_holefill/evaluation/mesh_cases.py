@@ -13,7 +13,7 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from ..core.holes import boundary_halfedges, boundary_loops
-from ..core.outlines import OUTLINE_RATIO, outline_ratios
+from ..core.outlines import outline_mask, pinch_vertices
 from ..geometry.topology import face_adjacency
 from ..meshlab.mesh_files import is_mesh, load_mesh, mesh_arrays
 from .cut_holes import cut_holes, hole_plan
@@ -229,7 +229,9 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
         V0, F0 = V, F
         loops = boundary_loops(F0)
         he, hf = boundary_halfedges(F0)
-        outline = outline_ratios(V0, F0, loops) >= OUTLINE_RATIO
+        measurable = [i for i, lp in enumerate(loops) if lp.closed and len(lp) >= 3]
+        outline = dict(zip(measurable, outline_mask(V0, F0, [loops[i] for i in measurable],
+                                                     pinch_vertices(loops, len(V0)))))
         out = []
         for i, lp in enumerate(loops):
             if not lp.closed or lp.pinched or len(lp) < 3 or len(lp) > maxholesize:
@@ -237,7 +239,7 @@ def prepare_case(case, holes=4, sizes=("small", "medium", "large"), seed=0, maxh
                        else f"{len(lp)} edges > maxholesize {maxholesize}" if len(lp) > maxholesize else "degenerate")
                 notes.append(f"boundary loop {i} ({len(lp)} edges) not evaluated: {why}")
                 continue
-            # An island's outline is listed apart: capping it folds over the island (outlines.outline_ratios).
+            # An island's outline is listed apart: capping it folds over the island (outlines.outline_mask).
             kind_of = "outline" if outline[i] else "natural"
             out.append(Hole(i, kind_of, kind_of, len(lp), lp.vertices, i,
                             _border(F0, he, hf, lp.vertices), None, corner_quality_bound(V0, F0, lp.vertices)))

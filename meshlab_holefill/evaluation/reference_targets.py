@@ -7,7 +7,7 @@ claim about a filter reads off measured numbers.
 The reference figures (the same for the four paper filters unless ``REFERENCES`` says otherwise):
 
 - every cut hole closed; every natural hole closed except island outlines
-  (:func:`core.outlines.outline_ratios`: capping them folds over the island);
+  (:func:`core.outlines.outline_mask`: capping them folds over the island);
 - 0 original elements changed (Xu et al.'s split border faces are allowed and counted apart);
 - 0 new faces intersecting the mesh;
 - new-triangle quality mean >= 0.85 (per hole, averaged) and min >= 0.3, where the min is

@@ -21,11 +21,11 @@ def test_loop_measures_of_a_planar_circle():
 
 
 def _is_outline_ring_by_ring(V, F, loop, incidence):
-    """The outline test grown one ring of faces at a time by sparse row gathers (the reference)."""
-    from meshlab_holefill.core.outlines import OUTLINE_RATIO, vector_area
+    """The outline test grown one ring of faces at a time by sparse row gathers (the reference; no pinch vertex)."""
+    from meshlab_holefill.core.outlines import loop_facings, outline_budgets, vector_area
     from meshlab_holefill.geometry.quality import face_areas
 
-    budget = vector_area(V[np.asarray(loop.vertices)]) / OUTLINE_RATIO
+    budget = outline_budgets([vector_area(V[np.asarray(loop.vertices)])], loop_facings(V, F, [loop]))[0]
     frontier = np.unique(np.asarray(loop.border_faces, np.int64))
     seen = np.zeros(len(F), bool)
     seen[frontier] = True
@@ -52,15 +52,14 @@ def _islands_and_holes():
 
 
 def test_compiled_outline_test_matches_the_ratio_and_the_ring_by_ring_growth():
-    from meshlab_holefill.core.outlines import OUTLINE_RATIO, is_outline, outline_ratios
+    from meshlab_holefill.core.outlines import is_outline, outline_mask
 
     V, F = _islands_and_holes()
     loops = boundary_loops(F)
     incidence = vertex_face_incidence(F, len(V))
-    ratios = outline_ratios(V, F, loops)
     compiled = [is_outline(V, F, loop, incidence) for loop in loops]
     ring_by_ring = [_is_outline_ring_by_ring(V, F, loop, incidence) for loop in loops]
-    assert compiled == ring_by_ring == (ratios >= OUTLINE_RATIO).tolist()
+    assert compiled == ring_by_ring == outline_mask(V, F, loops).tolist()
     assert sum(compiled) == 3  # the grid's outer rim and both islands; the two holes are not outlines
 
 
@@ -73,8 +72,10 @@ def test_grown_area_is_the_component_area_within_the_budget():
     island = np.arange(len(F) - 9, len(F) - 1)  # the square island's eight faces
     area = face_areas(V, F[island]).sum()
     start = island[:1]
-    assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 2 * area) == pytest.approx(area, rel=1e-12)
-    assert _grown_area(incidence.indptr, incidence.indices, V, F, start, 0.5 * area) == -1.0
+    pinch = np.zeros(len(V), bool)
+    assert _grown_area(incidence.indptr, incidence.indices, V, F, pinch, start, 2 * area) == pytest.approx(area,
+                                                                                                          rel=1e-12)
+    assert _grown_area(incidence.indptr, incidence.indices, V, F, pinch, start, 0.5 * area) == -1.0
 
 
 def _scan_with_debris(seed, islands):
@@ -137,7 +138,7 @@ def test_vector_area_has_np_cross_bits_and_is_exact_for_a_planar_square():
 def test_far_from_the_origin_holes_keep_their_area_and_are_not_taken_for_outlines(offset, scale):
     # Georeferenced scans: a 1-unit model 1e8 from the origin had every hole taken for an
     # island outline (the vector area of raw coordinates cancelled to noise).
-    from meshlab_holefill.core.outlines import OUTLINE_RATIO, is_outline, outline_ratios, vector_area
+    from meshlab_holefill.core.outlines import is_outline, outline_mask, vector_area
 
     V, F = _islands_and_holes()
     loops = boundary_loops(F)
@@ -146,7 +147,7 @@ def test_far_from_the_origin_holes_keep_their_area_and_are_not_taken_for_outline
     areas = [vector_area(V[loop.vertices]) for loop in loops]
     W = V * scale + offset
     assert [is_outline(W, F, loop, incidence) for loop in loops] == expected
-    assert (outline_ratios(W, F, loops) >= OUTLINE_RATIO).tolist() == expected
+    assert outline_mask(W, F, loops).tolist() == expected
     rounding = np.spacing(abs(offset)) / scale  # the coordinates themselves are rounded by this much (per unit)
     for loop, area in zip(loops, areas):
         assert vector_area(W[loop.vertices]) == pytest.approx(area * scale**2, rel=1e-9 + 100 * rounding)
@@ -168,26 +169,35 @@ def test_a_three_edge_loop_outlines_one_face_only_when_one_face_holds_all_its_ed
 
 
 @settings(max_examples=20, deadline=None)
-@given(seed=st.integers(0, 10_000), islands=st.integers(0, 12))
-def test_component_areas_are_those_of_the_vertex_connected_components(seed, islands):
+@given(seed=st.integers(0, 10_000), islands=st.integers(0, 12), held=st.booleans())
+def test_component_areas_are_those_of_the_components_the_growth_joins(seed, islands, held):
     from scipy.sparse.csgraph import connected_components
 
-    from meshlab_holefill.core.outlines import _component_areas
+    from meshlab_holefill.core.outlines import _component_areas, pinch_vertices
     from meshlab_holefill.geometry.quality import face_areas
+    from meshlab_holefill.geometry.topology import face_adjacency
 
     V, F = _scan_with_debris(seed, islands)
-    V = np.concatenate([V, [[9.0, 9.0, 9.0]]])  # a vertex of no face: its own component, of no area
-    root, area = _component_areas(V, F)
-    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]]])
-    count, label = connected_components(sp.coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(len(V),) * 2),
-                                        directed=False)
-    # the same partition, each set's root its smallest vertex
-    assert len(np.unique(root)) == count
-    assert np.array_equal(label[root], label) and np.all(root <= np.arange(len(V)))
-    assert np.array_equal(root[np.unique(root)], np.unique(root))
-    expected = np.bincount(label[F[:, 0]], weights=face_areas(V, F), minlength=count)
-    np.testing.assert_allclose(area[np.unique(root)], expected[label[np.unique(root)]], rtol=1e-12)
-    assert area[len(V) - 1] == 0.0 and root[len(V) - 1] == len(V) - 1
+    if held:  # and a fragment held to the grid's rim by one vertex
+        n = len(V)
+        V = np.concatenate([V, [[1.1, -0.05, 0.0], [1.15, 0.05, 0.0], [1.05, 0.1, 0.0]]])
+        F = np.concatenate([F, [[13, n, n + 1], [13, n + 1, n + 2]]])
+    V = np.concatenate([V, [[9.0, 9.0, 9.0]]])  # a vertex of no face
+    pinch = pinch_vertices(boundary_loops(F), len(V))
+    assert pinch.any() == held
+    incidence = vertex_face_incidence(F, len(V))
+    roots, area = _component_areas(incidence.indptr, incidence.indices, V, F, pinch, np.arange(len(F)))
+    # the reference: faces sharing an edge, or a vertex that is not a pinch vertex
+    shared = sp.coo_matrix((np.ones(3 * len(F)), (np.repeat(np.arange(len(F)), 3), F.ravel())),
+                           shape=(len(F), len(V))).tocsc()[:, ~pinch]
+    joined = (shared @ shared.T + face_adjacency(F)) > 0
+    count, label = connected_components(joined, directed=False)
+    assert len(np.unique(roots)) == count
+    for r in np.unique(roots):
+        members = roots == r
+        assert len(np.unique(label[members])) == 1
+        assert area[r] == pytest.approx(face_areas(V, F[members]).sum(), rel=1e-12)
+    assert np.sum(area) == pytest.approx(face_areas(V, F).sum(), rel=1e-12)
 
 
 @settings(max_examples=60, deadline=None)
@@ -207,3 +217,98 @@ def test_diameter_of_more_than_2000_points_is_their_box_diagonal():
     t = np.linspace(0.0, 2.0 * np.pi, 2001, endpoint=False)
     P = np.stack([np.cos(t), np.sin(t), np.zeros_like(t)], axis=1)
     assert _diameter(P) == np.linalg.norm(P.max(axis=0) - P.min(axis=0)) and _diameter(P[:2000]) <= 2.0
+
+
+def _sheet_with_fragment():
+    """A grid with a hole, and a small square fragment held to the grid's rim by one shared vertex."""
+    V, F = grid(10, 10)
+    _, F, _ = cut_disks(V, F, [(0.5, 0.5, 0)], 0.2)
+    corner = 9  # (1, 0, 0): a vertex of the grid's rim
+    square = np.array([[1.0, 0.0, 0.0], [1.1, -0.05, 0.0], [1.15, 0.05, 0.0], [1.05, 0.1, 0.0]])
+    V2 = np.concatenate([V, square[1:]])
+    n = len(V)
+    F2 = np.concatenate([F, np.array([[corner, n, n + 1], [corner, n + 1, n + 2]])])
+    return V2, F2
+
+
+def test_a_fragment_held_by_one_vertex_is_an_outline_of_its_own():
+    from meshlab_holefill.core.outlines import loops_measured, outline_mask, pinch_vertices
+
+    V, F = _sheet_with_fragment()
+    loops = boundary_loops(F)
+    fragment = next(i for i, loop in enumerate(loops) if len(loop) == 4)
+    incidence = vertex_face_incidence(F, len(V))
+    classes = {i: c for i, (_, c) in loops_measured(V, F, loops, incidence).items()}
+    assert classes[fragment] == "outline"
+    assert [c for i, c in sorted(classes.items()) if i != fragment].count("hole") == 1  # the grid's hole
+    assert outline_mask(V, F, loops, pinch_vertices(loops, len(V)))[fragment]
+    # joined through the shared vertex, the fragment was a sliver of the sheet's component
+    assert not outline_mask(V, F, loops, np.zeros(len(V), bool))[fragment]
+
+
+def test_no_filter_caps_a_fragment_held_by_one_vertex():
+    from meshlab_holefill import fill_holes
+
+    V, F = _sheet_with_fragment()
+    V2, F2, result = fill_holes(V, F, "min_angle_bilateral", workers=1)
+    fragment = next(h for h in result["holes"] if h["boundary_edges"] == 4)
+    assert fragment["status"] == "skipped" and "island outline" in fragment["reason"]
+    assert result["closed_holes"] == 1
+    np.testing.assert_array_equal(F2[:len(F)], F)
+
+
+def _sphere_parts(angle):
+    """A unit sphere's faces split by the cap of angular radius ``angle`` round +z: (V, cap faces, the rest)."""
+    from meshlab_holefill.evaluation.analytic import analytic_mesh
+
+    V, F = analytic_mesh("sphere")
+    in_cap = V[F].mean(axis=1)[:, 2] / np.linalg.norm(V[F].mean(axis=1), axis=1) > np.cos(angle)
+    return V, F[in_cap], F[~in_cap]
+
+
+@settings(max_examples=8, deadline=None)
+@given(degrees=st.floats(15.0, 80.0))
+def test_a_cap_less_than_a_hemisphere_is_a_sheet_and_the_sphere_without_it_has_a_hole(degrees):
+    from meshlab_holefill.core.outlines import loop_classes, loop_facings, outline_ratios
+
+    V, cap, rest = _sphere_parts(np.radians(degrees))
+    for F, expected in ((cap, "outline"), (rest, "hole")):
+        used = np.unique(F)
+        renumber = np.full(len(V), -1)
+        renumber[used] = np.arange(len(used))
+        W, G = V[used], renumber[F]
+        loops = boundary_loops(G)
+        assert len(loops) == 1
+        incidence = vertex_face_incidence(G, len(W))
+        assert loop_classes(W, G, loops, incidence) == [expected]
+        # the rim of a cap wider than 41 degrees encloses less than 0.75 of its area: its faces face away
+        facing, ratio = loop_facings(W, G, loops)[0], outline_ratios(W, G, loops)[0]
+        assert (facing < -0.9 and ratio > 0.5) if expected == "outline" else (facing > 0.9 and ratio < 0.5)
+
+
+def test_a_hole_in_a_fragment_held_by_one_vertex_stays_a_hole():
+    """A ring of faces round a hole, held to a sheet's rim by one vertex: the ring's outer loop is its outline,
+    the inner loop a hole, though the ring holds less area than the hole (a range scan's seen ring round an
+    unseen patch)."""
+    from meshlab_holefill.core.outlines import loops_measured, outline_mask, outline_ratios, pinch_vertices
+
+    V, F = grid(10, 10)
+    n = len(V)
+    outer = np.array([[1.0, 0.0, 0.0], [1.4, 0.0, 0.0], [1.4, 0.4, 0.0], [1.0, 0.4, 0.0]])
+    inner = np.array([[1.05, 0.05, 0.0], [1.35, 0.05, 0.0], [1.35, 0.35, 0.0], [1.05, 0.35, 0.0]])
+    V2 = np.concatenate([V, outer[1:], inner])
+    o = [9, n, n + 1, n + 2]  # the outer corners, the first the grid's rim vertex (1, 0, 0)
+    i = [n + 3, n + 4, n + 5, n + 6]
+    ring = [[o[k], o[(k + 1) % 4], i[(k + 1) % 4]] for k in range(4)] + [[o[k], i[(k + 1) % 4], i[k]] for k in range(4)]
+    F2 = np.concatenate([F, np.array(ring)])
+    loops = boundary_loops(F2)
+    sizes = [len(loop) for loop in loops]
+    assert sorted(sizes) == [4, 4, 36]
+    classes = loops_measured(V2, F2, loops, vertex_face_incidence(F2, len(V2)))
+    mask = outline_mask(V2, F2, loops, pinch_vertices(loops, len(V2)))
+    ratios = outline_ratios(V2, F2, loops, pinch_vertices(loops, len(V2)))
+    for k, loop in enumerate(loops):
+        if len(loop) == 4 and 9 not in loop.vertices:  # the hole in the ring
+            assert ratios[k] > 1.0 and not mask[k] and classes[k][1] == "hole"
+        elif len(loop) == 4:  # the ring's outline
+            assert mask[k] and classes[k][1] == "outline"

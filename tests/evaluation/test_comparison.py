@@ -6,7 +6,7 @@ import pytest
 
 import meshlab_holefill
 from meshlab_holefill.core.holes import boundary_halfedges, boundary_loops
-from meshlab_holefill.core.outlines import OUTLINE_RATIO, outline_ratios
+from meshlab_holefill.core.outlines import outline_mask, outline_ratios
 from meshlab_holefill.evaluation.comparison import (Filler, MeshCase, _patch_info, as_case, parse_fillers, prepare_case,
                                                     run_comparison)
 from meshlab_holefill.meshlab.mesh_files import load_mesh, meshset_from_arrays
@@ -74,8 +74,9 @@ def test_outline_ratios_separate_islands_from_holes():
     ratios = outline_ratios(V, F, loops)
     by_size = {len(lp): r for lp, r in zip(loops, ratios)}
     assert by_size[16] < 0.2  # the hole: 16 of 144 - 16 cells
-    assert by_size[48] >= OUTLINE_RATIO  # the grid's own border outlines its component
+    assert by_size[48] > 0.75  # the grid's own border outlines its component
     assert by_size[3] == pytest.approx(1.0)
+    assert [len(lp) for lp, outline in zip(loops, outline_mask(V, F, loops)) if outline] == [48, 3]
 
 
 def test_sphere_cap_hole_is_not_an_outline():

@@ -185,13 +185,17 @@ def test_face_range_scan_with_pinched_vertices_and_many_components():
     outer = res["holes"][0]
     assert outer["boundary_edges"] == 2468 and outer["status"] == "skipped"
     statuses = [h["status"] for h in res["holes"]]
-    # 45 loops: the outer border skipped, 16 island outlines skipped (capping one would fold a sheet
-    # over the fragment; one of them a lone triangle), a triangle held by one corner whose three edges
-    # are its loop skipped (its only fill would be a copy of it), 27 closed
-    assert (statuses.count("closed"), statuses.count("failed"), statuses.count("skipped")) == (27, 0, 18)
+    # 45 loops: the outer border skipped (an outline too: the scan lies inside it), 16 island outlines
+    # skipped (capping one would fold a sheet over the fragment; one of them a lone triangle), four
+    # fragments of two faces held to the rim by one vertex skipped as outlines, a triangle held by one
+    # corner whose three edges are its loop skipped (its only fill would be a copy of it), 23 closed
+    assert outer["size_class"] == "outline"
+    assert (statuses.count("closed"), statuses.count("failed"), statuses.count("skipped")) == (23, 0, 22)
     assert all(h["size_class"] == "outline" for h in res["holes"][1:] if h["status"] == "skipped")
+    # the four held fragments and three loose ones: every loop of four edges outlines two faces
+    assert sum(h["boundary_edges"] == 4 and h["size_class"] == "outline" for h in res["holes"]) == 7
     assert sum("outlines a single face" in (h.get("reason") or "") for h in res["holes"]) == 2
-    assert res["closed_holes"] == 27
+    assert res["closed_holes"] == 23
     V1, F1 = mesh_arrays(ms)
     assert np.array_equal(V1[: len(V0)], V0) and np.array_equal(F1[: len(F0)], F0)
     # every closed hole really is closed; nothing half-filled
