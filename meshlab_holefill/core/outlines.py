@@ -59,10 +59,10 @@ def pinch_vertices(loops, n):
     loops : sequence of BoundaryLoop or (k,) int arrays  every boundary loop of the mesh
     n : int  number of vertices
     """
-    count = np.zeros(n, np.int64)
-    for loop in loops:
-        np.add.at(count, np.asarray(getattr(loop, "vertices", loop), np.int64), 1)
-    return count > 1
+    if not len(loops):
+        return np.zeros(n, bool)
+    every = np.concatenate([np.asarray(getattr(loop, "vertices", loop), np.int64) for loop in loops])
+    return np.bincount(every, minlength=n) > 1
 
 
 def loop_facings(V, F, loops):
@@ -164,9 +164,10 @@ def outline_ratios(V, F, loops, pinch=None):
         pinch = pinch_vertices(loops, n)
     # Nodes: the vertices, then the faces; a face joins its corners but pinch vertices, and the
     # faces it shares an edge with.
-    corners = ~pinch[F]
-    rows = np.concatenate([np.repeat(n + np.arange(m), 3)[corners.ravel()], n + face_adjacency(F).tocoo().row])
-    cols = np.concatenate([F.ravel()[corners.ravel()], n + face_adjacency(F).tocoo().col])
+    corners = ~pinch[F].ravel()
+    adjacent = face_adjacency(F).tocoo()
+    rows = np.concatenate([np.repeat(n + np.arange(m), 3)[corners], n + adjacent.row])
+    cols = np.concatenate([F.ravel()[corners], n + adjacent.col])
     graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n + m, n + m))
     _, label = connected_components(graph, directed=False)
     face_label = label[n:]
